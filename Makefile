@@ -1,0 +1,48 @@
+# zeroset: the two commands of the README, and a few helpers.
+#   make demo   install what is missing, build, run the main job (pictures and a mesh in out/)
+#   make test   install what is missing, build, run the whole test suite with ctest
+JOBS ?= $(shell nproc)
+BUILD ?= build
+ASAN_BUILD ?= build-asan
+FUZZ_BUILD ?= build-fuzz
+CMAKE_FLAGS ?=
+
+.PHONY: deps build demo test test-asan fuzz bench clean
+
+deps:
+	scripts/install-deps.sh
+
+build: deps
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS)
+	cmake --build $(BUILD) -j $(JOBS)
+
+demo: build
+	scripts/demo.sh $(BUILD)/apps/cli/zeroset out
+
+test: build
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) --timeout 600
+
+# The same tests with AddressSanitizer and UndefinedBehaviorSanitizer.
+test-asan: deps
+	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DZEROSET_SANITIZE=ON \
+	      -DZEROSET_BUILD_BENCH=OFF $(CMAKE_FLAGS)
+	cmake --build $(ASAN_BUILD) -j $(JOBS)
+	cd $(ASAN_BUILD) && ZEROSET_SANITIZED=1 ctest --output-on-failure -j $(JOBS) --timeout 1200
+
+# Runs the parser fuzz target (libFuzzer, clang) for FUZZ_SECONDS.
+FUZZ_SECONDS ?= 60
+fuzz: deps
+	CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -DZEROSET_BUILD_FUZZ=ON -DZEROSET_BUILD_TESTS=OFF \
+	      -DZEROSET_BUILD_BENCH=OFF -DZEROSET_BUILD_VIEWER=OFF
+	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target parse_fuzz
+	mkdir -p $(FUZZ_BUILD)/corpus && cp tests/fuzz/corpus/* $(FUZZ_BUILD)/corpus/
+	$(FUZZ_BUILD)/tests/fuzz/parse_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=5 -max_len=512 \
+	      -print_final_stats=1 $(FUZZ_BUILD)/corpus
+
+# Peer comparisons (installs the peer tools) and micro-benchmarks; writes docs/benchmarks.md.
+bench: build
+	scripts/install-deps.sh --peers
+	scripts/bench.sh $(BUILD)
+
+clean:
+	rm -rf $(BUILD) $(ASAN_BUILD) $(FUZZ_BUILD)

@@ -1,0 +1,354 @@
+// zeroset mesh: marching cubes cut at the clip, the spring–mass improver of Rösch, Ruhl &
+// Saupe (§4), mesh files, a picture and quality figures.
+#include <unistd.h>
+
+#include <fmt/core.h>
+
+#include <chrono>
+#include <cmath>
+#include <optional>
+
+#include "common.h"
+#include "zeroset/error.h"
+#include "zeroset/io/atomic_file.h"
+#include "zeroset/io/image.h"
+#include "zeroset/mesh/adjacency.h"
+#include "zeroset/mesh/improve.h"
+#include "zeroset/mesh/mesh_io.h"
+#include "zeroset/mesh/polygonize.h"
+#include "zeroset/mesh/quality.h"
+#include "zeroset/render/render.h"
+
+namespace zeroset::cli {
+namespace {
+
+struct MeshArgs {
+  SurfaceArgs surface;
+  int resolution = 128;
+  std::string grid = "auto";
+  std::string improve = "auto";
+  std::string boundary = "constrain";
+  bool no_curvature = false;
+  bool no_singularity = false;
+  bool no_flips = false;
+  bool no_find_singular = false;
+  std::string output;
+  std::string stats;
+  std::string png;
+  std::string png_raw;
+  std::string size = "500x500";
+  bool wireframe = false;
+
+  CLI::Option* resolution_opt = nullptr;
+  CLI::Option* improve_opt = nullptr;
+  CLI::Option* boundary_opt = nullptr;
+};
+
+// --improve: "off" → 0 steps, "auto" → until converged (at most the default maximum),
+// a number → at most that many steps.
+std::optional<int> parse_improve(const std::string& text, const std::string& where) {
+  if (text == "off") return 0;
+  if (text == "auto") return std::nullopt;
+  try {
+    size_t used = 0;
+    const long long n = std::stoll(text, &used);
+    if (used == text.size() && n >= 0 && n <= 1000000) return static_cast<int>(n);
+  } catch (const std::exception&) {
+  }
+  throw InvalidArgument(where, text, "use auto, off or a number of steps (0 to 1000000)");
+}
+
+BoundaryMode parse_boundary(const std::string& text, const std::string& where) {
+  if (text == "fix") return BoundaryMode::kFixed;
+  if (text == "constrain") return BoundaryMode::kConstrained;
+  throw InvalidArgument(where, text, "use fix or constrain");
+}
+
+double physical_memory_bytes() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page) : 0.0;
+}
+
+// Refuses a resolution whose estimated memory exceeds what the machine has, and says which
+// resolution would fit.
+void check_memory(const Surface& surface, PolygonizeOptions po) {
+  const double have = physical_memory_bytes();
+  if (have <= 0) return;
+  const double limit = 0.75 * have;
+  auto need = [&](int cells) {
+    po.cells = cells;
+    return plan_grid(surface, po).estimated_bytes;
+  };
+  const double needed = need(po.cells);
+  if (needed <= limit) return;
+  int lo = 1, hi = po.cells;
+  while (hi - lo > 1) {
+    const int mid = lo + (hi - lo) / 2;
+    (need(mid) <= limit ? lo : hi) = mid;
+  }
+  throw InvalidArgument("--resolution", std::to_string(po.cells),
+                        fmt::format("would need about {:.1f} GB of memory and this machine has "
+                                    "{:.1f} GB; use --resolution {} or less",
+                                    needed / 1e9, have / 1e9, lo));
+}
+
+nlohmann::json vec_json(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+nlohmann::json quality_json(const MeshQuality& q) {
+  nlohmann::json j;
+  j["vertices"] = q.vertices;
+  j["triangles"] = q.triangles;
+  j["mean_edge_length"] = q.mean_edge_length;
+  j["min_angle_histogram"] = {{"bin_width_deg", 5}, {"counts", q.min_angle_histogram}};
+  j["percent_min_angle_below_10"] = q.percent_below_10;
+  j["percent_min_angle_below_20"] = q.percent_below_20;
+  j["percent_min_angle_below_30"] = q.percent_below_30;
+  j["mean_min_angle_deg"] = q.mean_min_angle_deg;
+  j["smallest_angle_deg"] = q.smallest_angle_deg;
+  j["radius_ratio"] = {{"mean", q.mean_radius_ratio}, {"min", q.min_radius_ratio}};
+  j["residual"] = {{"max", q.max_residual},
+                   {"rms", q.rms_residual},
+                   {"vertices", q.residual_vertices},
+                   {"excluded_radius_around_singular_points", q.singular_radius}};
+  j["normal_deviation_deg"] = {{"mean", q.mean_normal_deviation_deg},
+                               {"max", q.max_normal_deviation_deg},
+                               {"flipped_triangles", q.flipped_triangles}};
+  j["boundary"] = {{"vertices", q.boundary_vertices}, {"max_abs_clip_value", q.max_boundary_clip_value}};
+  nlohmann::json sing = nlohmann::json::array();
+  for (size_t k = 0; k < q.singular_points.size(); ++k)
+    sing.push_back({{"point", vec_json(q.singular_points[k])},
+                    {"nearest_vertex_distance", q.singular_point_distance[k]},
+                    {"in_mean_edge_lengths", q.mean_edge_length > 0 ? q.singular_point_distance[k] / q.mean_edge_length : 0.0}});
+  j["singular_points"] = sing;
+  return j;
+}
+
+nlohmann::json topology_json(const Mesh& m) {
+  const MeshTopology t = mesh_topology(m);
+  return {{"vertices", t.vertices},
+          {"edges", t.edges},
+          {"triangles", t.triangles},
+          {"boundary_edges", t.boundary_edges},
+          {"non_manifold_edges", t.non_manifold_edges},
+          {"misoriented_edges", t.misoriented_edges},
+          {"euler_characteristic", t.euler_characteristic},
+          {"watertight", t.is_watertight()}};
+}
+
+void write_picture(const Surface& surface, const Mesh& mesh, const std::string& path, int width,
+                   int height, bool wireframe) {
+  RenderOptions ro;
+  ro.width = width;
+  ro.height = height;
+  ro.samples = 2;
+  ro.threads = global_flags().threads;
+  write_png(render_mesh(surface, mesh, ro, wireframe), path);
+}
+
+void run_mesh(const MeshArgs& a) {
+  if (a.output.empty() && a.png.empty() && a.png_raw.empty() && a.stats.empty())
+    throw InvalidArgument(
+        "nothing to write: give -o FILE.{obj,ply,stl,glb}, --png FILE.png or --stats FILE.json");
+  if (!a.output.empty()) check_mesh_path(a.output);
+  for (const auto& [flag, path] : {std::pair{"--png", a.png}, std::pair{"--png-raw", a.png_raw}})
+    if (!path.empty() && file_extension(path) != "png") throw InvalidArgument(flag, path, "use a .png name");
+  if (!a.stats.empty() && file_extension(a.stats) != "json")
+    throw InvalidArgument("--stats", a.stats, "use a .json name");
+  const auto [width, height] = parse_size(a.size, "--size");
+  for (const auto& path : {a.png, a.png_raw, a.stats})
+    if (!path.empty()) check_writable(path);
+
+  Scene scene = a.surface.resolve();
+  const Surface& surface = scene.surface;
+
+  // Settings from a scene file's "mesh" object; flags given explicitly win.
+  int resolution = a.resolution;
+  std::string improve_text = a.improve, boundary_text = a.boundary;
+  if (scene.settings.contains("mesh")) {
+    const auto& j = scene.settings["mesh"];
+    try {
+      if (j.contains("resolution") && !a.resolution_opt->count()) resolution = j.at("resolution").get<int>();
+      if (j.contains("improve") && !a.improve_opt->count())
+        improve_text = j.at("improve").is_string() ? j.at("improve").get<std::string>()
+                                                   : std::to_string(j.at("improve").get<int>());
+      if (j.contains("boundary") && !a.boundary_opt->count()) boundary_text = j.at("boundary").get<std::string>();
+    } catch (const nlohmann::json::exception&) {
+      throw BadInput("scene: an entry of \"mesh\" has the wrong type (resolution: number, "
+                     "improve: \"auto\", \"off\" or a number, boundary: \"fix\" or \"constrain\")");
+    }
+  }
+  if (resolution < 1)
+    throw InvalidArgument("--resolution", std::to_string(resolution),
+                          "must be at least 1 (cells along the longest side of the clip box)");
+  if (resolution > 32768)
+    throw InvalidArgument("--resolution", std::to_string(resolution), "must be at most 32768");
+  const std::optional<int> improve_steps = parse_improve(improve_text, "--improve");
+
+  PolygonizeOptions po;
+  po.cells = resolution;
+  po.threads = global_flags().threads;
+  if (a.grid == "dense") po.mode = GridMode::kDense;
+  else if (a.grid == "sparse") po.mode = GridMode::kSparse;
+  else if (a.grid != "auto") throw InvalidArgument("--grid", a.grid, "use auto, dense or sparse");
+  ImproveOptions io;
+  io.boundary = parse_boundary(boundary_text, "--boundary");
+  io.use_curvature = !a.no_curvature;
+  io.use_singularity = !a.no_singularity;
+  io.flip_edges = !a.no_flips;
+  io.find_singular_points = !a.no_find_singular;
+  io.threads = global_flags().threads;
+  const int max_steps = improve_steps.value_or(io.max_steps);
+  check_memory(surface, po);
+
+  const auto t0 = std::chrono::steady_clock::now();
+  PolygonizeStats ps;
+  Mesh mesh = polygonize(surface, po, &ps);
+  nlohmann::json stats;
+  stats["surface"] = surface.label();
+  nlohmann::json params = nlohmann::json::object();
+  const auto& names = surface.field.parameter_names();
+  for (size_t k = 0; k < names.size(); ++k) params[names[k]] = surface.field.parameter_values()[k];
+  stats["parameters"] = params;
+  stats["clip"] = surface.clip.to_specs();
+  stats["polygonize"] = {
+      {"resolution", resolution},
+      {"cells", ps.cells},
+      {"cell_size", ps.cell_size},
+      {"grid", ps.sparse ? "sparse" : "dense"},
+      {"bricks", ps.bricks},
+      {"bricks_kept", ps.bricks_kept},
+      {"grid_samples", ps.grid_samples},
+      {"refine_evaluations", ps.refine_evaluations},
+      {"nan_samples", ps.nan_samples},
+      {"active_cells", ps.active_cells},
+      {"ambiguous_faces", ps.ambiguous_faces},
+      {"edge_vertices", ps.edge_vertices},
+      {"collapsed_edges", ps.collapsed_edges},
+      {"clip_cut_edges", ps.clip_cut_edges},
+      {"clip_snapped_vertices", ps.clip_snapped},
+      {"seconds", {{"sampling", ps.seconds_sampling},
+                   {"extraction", ps.seconds_extraction},
+                   {"refinement", ps.seconds_refinement},
+                   {"cleanup", ps.seconds_cleanup},
+                   {"total", ps.seconds_total}}},
+      {"vertices", mesh.vertex_count()},
+      {"triangles", mesh.triangle_count()}};
+  if (mesh.empty())
+    say(fmt::format("{}: the grid of {} cells found no surface inside the clip", surface.label(), resolution));
+  const bool want_quality = !a.stats.empty();
+  QualityOptions qo;
+  qo.threads = po.threads;
+  std::optional<MeshQuality> before;
+  if (want_quality) {
+    before = measure_quality(mesh, surface, qo);
+    stats["quality_before"] = quality_json(*before);
+    stats["topology_before"] = topology_json(mesh);
+  }
+  if (!a.png_raw.empty()) write_picture(surface, mesh, a.png_raw, width, height, a.wireframe);
+
+  ImproveStats is;
+  if (max_steps > 0 && !mesh.empty()) {
+    Progress progress("improving", global_flags().quiet);
+    MeshImprover improver(std::move(mesh), surface, io);
+    for (int k = 0; k < max_steps && !improver.converged(); ++k) {
+      improver.step();
+      progress.update(static_cast<double>(k + 1) / max_steps);
+    }
+    improver.finish();
+    progress.finish();
+    is = improver.stats();
+    mesh = improver.take_mesh();
+    nlohmann::json found = nlohmann::json::array();
+    for (const Vec3& p : is.singular_points) found.push_back(vec_json(p));
+    stats["improve"] = {{"steps", is.steps},
+                        {"max_steps", max_steps},
+                        {"converged", is.converged},
+                        {"last_max_move_in_mean_edges", is.max_move},
+                        {"edge_flips", is.flips},
+                        {"shortened_moves", is.shortened_moves},
+                        {"cancelled_moves", is.cancelled_moves},
+                        {"flipped_triangles", is.flipped_triangles},
+                        {"singular_points_found", found},
+                        {"max_residual", is.max_residual},
+                        {"boundary", boundary_text},
+                        {"curvature", io.use_curvature},
+                        {"singularity", io.use_singularity},
+                        {"flips", io.flip_edges},
+                        {"find_singular_points", io.find_singular_points},
+                        {"seconds", is.seconds}};
+  }
+  std::optional<MeshQuality> after;
+  if (want_quality) {
+    after = measure_quality(mesh, surface, qo);
+    stats["quality_after"] = quality_json(*after);
+    stats["topology_after"] = topology_json(mesh);
+  }
+  if (!a.output.empty()) write_mesh(mesh, a.output);
+  if (!a.png.empty()) write_picture(surface, mesh, a.png, width, height, a.wireframe);
+  stats["seconds_total"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!a.stats.empty()) write_json(stats, a.stats);
+
+  std::string line = fmt::format("{}: {} vertices, {} triangles ({} grid, {} cells, {:.2f} s)",
+                                 surface.label(), mesh.vertex_count(), mesh.triangle_count(),
+                                 ps.sparse ? "sparse" : "dense", resolution, ps.seconds_total);
+  if (max_steps > 0) line += fmt::format("; improved in {} steps ({:.2f} s)", is.steps, is.seconds);
+  say(line);
+  if (before && after)
+    say(fmt::format("  min angle < 30°: {:.1f}% -> {:.1f}%, mean min angle {:.1f}° -> {:.1f}°, "
+                    "max residual {:.1e}",
+                    before->percent_below_30, after->percent_below_30, before->mean_min_angle_deg,
+                    after->mean_min_angle_deg, after->max_residual));
+  for (const auto& path : {a.output, a.png_raw, a.png, a.stats})
+    if (!path.empty()) say("  wrote " + path);
+}
+
+}  // namespace
+
+void register_mesh_command(CLI::App& app) {
+  auto args = std::make_shared<MeshArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "mesh",
+      "Polygonize a surface (marching cubes cut at the clip) and improve the mesh with the "
+      "spring-mass system of Rosch, Ruhl & Saupe (1997, section 4).\n\n"
+      "Examples:\n"
+      "  zeroset mesh kummer --param mu=1.5 -o kummer.obj\n"
+      "  zeroset mesh kummer --param mu=1.2 --resolution 48 --png-raw raw.png --png improved.png "
+      "--wireframe\n"
+      "  zeroset mesh torus --improve off --stats torus.json -o torus.glb");
+  args->surface.add_to(cmd);
+  args->resolution_opt =
+      cmd->add_option("-r,--resolution", args->resolution,
+                      "Grid cells along the longest side of the clip's bounding box")
+          ->capture_default_str();
+  cmd->add_option("--grid", args->grid,
+                  "auto, dense (sample every node) or sparse (bricks near the surface only)")
+      ->capture_default_str();
+  args->improve_opt =
+      cmd->add_option("--improve", args->improve,
+                      "auto (until every vertex is slower than the threshold), off, or at most "
+                      "STEPS steps")
+          ->type_name("auto|off|STEPS")
+          ->capture_default_str();
+  args->boundary_opt =
+      cmd->add_option("--boundary", args->boundary,
+                      "Boundary vertices: fix, or constrain to the clip curve F = 0, G = 0")
+          ->type_name("fix|constrain")
+          ->capture_default_str();
+  cmd->add_flag("--no-curvature", args->no_curvature,
+                "Springs without the curvature estimator (paper eq. 6)");
+  cmd->add_flag("--no-singularity", args->no_singularity,
+                "Springs without the singularity estimator");
+  cmd->add_flag("--no-flips", args->no_flips, "No Delaunay edge flips (vertex motion only)");
+  cmd->add_flag("--no-find-singular", args->no_find_singular,
+                "Do not search singular points by Newton's method on grad F = 0");
+  cmd->add_option("-o,--output", args->output, "Mesh file: .obj, .ply, .stl or .glb");
+  cmd->add_option("--stats", args->stats,
+                  "JSON file with counts, timings and quality before and after improvement");
+  cmd->add_option("--png", args->png, "Picture of the final mesh");
+  cmd->add_option("--png-raw", args->png_raw, "Picture of the polygonizer's mesh before improvement");
+  cmd->add_option("--size", args->size, "Picture size WxH")->capture_default_str();
+  cmd->add_flag("--wireframe", args->wireframe, "Draw the mesh edges in the pictures");
+  cmd->callback([args] { run_mesh(*args); });
+}
+
+}  // namespace zeroset::cli

@@ -1,0 +1,351 @@
+// zeroset render | animate | export: pictures, animations and POV-Ray scenes of a surface.
+#include <fmt/core.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <sstream>
+#include <tuple>
+
+#include "common.h"
+#include "zeroset/error.h"
+#include "zeroset/io/atomic_file.h"
+#include "zeroset/render/pov_export.h"
+#include "zeroset/render/render.h"
+#include "zeroset/render/settings.h"
+
+namespace zeroset::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Flags shared by render, animate and export: how the picture looks.
+struct LookArgs {
+  std::string size = "800x800";
+  int aa = 2;
+  std::string camera;  // az,el[,dist]
+  std::string target;  // x,y,z
+  double fov = 0;      // 0: the surface's
+  std::string background, front, back;
+  CLI::Option* size_opt = nullptr;
+  CLI::Option* aa_opt = nullptr;
+
+  void add_to(CLI::App* cmd, bool with_aa = true) {
+    size_opt = cmd->add_option("--size", size,
+                               "Image size WIDTHxHEIGHT (default 800x800, or the scene file's)")
+                   ->type_name("WxH");
+    if (with_aa)
+      aa_opt = cmd->add_option("--aa", aa,
+                               "Anti-aliasing: N×N rays per pixel, 1 = none (default 2, or the "
+                               "scene file's)")
+                   ->check(CLI::Range(1, 16));
+    cmd->add_option("--camera", camera,
+                    "Orbit camera AZIMUTH,ELEVATION[,DISTANCE] in degrees (z up); distance 0 or "
+                    "omitted fits the clip volume")
+        ->type_name("AZ,EL[,D]");
+    cmd->add_option("--target", target, "Point the camera orbits and looks at (default: the "
+                                        "surface's, usually the origin)")
+        ->type_name("X,Y,Z");
+    cmd->add_option("--fov", fov, "Vertical field of view in degrees (default: the surface's)")
+        ->check(CLI::Range(1.0, 170.0));
+    cmd->add_option("--background", background,
+                    "Background colour: #rrggbb or r,g,b in [0,1] (default white)")
+        ->type_name("COLOR");
+    cmd->add_option("--front", front, "Colour of the side ∇F points to (default orange)")
+        ->type_name("COLOR");
+    cmd->add_option("--back", back, "Colour of the other side (default dark blue)")
+        ->type_name("COLOR");
+  }
+
+  /// Render options for a scene: defaults, then the scene file's "render" object, then the
+  /// flags given. Throws InvalidArgument naming the bad flag, BadInput for a bad scene entry.
+  RenderOptions options(const Scene& scene, const std::string& origin) const {
+    const Surface& surface = scene.surface;
+    RenderOptions o;
+    o.samples = 2;
+    if (scene.settings.is_object() && scene.settings.contains("render"))
+      apply_render_settings(scene.settings["render"], o, origin);
+    if (size_opt && size_opt->count() > 0) std::tie(o.width, o.height) = parse_size(size, "--size");
+    if (aa_opt && aa_opt->count() > 0) o.samples = aa;
+    o.threads = global_flags().threads;
+    Camera cam = surface.camera;
+    if (!camera.empty()) {
+      const std::vector<double> v = parse_numbers(camera, "--camera");
+      if (v.size() < 2 || v.size() > 3)
+        throw InvalidArgument("--camera", camera, "expected AZIMUTH,ELEVATION[,DISTANCE]");
+      if (v.size() == 3 && v[2] < 0)
+        throw InvalidArgument("--camera", camera, "the distance must not be negative");
+      if (std::abs(v[1]) > 90)
+        throw InvalidArgument("--camera", camera, "the elevation must lie in [-90, 90] degrees");
+      cam.azimuth_deg = v[0];
+      cam.elevation_deg = v[1];
+      if (v.size() == 3) cam.distance = v[2];
+    }
+    if (!target.empty()) {
+      const std::vector<double> v = parse_numbers(target, "--target");
+      if (v.size() != 3) throw InvalidArgument("--target", target, "expected three numbers x,y,z");
+      cam.target = Vec3(v[0], v[1], v[2]);
+    }
+    if (fov > 0) cam.fov_deg = fov;
+    o.camera = cam;
+    if (!background.empty()) o.background = parse_display_color(background, "--background");
+    if (!front.empty()) o.front.diffuse = parse_display_color(front, "--front");
+    if (!back.empty()) o.back.diffuse = parse_display_color(back, "--back");
+    return o;
+  }
+
+  static std::vector<double> parse_numbers(const std::string& text, const std::string& flag) {
+    std::vector<double> v;
+    std::stringstream in(text);
+    std::string item;
+    while (std::getline(in, item, ',')) {
+      char* end = nullptr;
+      const double d = std::strtod(item.c_str(), &end);
+      if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(d))
+        throw InvalidArgument(flag, text, fmt::format("'{}' is not a finite number", item));
+      v.push_back(d);
+    }
+    return v;
+  }
+};
+
+void require_extension(const std::string& path, const std::string& ext, const std::string& flag) {
+  if (file_extension(path) != ext)
+    throw InvalidArgument(flag, path, "the file name must end in ." + ext);
+}
+
+std::string shell_quote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+bool on_path(const std::string& program) {
+  return std::system(("command -v " + program + " >/dev/null 2>&1").c_str()) == 0;
+}
+
+// ---------------------------------------------------------------------------------- render
+void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string& output,
+                const std::string& stats_path) {
+  require_extension(output, "png", "--output");
+  check_writable(output);
+  if (!stats_path.empty()) check_writable(stats_path);
+  const Scene scene = args.resolve();
+  const Surface& surface = scene.surface;
+  RenderOptions o = look.options(scene, args.spec);
+  Progress progress("render", global_flags().quiet);
+  o.progress = [&](double f) { progress.update(f); };
+  RenderStats stats;
+  const Image image = render_surface(surface, o, &stats);
+  progress.finish();
+  write_png(image, output);
+  const char* method = stats.exact ? "polynomial roots" : "interval arithmetic";
+  say(fmt::format("wrote {} ({}x{}, {} rays, {:.2f} s, {})", output, o.width, o.height,
+                  stats.rays, stats.seconds, method));
+  if (!stats_path.empty())
+    write_json({{"surface", surface.label()},
+                {"width", o.width},
+                {"height", o.height},
+                {"samples", o.samples},
+                {"threads", stats.threads},
+                {"method", method},
+                {"seconds", stats.seconds},
+                {"rays", stats.rays},
+                {"hits", stats.hits},
+                {"singular_normals", stats.singular_normals}},
+               stats_path);
+}
+
+// --------------------------------------------------------------------------------- animate
+struct AnimateArgs {
+  int frames = 60;
+  double fps = 30;
+  double orbit_deg = 0;
+  std::string dir;
+  std::string video;
+  bool no_video = false;
+};
+
+void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArgs& a) {
+  // --param takes both fixed values (k=v) and the animated ranges (k=from:to).
+  SurfaceOverrides overrides;
+  overrides.clip_specs = args.clips;
+  std::vector<ParamRange> ranges;
+  for (const std::string& p : args.params) {
+    const size_t eq = p.find('=');
+    if (eq != std::string::npos && p.find(':', eq) != std::string::npos) {
+      ranges.push_back(parse_range(p, "--param"));
+      overrides.params[ranges.back().name] = ranges.back().from;
+    } else {
+      const auto [name, value] = parse_assignment(p, "--param");
+      overrides.params[name] = value;
+    }
+  }
+  if (ranges.empty() && a.orbit_deg == 0)
+    throw InvalidArgument("--param", "(none)",
+                          "give at least one range name=from:to (or --orbit) to animate");
+  if (a.frames < 1) throw InvalidArgument("--frames", std::to_string(a.frames), "must be ≥ 1");
+  const fs::path dir(a.dir);
+  std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+    throw IoError(a.dir, "exists and is not a directory");
+  // Before any work: frames can be written into DIR, or DIR can be created.
+  check_writable(fs::is_directory(dir, ec) ? (dir / "frame_0000.png").string() : a.dir);
+  const bool want_video = !a.no_video;
+  const bool have_ffmpeg = want_video && on_path("ffmpeg");
+  std::string video = a.video.empty() ? (dir / "animation.mp4").string() : a.video;
+  if (want_video && !a.video.empty()) require_extension(video, "mp4", "--video");
+
+  const Scene scene = resolve_scene(args.spec, overrides);
+  Surface surface = scene.surface;
+  for (const ParamRange& r : ranges)
+    if (surface.field.parameter_index(r.name) < 0)
+      throw InvalidArgument("--param", r.name, "the surface has no parameter of that name");
+  RenderOptions o = look.options(scene, args.spec);
+  const Camera base_camera = *o.camera;
+  fs::create_directories(dir, ec);
+  if (ec) throw IoError(a.dir, "cannot create the directory: " + ec.message());
+  if (want_video && !a.video.empty()) check_writable(video);
+
+  Progress progress("animate", global_flags().quiet);
+  for (int f = 0; f < a.frames; ++f) {
+    const double s = a.frames == 1 ? 0.0 : static_cast<double>(f) / (a.frames - 1);
+    for (const ParamRange& r : ranges)
+      surface.field.set_parameter(r.name, r.from + s * (r.to - r.from));
+    Camera cam = base_camera;
+    cam.azimuth_deg += s * a.orbit_deg;
+    o.camera = cam;
+    o.progress = [&](double x) { progress.update((f + x) / a.frames); };
+    const Image image = render_surface(surface, o);
+    write_png(image, (dir / fmt::format("frame_{:04d}.png", f)).string());
+  }
+  progress.finish();
+  say(fmt::format("wrote {} frames to {}", a.frames, a.dir));
+  if (!want_video) return;
+  if (!have_ffmpeg) {
+    say("ffmpeg not found on PATH: no video (frames are in " + a.dir + ")");
+    return;
+  }
+  // ffmpeg writes beside the target and the result is renamed into place, so a failed
+  // encode leaves no partial video.
+  const fs::path target(video);
+  const fs::path tmp =
+      (target.parent_path().empty() ? fs::path(".") : target.parent_path()) /
+      ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid()) + ".mp4");
+  const std::string cmd = fmt::format(
+      "ffmpeg -nostdin -y -loglevel error -framerate {} -i {} -c:v libx264 -pix_fmt yuv420p "
+      "-vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' {} 2>&1",
+      a.fps, shell_quote((dir / "frame_%04d.png").string()), shell_quote(tmp.string()));
+  std::string log;
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  if (!pipe) throw Error("cannot run ffmpeg");
+  char buf[4096];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) log.append(buf, n);
+  const int status = ::pclose(pipe);
+  if (status != 0) {
+    fs::remove(tmp, ec);
+    throw Error("ffmpeg failed to encode " + video + ":\n" + log);
+  }
+  fs::rename(tmp, target, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    throw IoError(video, "cannot move the video into place");
+  }
+  say("wrote " + video);
+}
+
+// ---------------------------------------------------------------------------------- export
+void run_export(const SurfaceArgs& args, const LookArgs& look, const std::string& output) {
+  require_extension(output, "pov", "--output");
+  check_writable(output);
+  const Scene scene = args.resolve();
+  const RenderOptions o = look.options(scene, args.spec);
+  write_pov_scene(scene.surface, o, output);
+  say(fmt::format("wrote {}; render it with: povray +W{} +H{} +A0.1 +I{} +O{}.png", output,
+                  o.width, o.height, output, fs::path(output).stem().string()));
+}
+
+}  // namespace
+
+void register_render_commands(CLI::App& app) {
+  {
+    auto* cmd = app.add_subcommand(
+        "render",
+        "Ray trace a surface into a PNG picture.\n\n"
+        "Polynomial surfaces are cast exactly: the equation is restricted to each ray and its\n"
+        "first root isolated robustly, so nodes show as sharp double cones and\n"
+        "self-intersections as clean curves. Other expressions use interval arithmetic.\n"
+        "The side ∇F points to is drawn in the front colour, the other side darker.\n\n"
+        "Examples:\n"
+        "  zeroset render kummer --param mu=1.5 -o kummer.png\n"
+        "  zeroset render barth6 --size 1200x900 --aa 3 -o barth.png\n"
+        "  zeroset render \"x^2 + y^2 - z^2\" --clip sphere:1.5 --camera 30,20 -o cone.png\n"
+        "  zeroset render roman --background '#202020' --stats roman.json -o roman.png");
+    auto args = std::make_shared<SurfaceArgs>();
+    auto look = std::make_shared<LookArgs>();
+    auto output = std::make_shared<std::string>();
+    auto stats = std::make_shared<std::string>();
+    args->add_to(cmd);
+    look->add_to(cmd);
+    cmd->add_option("-o,--output", *output, "Output PNG file")->required()->type_name("FILE");
+    cmd->add_option("--stats", *stats, "Write figures (rays, hits, seconds) as JSON to FILE")
+        ->type_name("FILE");
+    cmd->callback([=] { run_render(*args, *look, *output, *stats); });
+  }
+  {
+    auto* cmd = app.add_subcommand(
+        "animate",
+        "Render a parameter animation: numbered PNGs in a directory, and an MP4 when ffmpeg\n"
+        "is on PATH.\n\n"
+        "--param takes fixed values (name=value) and animated ranges (name=from:to); every\n"
+        "range goes linearly from its first to its last value over the frames.\n\n"
+        "Examples:\n"
+        "  zeroset animate kummer --param mu=0.34:3.0 --frames 60 -o kummer-frames\n"
+        "  zeroset animate torus --param r=0.2:0.9 --orbit 90 --size 480x480 -o torus\n"
+        "  zeroset animate planes --param a=-0.5:0.5 --no-video -o planes");
+    auto args = std::make_shared<SurfaceArgs>();
+    auto look = std::make_shared<LookArgs>();
+    auto a = std::make_shared<AnimateArgs>();
+    args->add_to(cmd);
+    cmd->get_option("--param")
+        ->description("Animated range name=from:to, or fixed value name=value (repeatable)")
+        ->type_name("NAME=A:B");
+    look->add_to(cmd);
+    cmd->add_option("-o,--output", a->dir, "Output directory for frame_0000.png, ...")
+        ->required()
+        ->type_name("DIR");
+    cmd->add_option("--frames", a->frames, "Number of frames")->capture_default_str();
+    cmd->add_option("--fps", a->fps, "Frames per second of the video")
+        ->check(CLI::Range(1.0, 240.0))
+        ->capture_default_str();
+    cmd->add_option("--orbit", a->orbit_deg,
+                    "Turn the camera's azimuth by this many degrees over the animation");
+    cmd->add_option("--video", a->video, "Video file (default: DIR/animation.mp4)")
+        ->type_name("FILE.mp4");
+    cmd->add_flag("--no-video", a->no_video, "Only write the frames, even if ffmpeg is there");
+    cmd->callback([=] { run_animate(*args, *look, *a); });
+  }
+  {
+    auto* cmd = app.add_subcommand(
+        "export",
+        "Export the view as a POV-Ray 3.7 scene: the surface as a `polynomial` with `sturm`,\n"
+        "`clipped_by` the clip volume, and the same camera, lights and colours (the back\n"
+        "side as interior_texture). Needs a polynomial surface.\n\n"
+        "Examples:\n"
+        "  zeroset export kummer --param mu=2.44 -o kummer.pov\n"
+        "  povray +W800 +H800 +A0.1 +Ikummer.pov +Okummer.png");
+    auto args = std::make_shared<SurfaceArgs>();
+    auto look = std::make_shared<LookArgs>();
+    auto output = std::make_shared<std::string>();
+    args->add_to(cmd);
+    look->add_to(cmd, false);
+    cmd->add_option("-o,--output", *output, "Output .pov file")->required()->type_name("FILE");
+    cmd->callback([=] { run_export(*args, *look, *output); });
+  }
+}
+
+}  // namespace zeroset::cli

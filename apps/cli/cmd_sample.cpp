@@ -1,0 +1,393 @@
+// zeroset sample: floaters on a surface (Witkin–Heckbert with the Rösch–Ruhl–Saupe
+// extensions), written as a PLY point set, a picture and quality figures.
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+#include "common.h"
+#include "zeroset/error.h"
+#include "zeroset/floaters/floaters.h"
+#include "zeroset/floaters/metrics.h"
+#include "zeroset/floaters/ply.h"
+#include "zeroset/io/atomic_file.h"
+#include "zeroset/io/image.h"
+#include "zeroset/render/render.h"
+
+namespace zeroset::cli {
+namespace {
+
+struct SampleArgs {
+  SurfaceArgs surface;
+  double radius = 0;
+  std::size_t max_count = 0;
+  std::size_t seed_count = 0;
+  std::size_t steps = 0;
+  bool until_converged = false;
+  std::size_t max_steps = 3000;
+  std::uint64_t seed = 1;
+  bool no_cos_weight = false;
+  bool no_clip_projection = false;
+  bool no_snap = false;
+  bool plain_repulsion = false;
+  double grading = -1;
+  std::string radius_adapt;
+  std::string animate;
+  std::size_t settle_steps = 1000;
+  std::string output;
+  bool ascii = false;
+  std::string stats;
+  std::string png;
+  std::string size = "500x500";
+  std::string camera;
+  double disk_scale = 0.75;
+  double band = 0;
+  std::size_t reference = 20000;
+
+  CLI::Option* radius_opt = nullptr;
+  CLI::Option* max_count_opt = nullptr;
+  CLI::Option* seed_count_opt = nullptr;
+  CLI::Option* seed_opt = nullptr;
+  CLI::Option* steps_opt = nullptr;
+};
+
+// Settings from a scene file's "floaters" object; command-line flags given explicitly win.
+FloaterOptions options_from(const SampleArgs& a, const Scene& scene) {
+  FloaterOptions o;
+  if (scene.settings.contains("floaters")) {
+    const auto& j = scene.settings["floaters"];
+    auto get = [&](const char* key, auto& field) {
+      if (!j.contains(key)) return;
+      try {
+        j.at(key).get_to(field);
+      } catch (const nlohmann::json::exception&) {
+        throw BadInput(fmt::format("scene: floaters.{} has the wrong type", key));
+      }
+    };
+    get("radius", o.radius);
+    get("max_count", o.max_count);
+    get("seed_count", o.seed_count);
+    get("seed", o.seed);
+    get("cos_weight", o.cos_weight);
+    get("clip_projection", o.clip_projection);
+    get("snap_to_nodes", o.snap_to_nodes);
+    get("scaled_repulsion", o.scaled_repulsion);
+    get("radius_grading", o.radius_grading);
+    if (j.contains("radius_adapt") && j["radius_adapt"].is_string())
+      o.radius_adapt = parse_radius_adapt(j["radius_adapt"].get<std::string>(),
+                                          "scene floaters.radius_adapt");
+  }
+  if (a.radius_opt->count()) o.radius = a.radius;
+  if (a.max_count_opt->count()) o.max_count = a.max_count;
+  if (a.seed_count_opt->count()) o.seed_count = a.seed_count;
+  if (a.seed_opt->count()) o.seed = a.seed;
+  if (a.no_cos_weight) o.cos_weight = false;
+  if (a.no_clip_projection) o.clip_projection = false;
+  if (a.no_snap) o.snap_to_nodes = false;
+  if (a.plain_repulsion) o.scaled_repulsion = false;
+  if (a.grading >= 0) o.radius_grading = a.grading;
+  if (!a.radius_adapt.empty()) o.radius_adapt = parse_radius_adapt(a.radius_adapt, "--radius-adapt");
+  o.threads = global_flags().threads;
+  return o;
+}
+
+nlohmann::json vec_json(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+// The surface's camera with --camera AZ,EL[,D] applied.
+Camera camera_from(const Surface& surface, const std::string& spec) {
+  Camera c = surface.camera;
+  if (!spec.empty()) {
+    std::vector<double> v;
+    std::size_t pos = 0;
+    while (pos <= spec.size()) {
+      std::size_t comma = spec.find(',', pos);
+      if (comma == std::string::npos) comma = spec.size();
+      const std::string item = spec.substr(pos, comma - pos);
+      char* end = nullptr;
+      const double d = std::strtod(item.c_str(), &end);
+      if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(d))
+        throw InvalidArgument("--camera", spec, fmt::format("'{}' is not a finite number", item));
+      v.push_back(d);
+      pos = comma + 1;
+    }
+    if (v.size() < 2 || v.size() > 3)
+      throw InvalidArgument("--camera", spec, "expected AZIMUTH,ELEVATION[,DISTANCE]");
+    if (std::abs(v[1]) > 90)
+      throw InvalidArgument("--camera", spec, "the elevation must lie in [-90, 90] degrees");
+    if (v.size() == 3 && v[2] < 0)
+      throw InvalidArgument("--camera", spec, "the distance must not be negative");
+    c.azimuth_deg = v[0];
+    c.elevation_deg = v[1];
+    if (v.size() == 3) c.distance = v[2];
+  }
+  return c;
+}
+
+// Without a distance, the camera is aimed at the floaters: the clip volume can be much larger
+// than what lies on the surface inside it (the cone fills a third of its clip sphere).
+Camera framing(Camera c, const Surface& surface, std::span<const Vec3> points) {
+  if (points.empty() || c.distance > 0) return c;
+  Box3 b{points[0], points[0]};
+  for (const Vec3& p : points) {
+    b.lo = b.lo.cwiseMin(p);
+    b.hi = b.hi.cwiseMax(p);
+  }
+  const double radius = std::max(0.5 * b.diagonal(), 1e-9 * surface.scene_radius());
+  c.target = b.center();
+  c.distance = 1.08 * radius / std::sin(0.5 * c.fov_deg * M_PI / 180);
+  return c;
+}
+
+nlohmann::json metrics_json(const SampleMetrics& m, double band) {
+  nlohmann::json j;
+  j["count"] = m.count;
+  j["residual"] = {{"median", m.residual_median},
+                   {"max", m.residual_max},
+                   {"excluded_near_singular_points", m.residual_excluded}};
+  j["spacing"] = {{"mean", m.spacing_mean}, {"cv", m.spacing_cv}};
+  j["covering"] = {{"radius", m.covering_radius},
+                   {"relative_to_spacing", m.covering_relative},
+                   {"reference_points", m.reference_count}};
+  nlohmann::json sing = nlohmann::json::array();
+  for (const auto& c : m.singular)
+    sing.push_back({{"point", vec_json(c.point)},
+                    {"distance", c.distance},
+                    {"local_spacing", c.local_spacing},
+                    {"ratio", c.ratio}});
+  j["singular_points"] = sing;
+  j["singular_ratio_max"] = m.singular_ratio_max;
+  j["band"] = {{"halfwidth", band},
+               {"density_ratio", m.band_density_ratio},
+               {"samples", m.band_samples},
+               {"reference_points", m.band_reference}};
+  return j;
+}
+
+nlohmann::json options_json(const FloaterOptions& o, double sigma_hat) {
+  return {{"radius", sigma_hat},
+          {"radius_given", o.radius},
+          {"max_count", o.max_count},
+          {"seed_count", o.seed_count},
+          {"seed", o.seed},
+          {"cos_weight", o.cos_weight},
+          {"clip_projection", o.clip_projection},
+          {"snap_to_nodes", o.snap_to_nodes},
+          {"scaled_repulsion", o.scaled_repulsion},
+          {"radius_grading", o.radius_grading},
+          {"radius_adapt", std::string(to_string(o.radius_adapt))}};
+}
+
+void run_sample(const SampleArgs& a) {
+  if (a.output.empty() && a.png.empty() && a.stats.empty())
+    throw InvalidArgument("nothing to write: give -o FILE.ply, --png FILE.png or --stats FILE.json");
+  if (!a.output.empty() && file_extension(a.output) != "ply")
+    throw InvalidArgument("-o", a.output, "the point set is written as PLY: use a .ply name");
+  if (!a.png.empty() && file_extension(a.png) != "png")
+    throw InvalidArgument("--png", a.png, "use a .png name");
+  if (!a.stats.empty() && file_extension(a.stats) != "json")
+    throw InvalidArgument("--stats", a.stats, "use a .json name");
+  if (!(a.disk_scale > 0) || !std::isfinite(a.disk_scale))
+    throw InvalidArgument("--disk-scale", fmt::format("{}", a.disk_scale), "must be positive");
+  if (a.radius_opt->count() && !(a.radius > 0 && std::isfinite(a.radius)))
+    throw InvalidArgument("--radius", fmt::format("{}", a.radius), "must be a positive length");
+  if (a.band < 0 || !std::isfinite(a.band))
+    throw InvalidArgument("--band", fmt::format("{}", a.band), "must not be negative");
+  const auto [width, height] = parse_size(a.size, "--size");
+  std::optional<ParamRange> anim;
+  if (!a.animate.empty()) {
+    anim = parse_range(a.animate, "--animate");
+    if (a.steps == 0)
+      throw InvalidArgument("--animate", a.animate, "give the number of animated steps with --steps N");
+  }
+  for (const auto& path : {a.output, a.png, a.stats})
+    if (!path.empty()) check_writable(path);
+
+  Scene scene = a.surface.resolve();
+  Surface& surface = scene.surface;
+  int anim_index = -1;
+  if (anim) {
+    anim_index = surface.field.parameter_index(anim->name);
+    if (anim_index < 0)
+      throw InvalidArgument("--animate", a.animate,
+                            fmt::format("{} has no parameter '{}'", surface.label(), anim->name));
+    surface.field.set_parameter(anim_index, anim->from);
+  }
+  const FloaterOptions options = options_from(a, scene);
+  const Camera camera = camera_from(surface, a.camera);
+  FloaterSystem sys(surface, options);
+
+  Progress progress("sampling", global_flags().quiet);
+  nlohmann::json stats;
+  double seconds = 0;
+  std::size_t updates = 0;
+  std::optional<std::size_t> converged_at;
+  auto run = [&](const StepStats& st) {
+    seconds += st.seconds;
+    updates += st.count;
+    if (st.converged && !converged_at) converged_at = st.step;
+    return st;
+  };
+
+  if (!anim) {
+    const bool fixed = a.steps_opt->count() > 0;
+    const std::size_t limit = fixed ? a.steps : a.max_steps;
+    for (std::size_t k = 0; k < limit; ++k) {
+      const StepStats st = run(sys.step());
+      progress.update(static_cast<double>(k + 1) / static_cast<double>(limit));
+      if (!fixed && st.converged) break;
+    }
+  } else {
+    // Settle at the start value first (random seeding is far from the surface), then move the
+    // parameter linearly over --steps steps, q̇ known to the F_q·q̇ term.
+    for (std::size_t k = 0; k < a.settle_steps; ++k)
+      if (run(sys.step()).converged) break;
+    const std::size_t settled = sys.steps_taken();
+    std::vector<double> q(sys.parameters().begin(), sys.parameters().end());
+    double worst_median = 0, worst_max = 0;
+    std::size_t min_count = sys.size(), max_count = sys.size();
+    for (std::size_t k = 1; k <= a.steps; ++k) {
+      q[static_cast<std::size_t>(anim_index)] =
+          anim->from + (anim->to - anim->from) * static_cast<double>(k) / static_cast<double>(a.steps);
+      const StepStats st = run(sys.step(q));
+      worst_median = std::max(worst_median, st.median_residual);
+      worst_max = std::max(worst_max, st.max_residual);
+      min_count = std::min(min_count, st.count);
+      max_count = std::max(max_count, st.count);
+      progress.update(static_cast<double>(k) / static_cast<double>(a.steps));
+    }
+    stats["animation"] = {{"parameter", anim->name},      {"from", anim->from},
+                          {"to", anim->to},               {"steps", a.steps},
+                          {"settle_steps", settled},      {"median_residual_worst", worst_median},
+                          {"max_residual_worst", worst_max}, {"count_min", min_count},
+                          {"count_max", max_count}};
+  }
+  progress.finish();
+
+  const Surface& final_surface = sys.surface();
+  if (!a.output.empty())
+    write_points_ply(a.output, sys.positions(), sys.normals(), sys.radii(),
+                     a.ascii ? PlyFormat::kAscii : PlyFormat::kBinaryLittleEndian);
+  if (!a.png.empty()) {
+    RenderOptions ro;
+    ro.width = width;
+    ro.height = height;
+    ro.threads = global_flags().threads;
+    std::vector<double> disks(sys.radii().begin(), sys.radii().end());
+    for (double& r : disks) r *= a.disk_scale;
+    ro.camera = framing(camera, final_surface, sys.positions());
+    write_png(render_points(final_surface, sys.positions(), sys.normals(), disks, ro), a.png);
+  }
+
+  const double band = a.band > 0 ? a.band : sys.nominal_radius() / 2;
+  if (!a.stats.empty()) {
+    MetricsOptions mo;
+    mo.band_halfwidth = band;
+    mo.reference.count = a.reference;
+    const SampleMetrics m = measure_samples(final_surface, sys.positions(), mo);
+    stats["surface"] = final_surface.label();
+    nlohmann::json params = nlohmann::json::object();
+    for (std::size_t k = 0; k < final_surface.field.parameter_names().size(); ++k)
+      params[final_surface.field.parameter_names()[k]] = final_surface.field.parameter_values()[k];
+    stats["parameters"] = params;
+    stats["options"] = options_json(sys.options(), sys.nominal_radius());
+    stats["steps"] = sys.steps_taken();
+    stats["converged_at_step"] = converged_at ? nlohmann::json(*converged_at) : nlohmann::json();
+    stats["seconds"] = seconds;
+    stats["steps_per_second"] = seconds > 0 ? static_cast<double>(sys.steps_taken()) / seconds : 0;
+    stats["updates_per_second"] = seconds > 0 ? static_cast<double>(updates) / seconds : 0;
+    stats["metrics"] = metrics_json(m, band);
+    write_json(stats, a.stats);
+  }
+  say(fmt::format("{} floaters after {} steps ({}), sigma^ = {:.4g}, {:.0f} steps/s", sys.size(),
+                  sys.steps_taken(),
+                  converged_at ? fmt::format("settled at step {}", *converged_at) : "not settled",
+                  sys.nominal_radius(),
+                  seconds > 0 ? static_cast<double>(sys.steps_taken()) / seconds : 0.0));
+}
+
+}  // namespace
+
+void register_sample_command(CLI::App& app) {
+  auto a = std::make_shared<SampleArgs>();
+  auto* cmd = app.add_subcommand(
+      "sample",
+      "Sample a surface with floaters: particles that repel each other and stay on F = 0\n"
+      "(Witkin-Heckbert 1994 with the extensions of Rosch-Ruhl-Saupe 1997: clip projection,\n"
+      "cosine-weighted repulsion, smaller floaters near singular points and strong curvature).\n"
+      "Writes the floaters as PLY (position, normal, radius), a picture of them as shaded\n"
+      "disks, and quality figures.\n\n"
+      "Examples:\n"
+      "  zeroset sample kummer --param mu=1.5 -o kummer.ply --png kummer.png\n"
+      "  zeroset sample cone --png cone.png --stats cone.json\n"
+      "  zeroset sample planes --no-cos-weight --png gap.png      # the paper's figure 4(d)\n"
+      "  zeroset sample kummer --radius-adapt wh --max-count 500 --steps 400 -o wh.ply\n"
+      "  zeroset sample kummer --animate mu=1.02:2.44 --steps 500 --stats anim.json\n"
+      "  zeroset sample \"x^2 + y^2 = z^2\" --clip sphere:1 --radius 0.05 -o cone.ply");
+  a->surface.add_to(cmd);
+  a->radius_opt = cmd->add_option("--radius", a->radius,
+                                  "Nominal floater radius sigma^ (the density knob; spacing is "
+                                  "about 1.5 sigma^). Default: from the surface's area so that "
+                                  "about max-count/3 floaters would cover it uniformly")
+                      ->type_name("LENGTH");
+  a->max_count_opt =
+      cmd->add_option("--max-count", a->max_count, "Population cap (default 2000)")
+          ->check(CLI::Range(std::size_t{1}, std::size_t{100'000'000}));
+  a->seed_count_opt = cmd->add_option("--seed-count", a->seed_count,
+                                      "Random floaters inserted at the start (default 200)");
+  a->steps_opt = cmd->add_option("--steps", a->steps,
+                                 "Run exactly N steps (with --animate: N animated steps)");
+  auto* until = cmd->add_flag("--until-converged", a->until_converged,
+                              "Stop when the system has settled (the default), at most "
+                              "--max-steps steps");
+  until->excludes(a->steps_opt);
+  cmd->add_option("--max-steps", a->max_steps, "Step limit for --until-converged")->capture_default_str();
+  a->seed_opt = cmd->add_option("--seed", a->seed, "Random seed (same seed, same floaters)");
+  cmd->add_flag("--no-cos-weight", a->no_cos_weight,
+                "Plain repulsion: no |cos| weighting between sheets (paper figure 4(d))");
+  cmd->add_flag("--no-clip-projection", a->no_clip_projection,
+                "Remove floaters that leave the clip volume instead of projecting them back");
+  cmd->add_flag("--no-snap", a->no_snap,
+                "Do not move floaters onto nodes (isolated singular points) they come near");
+  cmd->add_flag("--plain-repulsion", a->plain_repulsion,
+                "Witkin-Heckbert's desired velocity exactly, instead of pair forces scaled by "
+                "the pair's mean radius (with it a graded density never settles)");
+  cmd->add_option("--grading", a->grading,
+                  "How fast the fission radius may grow with distance from a neighbour's "
+                  "(default 0.1; 0: off)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--radius-adapt", a->radius_adapt,
+                  "Per-floater fission radius: wh (global, original method), curvature, "
+                  "singular or mixed (default, alpha/3 + 2 beta/3)")
+      ->check(CLI::IsMember({"wh", "curvature", "singular", "mixed"}));
+  cmd->add_option("--animate", a->animate,
+                  "Move a parameter while sampling, e.g. mu=1.02:2.44 (after settling at the "
+                  "start value; needs --steps)")
+      ->type_name("NAME=FROM:TO");
+  cmd->add_option("--settle-steps", a->settle_steps,
+                  "With --animate: at most this many steps to settle first")->capture_default_str();
+  cmd->add_option("-o,--output", a->output, "Floaters as PLY (binary little-endian)")
+      ->type_name("FILE.ply");
+  cmd->add_flag("--ascii", a->ascii, "Write the PLY as ASCII");
+  cmd->add_option("--stats", a->stats,
+                  "Quality figures as JSON: count, steps/s, residual, spacing CV, covering "
+                  "radius, singular point coverage, density near the singular set")
+      ->type_name("FILE.json");
+  cmd->add_option("--png", a->png, "Picture of the floaters as shaded disks")
+      ->type_name("FILE.png");
+  cmd->add_option("--camera", a->camera,
+                  "Orbit camera AZIMUTH,ELEVATION[,DISTANCE] in degrees (z up) for --png; "
+                  "without a distance the picture is framed on the floaters")
+      ->type_name("AZ,EL[,D]");
+  cmd->add_option("--size", a->size, "Picture size")->capture_default_str()->type_name("WxH");
+  cmd->add_option("--disk-scale", a->disk_scale, "Disk radius in the picture per floater radius")->capture_default_str();
+  cmd->add_option("--band", a->band,
+                  "Half width of the band around the singular set for the density figure "
+                  "(default sigma^/2)");
+  cmd->add_option("--reference", a->reference,
+                  "Reference points on the surface for the covering radius")->capture_default_str()
+      ->check(CLI::Range(std::size_t{100}, std::size_t{10'000'000}));
+  cmd->callback([a] { run_sample(*a); });
+}
+
+}  // namespace zeroset::cli

@@ -1,0 +1,120 @@
+#include "common.h"
+
+#include <fmt/core.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "zeroset/error.h"
+#include "zeroset/io/atomic_file.h"
+
+namespace zeroset::cli {
+
+GlobalFlags& global_flags() {
+  static GlobalFlags flags;
+  return flags;
+}
+
+void say(const std::string& line) {
+  if (!global_flags().quiet) fmt::print("{}\n", line);
+}
+
+void SurfaceArgs::add_to(CLI::App* cmd, bool optional) {
+  auto* opt = cmd->add_option("SURFACE", spec,
+                              "Catalog name (zeroset list), equation in quotes, or scene file "
+                              "(.json)");
+  if (!optional) opt->required();
+  cmd->add_option("-p,--param", params,
+                  "Parameter value name=value (repeatable), e.g. --param mu=1.5")
+      ->type_name("NAME=VALUE");
+  cmd->add_option("--clip", clips,
+                  "Clip volume, replaces the default (repeatable, intersected): sphere:R, "
+                  "sphere:R@x,y,z, box:H, box:x0,y0,z0,x1,y1,z1, plane:nx,ny,nz,d (keeps "
+                  "n.x <= d)")
+      ->type_name("SPEC");
+}
+
+SurfaceOverrides SurfaceArgs::overrides() const {
+  SurfaceOverrides o;
+  for (const auto& p : params) {
+    auto [name, value] = parse_assignment(p, "--param");
+    o.params[name] = value;
+  }
+  o.clip_specs = clips;
+  return o;
+}
+
+Scene SurfaceArgs::resolve() const { return resolve_scene(spec, overrides()); }
+
+namespace {
+double parse_finite(const std::string& text, const std::string& flag, const std::string& whole) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size())
+    throw InvalidArgument(flag, whole, fmt::format("'{}' is not a number", text));
+  if (!std::isfinite(v)) throw InvalidArgument(flag, whole, "the value must be finite");
+  return v;
+}
+}  // namespace
+
+std::pair<std::string, double> parse_assignment(const std::string& text, const std::string& flag) {
+  const size_t eq = text.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw InvalidArgument(flag, text, "expected name=value, e.g. mu=1.5");
+  return {text.substr(0, eq), parse_finite(text.substr(eq + 1), flag, text)};
+}
+
+ParamRange parse_range(const std::string& text, const std::string& flag) {
+  const size_t eq = text.find('=');
+  const size_t colon = text.find(':', eq == std::string::npos ? 0 : eq);
+  if (eq == std::string::npos || eq == 0 || colon == std::string::npos)
+    throw InvalidArgument(flag, text, "expected name=from:to, e.g. mu=1.02:2.44");
+  ParamRange r;
+  r.name = text.substr(0, eq);
+  r.from = parse_finite(text.substr(eq + 1, colon - eq - 1), flag, text);
+  r.to = parse_finite(text.substr(colon + 1), flag, text);
+  return r;
+}
+
+std::pair<int, int> parse_size(const std::string& text, const std::string& flag) {
+  const size_t x = text.find('x');
+  if (x == std::string::npos) throw InvalidArgument(flag, text, "expected WIDTHxHEIGHT, e.g. 800x600");
+  const double w = parse_finite(text.substr(0, x), flag, text);
+  const double h = parse_finite(text.substr(x + 1), flag, text);
+  if (w < 1 || h < 1 || w != std::floor(w) || h != std::floor(h))
+    throw InvalidArgument(flag, text, "width and height must be positive whole numbers");
+  if (w * h > 100e6) throw InvalidArgument(flag, text, "larger than 100 megapixels");
+  return {static_cast<int>(w), static_cast<int>(h)};
+}
+
+Progress::Progress(std::string label, bool quiet)
+    : label_(std::move(label)), enabled_(!quiet && ::isatty(STDERR_FILENO)) {}
+
+Progress::~Progress() { finish(); }
+
+void Progress::update(double fraction) {
+  if (!enabled_) return;
+  const int permille = static_cast<int>(std::clamp(fraction, 0.0, 1.0) * 1000);
+  if (permille == last_permille_) return;
+  last_permille_ = permille;
+  const int width = 30, filled = permille * width / 1000;
+  fmt::print(stderr, "\r{} [{}{}] {:5.1f}%", label_, std::string(filled, '#'),
+             std::string(width - filled, ' '), permille / 10.0);
+  std::fflush(stderr);
+}
+
+void Progress::finish() {
+  if (!enabled_ || last_permille_ < 0) return;
+  fmt::print(stderr, "\r{}\r", std::string(label_.size() + 45, ' '));
+  std::fflush(stderr);
+  last_permille_ = -1;
+}
+
+void write_json(const nlohmann::json& j, const std::string& path) {
+  const std::string text = j.dump(2) + "\n";
+  write_file_atomically(path, [&](std::ostream& out) { out << text; });
+}
+
+}  // namespace zeroset::cli

@@ -1,0 +1,71 @@
+#pragma once
+// Shared pieces of the `zeroset` subcommands: the SURFACE argument, --param/--clip,
+// progress bars, --stats files. Every subcommand registers itself through one function.
+#include <CLI/CLI.hpp>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "zeroset/surface/scene.h"
+
+namespace zeroset::cli {
+
+/// The SURFACE positional argument with --param and --clip, as every stage takes them.
+struct SurfaceArgs {
+  std::string spec;
+  std::vector<std::string> params;  // "k=v"
+  std::vector<std::string> clips;   // clip specs
+  /// Adds SURFACE (required unless `optional`), --param and --clip to `cmd`.
+  void add_to(CLI::App* cmd, bool optional = false);
+  /// The overrides from --param and --clip (throws InvalidArgument on malformed ones).
+  SurfaceOverrides overrides() const;
+  /// Resolves the surface (catalog name, scene file or equation) with the overrides.
+  Scene resolve() const;
+};
+
+/// Parses "name=value" (value a finite number). Throws InvalidArgument saying which and why.
+std::pair<std::string, double> parse_assignment(const std::string& text, const std::string& flag);
+/// Parses "name=a:b" (a range). Throws InvalidArgument.
+struct ParamRange {
+  std::string name;
+  double from = 0, to = 0;
+};
+ParamRange parse_range(const std::string& text, const std::string& flag);
+/// Parses "WxH" (positive). Throws InvalidArgument.
+std::pair<int, int> parse_size(const std::string& text, const std::string& flag);
+
+/// A progress bar on stderr; silent when stderr is not a terminal or --quiet was given.
+class Progress {
+ public:
+  Progress(std::string label, bool quiet);
+  ~Progress();
+  void update(double fraction);  ///< thread-safe enough: called from one thread at a time
+  void finish();
+
+ private:
+  std::string label_;
+  bool enabled_;
+  int last_permille_ = -1;
+};
+
+/// Writes a JSON document atomically (pretty-printed).
+void write_json(const nlohmann::json& j, const std::string& path);
+
+/// Global flags every subcommand sees.
+struct GlobalFlags {
+  bool quiet = false;
+  int threads = 0;  // 0: all cores
+};
+GlobalFlags& global_flags();
+
+/// Prints a line to stdout unless --quiet.
+void say(const std::string& line);
+
+void register_catalog_commands(CLI::App& app);  // list, info, eval
+void register_render_commands(CLI::App& app);   // render, animate, export
+void register_sample_command(CLI::App& app);    // sample
+void register_mesh_command(CLI::App& app);      // mesh
+void register_view_command(CLI::App& app);      // view
+
+}  // namespace zeroset::cli

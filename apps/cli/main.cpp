@@ -1,0 +1,63 @@
+// zeroset: make implicit surfaces F(x, y, z; q) = 0 visible.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <exception>
+#include <fmt/core.h>
+
+#include "common.h"
+#include "zeroset/error.h"
+
+int main(int argc, char** argv) {
+  using namespace zeroset;
+  CLI::App app{
+      "zeroset — make implicit surfaces F(x, y, z; q) = 0 visible, singular points and\n"
+      "self-intersections included.\n\n"
+      "SURFACE is a catalog name (see `zeroset list`), an equation in quotes such as\n"
+      "\"x^2 + y^2 = z^2\", or a scene file (.json). Free names in an equation are\n"
+      "parameters: give them with --param name=value.\n\n"
+      "Examples:\n"
+      "  zeroset list\n"
+      "  zeroset info kummer --param mu=1.5\n"
+      "  zeroset eval \"x^2 + y^2 - z^2\" --at 1,0,1\n"
+      "  zeroset render kummer -o kummer.png\n"
+      "  zeroset sample cone --png cone.png -o cone.ply\n"
+      "  zeroset mesh kummer --param mu=1.5 -o kummer.obj\n"
+      "  zeroset view kummer\n\n"
+      "Exit codes: 0 success, 2 bad input, 1 failure.",
+      "zeroset"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "zeroset 0.1.0");
+  auto& g = cli::global_flags();
+  app.add_flag("-q,--quiet", g.quiet, "Print nothing but errors")->configurable(false);
+  app.add_option("--threads", g.threads, "Worker threads (0: all cores)")
+      ->check(CLI::Range(0, 1024));
+
+  cli::register_catalog_commands(app);
+  cli::register_render_commands(app);
+  cli::register_sample_command(app);
+  cli::register_mesh_command(app);
+  cli::register_view_command(app);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return 2;
+  } catch (const BadInput& e) {
+    fmt::print(stderr, "zeroset: error: {}\n", e.what());
+    return 2;
+  } catch (const std::bad_alloc&) {
+    fmt::print(stderr, "zeroset: error: out of memory\n");
+    return 1;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "zeroset: error: {}\n", e.what());
+    return 1;
+  }
+  return 0;
+}

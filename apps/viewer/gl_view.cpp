@@ -1,0 +1,459 @@
+#include "gl_view.h"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "camera_control.h"
+#include "zeroset/error.h"
+
+namespace zeroset::viewer {
+namespace {
+
+// The shading of zeroset's CPU renderer (Phong, parallel lights, ambient term, front and back
+// materials, gamma 2.2), in eye space; shared by the programs below (after their #version
+// line). A point is on the front side when the eye lies on the side its normal (∇F) points to.
+constexpr const char* kShading = R"(
+uniform int u_light_count;
+uniform vec3 u_light_dir[4];    // unit, towards the light, eye space
+uniform vec3 u_light_color[4];
+uniform vec3 u_front_diffuse;
+uniform vec3 u_front_params;    // ambient, specular, shininess
+uniform vec3 u_back_diffuse;
+uniform vec3 u_back_params;
+
+vec3 phong(vec3 n, vec3 to_eye, vec3 diffuse, vec3 params) {
+  vec3 c = params.x * diffuse;
+  for (int i = 0; i < u_light_count; ++i) {
+    float ndl = dot(n, u_light_dir[i]);
+    if (ndl <= 0.0) continue;
+    c += u_light_color[i] * ndl * diffuse;
+    if (params.y > 0.0) {
+      float rv = dot(2.0 * ndl * n - u_light_dir[i], to_eye);
+      if (rv > 0.0) c += params.y * pow(rv, params.z) * u_light_color[i];
+    }
+  }
+  return c;
+}
+
+// Gamma-encoded colour of a point at `pos` (eye space) with normal `normal`.
+vec3 shade(vec3 normal, vec3 pos) {
+  vec3 to_eye = normalize(-pos);
+  float len = length(normal);
+  vec3 n = len > 1e-12 ? normal / len : to_eye;
+  bool front = dot(n, to_eye) >= 0.0;
+  vec3 c = front ? phong(n, to_eye, u_front_diffuse, u_front_params)
+                 : phong(-n, to_eye, u_back_diffuse, u_back_params);
+  return pow(clamp(c, 0.0, 1.0), vec3(1.0 / 2.2));
+}
+)";
+
+// Disk: one point sprite per floater, as wide as the projection of the ball that holds the
+// disk; the fragment shader intersects the pixel's eye ray with the disk's plane and keeps
+// the pixels within its radius, so every disk appears as the exact ellipse it projects to,
+// with correct depth. One primitive and one vertex per floater: software OpenGL spends most
+// of its time per primitive and per vertex, and draws ten thousand of these several times
+// faster than the same disks as quads. A disk is flat, so it is shaded once, at its centre.
+constexpr const char* kDiskVertex = R"(
+layout(location = 1) in vec3 a_center;
+layout(location = 2) in vec3 a_normal;
+layout(location = 3) in float a_radius;
+uniform mat4 u_view;
+uniform mat4 u_proj;
+uniform float u_scale;
+uniform vec4 u_viewport;  // x, y, width, height in pixels
+flat out vec3 v_color;
+flat out vec3 v_center;
+flat out vec3 v_normal;
+flat out float v_radius;
+void main() {
+  vec4 ce = u_view * vec4(a_center, 1.0);
+  vec3 n = mat3(u_view) * normalize(a_normal);
+  float r = u_scale * a_radius;
+  v_color = shade(n, ce.xyz);
+  v_center = ce.xyz;
+  v_normal = n;
+  v_radius = r;
+  gl_Position = u_proj * ce;
+  // The ball's projection is at most r / sqrt(depth² - r²) wide in units of the focal length;
+  // 10% and a pixel more cover where it sits off the sprite's centre.
+  float depth = max(-ce.z, 1e-6);
+  float half_width = r / sqrt(max(depth * depth - r * r, 1e-12)) * u_proj[1][1] * 0.5 * u_viewport.w;
+  gl_PointSize = clamp(2.2 * half_width + 1.0, 1.0, 255.0);
+}
+)";
+
+constexpr const char* kDiskFragment = R"(
+flat in vec3 v_color;
+flat in vec3 v_center;
+flat in vec3 v_normal;
+flat in float v_radius;
+uniform mat4 u_proj;
+uniform vec4 u_viewport;
+out vec4 frag;
+void main() {
+  vec2 ndc = 2.0 * (gl_FragCoord.xy - u_viewport.xy) / u_viewport.zw - 1.0;
+  vec3 dir = vec3(ndc.x / u_proj[0][0], ndc.y / u_proj[1][1], -1.0);
+  float facing = dot(dir, v_normal);
+  if (abs(facing) < 1e-9) discard;
+  vec3 p = dot(v_center, v_normal) / facing * dir;
+  vec3 d = p - v_center;
+  if (dot(d, d) > v_radius * v_radius) discard;
+  vec4 clip = u_proj * vec4(p, 1.0);
+  gl_FragDepth = 0.5 * clip.z / clip.w + 0.5;
+  frag = vec4(v_color, 1.0);
+}
+)";
+
+// Points: round sprites of a fixed size in pixels, shaded at their centre.
+constexpr const char* kPointVertex = R"(
+layout(location = 1) in vec3 a_center;
+layout(location = 2) in vec3 a_normal;
+uniform mat4 u_view;
+uniform mat4 u_proj;
+uniform float u_point_size;
+flat out vec3 v_color;
+void main() {
+  vec4 pe = u_view * vec4(a_center, 1.0);
+  v_color = shade(mat3(u_view) * a_normal, pe.xyz);
+  gl_PointSize = u_point_size;
+  gl_Position = u_proj * pe;
+}
+)";
+
+constexpr const char* kPointFragment = R"(
+flat in vec3 v_color;
+out vec4 frag;
+void main() {
+  vec2 q = 2.0 * gl_PointCoord - 1.0;
+  if (dot(q, q) > 1.0) discard;
+  frag = vec4(v_color, 1.0);
+}
+)";
+
+constexpr const char* kMeshVertex = R"(
+layout(location = 0) in vec3 a_pos;
+layout(location = 1) in vec3 a_normal;
+uniform mat4 u_view;
+uniform mat4 u_proj;
+out vec3 v_pos;
+out vec3 v_normal;
+void main() {
+  vec4 pe = u_view * vec4(a_pos, 1.0);
+  v_pos = pe.xyz;
+  v_normal = mat3(u_view) * a_normal;
+  gl_Position = u_proj * pe;
+}
+)";
+
+// The mesh is shaded per fragment: its normals (∇F) vary across a triangle.
+constexpr const char* kMeshFragment = R"(
+in vec3 v_pos;
+in vec3 v_normal;
+uniform vec4 u_flat_color;  // alpha > 0: this colour instead of shading (wireframe)
+out vec4 frag;
+void main() {
+  frag = u_flat_color.a > 0.0 ? u_flat_color : vec4(shade(v_normal, v_pos), 1.0);
+}
+)";
+
+// One triangle covering the viewport; the image's row 0 is its top.
+constexpr const char* kImageVertex = R"(
+out vec2 v_uv;
+void main() {
+  vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);
+  v_uv = vec2(p.x, 1.0 - p.y);
+  gl_Position = vec4(2.0 * p - 1.0, 0.0, 1.0);
+}
+)";
+
+constexpr const char* kImageFragment = R"(
+in vec2 v_uv;
+uniform sampler2D u_image;
+out vec4 frag;
+void main() { frag = vec4(texture(u_image, v_uv).rgb, 1.0); }
+)";
+
+constexpr int kMaxLights = 4;
+constexpr float kWireColor[4] = {0.08f, 0.08f, 0.1f, 1.0f};
+constexpr int kFloaterFloats = 7;  // centre, normal, radius
+
+// Compiles "#version 330 core", the shading functions and `body`.
+GLuint compile(GLenum kind, const char* body) {
+  const GLuint shader = glCreateShader(kind);
+  const char* sources[] = {"#version 330 core\n", kShading, body};
+  glShaderSource(shader, 3, sources, nullptr);
+  glCompileShader(shader);
+  GLint ok = GL_FALSE;
+  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    GLint length = 0;
+    glGetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
+    std::string log(std::max(length, 1), '\0');
+    glGetShaderInfoLog(shader, length, nullptr, log.data());
+    glDeleteShader(shader);
+    throw Error("OpenGL shader does not compile: " + log);
+  }
+  return shader;
+}
+
+GLuint link(const char* vertex, const char* fragment) {
+  const GLuint vs = compile(GL_VERTEX_SHADER, vertex);
+  const GLuint fs = compile(GL_FRAGMENT_SHADER, fragment);
+  const GLuint program = glCreateProgram();
+  glAttachShader(program, vs);
+  glAttachShader(program, fs);
+  glLinkProgram(program);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  GLint ok = GL_FALSE;
+  glGetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    GLint length = 0;
+    glGetProgramiv(program, GL_INFO_LOG_LENGTH, &length);
+    std::string log(std::max(length, 1), '\0');
+    glGetProgramInfoLog(program, length, nullptr, log.data());
+    glDeleteProgram(program);
+    throw Error("OpenGL program does not link: " + log);
+  }
+  return program;
+}
+
+void locate(GLuint id, auto& p) {
+  p.id = id;
+  p.view = glGetUniformLocation(id, "u_view");
+  p.proj = glGetUniformLocation(id, "u_proj");
+  p.scale = glGetUniformLocation(id, "u_scale");
+  p.point_size = glGetUniformLocation(id, "u_point_size");
+  p.viewport = glGetUniformLocation(id, "u_viewport");
+  p.flat_color = glGetUniformLocation(id, "u_flat_color");
+  p.light_count = glGetUniformLocation(id, "u_light_count");
+  p.light_dir = glGetUniformLocation(id, "u_light_dir");
+  p.light_color = glGetUniformLocation(id, "u_light_color");
+  p.front_diffuse = glGetUniformLocation(id, "u_front_diffuse");
+  p.front_params = glGetUniformLocation(id, "u_front_params");
+  p.back_diffuse = glGetUniformLocation(id, "u_back_diffuse");
+  p.back_params = glGetUniformLocation(id, "u_back_params");
+  p.image = glGetUniformLocation(id, "u_image");
+}
+
+float encode_gamma(double linear) {
+  return static_cast<float>(std::pow(std::clamp(linear, 0.0, 1.0), 1.0 / 2.2));
+}
+
+}  // namespace
+
+GlView::GlView() {
+  locate(link(kDiskVertex, kDiskFragment), disks_);
+  locate(link(kPointVertex, kPointFragment), points_);
+  locate(link(kMeshVertex, kMeshFragment), mesh_);
+  locate(link(kImageVertex, kImageFragment), image_);
+
+  // Floaters: one vertex per floater, drawn as disks or as points.
+  glGenBuffers(1, &floater_vbo_);
+  glGenVertexArrays(1, &floater_vao_);
+  glBindVertexArray(floater_vao_);
+  glBindBuffer(GL_ARRAY_BUFFER, floater_vbo_);
+  const GLsizei stride = kFloaterFloats * sizeof(float);
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride, nullptr);
+  glEnableVertexAttribArray(2);
+  glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(3 * sizeof(float)));
+  glEnableVertexAttribArray(3);
+  glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(6 * sizeof(float)));
+
+  glGenVertexArrays(1, &mesh_vao_);
+  glBindVertexArray(mesh_vao_);
+  glGenBuffers(1, &mesh_vbo_);
+  glGenBuffers(1, &mesh_ebo_);
+  glBindBuffer(GL_ARRAY_BUFFER, mesh_vbo_);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, mesh_ebo_);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<void*>(3 * sizeof(float)));
+
+  glGenVertexArrays(1, &image_vao_);
+  glGenTextures(1, &image_texture_);
+  glBindTexture(GL_TEXTURE_2D, image_texture_);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glBindVertexArray(0);
+}
+
+GlView::~GlView() {
+  glDeleteTextures(1, &image_texture_);
+  const GLuint arrays[] = {floater_vao_, mesh_vao_, image_vao_};
+  glDeleteVertexArrays(3, arrays);
+  const GLuint buffers[] = {floater_vbo_, mesh_vbo_, mesh_ebo_};
+  glDeleteBuffers(3, buffers);
+  for (const Program* p : {&disks_, &points_, &mesh_, &image_}) glDeleteProgram(p->id);
+}
+
+void GlView::draw(const ViewerState& state, int x, int y, int width, int height) {
+  const Color& bg = state.look().background;
+  glViewport(x, y, width, height);
+  glEnable(GL_SCISSOR_TEST);
+  glScissor(x, y, width, height);
+  glClearColor(encode_gamma(bg.x()), encode_gamma(bg.y()), encode_gamma(bg.z()), 1.0f);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glDisable(GL_SCISSOR_TEST);
+  if (width < 1 || height < 1) return;
+
+  if (state.mode() == Mode::kRaytrace) {
+    draw_preview(state);
+    return;
+  }
+  const View view = View::from_camera(state.camera(), state.surface().scene_radius(), width, height);
+  double near = 0, far = 0;
+  // The clip volume plus a margin for disks reaching past its boundary.
+  depth_range(view, state.surface().bounds().center(), 1.2 * state.surface().scene_radius(), near, far);
+  const Eigen::Matrix4f view_m = view_matrix(view);
+  const Eigen::Matrix4f proj_m = projection_matrix(view, near, far);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  if (state.mode() == Mode::kFloaters)
+    draw_floaters(state, view_m, proj_m, Eigen::Vector4f(x, y, width, height));
+  else
+    draw_mesh(state, view_m, proj_m);
+  glDisable(GL_DEPTH_TEST);
+  glBindVertexArray(0);
+}
+
+void GlView::set_shading(const Program& p, const ViewerState& state, const Eigen::Matrix4f& view,
+                         const Eigen::Matrix4f& proj) {
+  glUseProgram(p.id);
+  glUniformMatrix4fv(p.view, 1, GL_FALSE, view.data());
+  glUniformMatrix4fv(p.proj, 1, GL_FALSE, proj.data());
+  glUniform4f(p.flat_color, 0, 0, 0, 0);
+  const RenderOptions& look = state.look();
+  // Lights in eye space: camera-following lights are given in camera coordinates already,
+  // world lights are turned by the view's rotation.
+  std::vector<float> dirs, colors;
+  const Eigen::Matrix3d rotation = view.block<3, 3>(0, 0).cast<double>();
+  for (const Light& l : look.lights) {
+    if (static_cast<int>(dirs.size()) / 3 == kMaxLights) break;
+    if (!(l.direction.norm() > 0) || !l.direction.allFinite()) continue;
+    const Vec3 d = (l.follows_camera ? l.direction : Vec3(rotation * l.direction)).normalized();
+    for (int k = 0; k < 3; ++k) {
+      dirs.push_back(static_cast<float>(d[k]));
+      colors.push_back(static_cast<float>(l.color[k]));
+    }
+  }
+  const GLsizei count = static_cast<GLsizei>(dirs.size() / 3);
+  glUniform1i(p.light_count, count);
+  if (count > 0) {
+    glUniform3fv(p.light_dir, count, dirs.data());
+    glUniform3fv(p.light_color, count, colors.data());
+  }
+  auto material = [](GLint diffuse, GLint params, const Material& m) {
+    glUniform3f(diffuse, static_cast<float>(m.diffuse.x()), static_cast<float>(m.diffuse.y()),
+                static_cast<float>(m.diffuse.z()));
+    glUniform3f(params, static_cast<float>(m.ambient), static_cast<float>(m.specular),
+                static_cast<float>(m.shininess));
+  };
+  material(p.front_diffuse, p.front_params, look.front);
+  material(p.back_diffuse, p.back_params, look.back);
+}
+
+void GlView::draw_preview(const ViewerState& state) {
+  const auto frame = state.preview();
+  if (!frame || frame->image.width < 1) return;
+  glBindTexture(GL_TEXTURE_2D, image_texture_);
+  if (frame != uploaded_preview_) {
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, frame->image.width, frame->image.height, 0, GL_RGB,
+                 GL_UNSIGNED_BYTE, frame->image.rgb.data());
+    uploaded_preview_ = frame;
+  }
+  glUseProgram(image_.id);
+  glActiveTexture(GL_TEXTURE0);
+  glUniform1i(image_.image, 0);
+  glBindVertexArray(image_vao_);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+}
+
+void GlView::draw_floaters(const ViewerState& state, const Eigen::Matrix4f& view,
+                           const Eigen::Matrix4f& proj, const Eigen::Vector4f& viewport) {
+  const auto frame = state.floaters();
+  if (!frame) return;
+  if (frame != uploaded_floaters_) {
+    const size_t n = frame->positions.size();
+    std::vector<float> data(n * kFloaterFloats);
+    for (size_t i = 0; i < n; ++i) {
+      float* d = &data[i * kFloaterFloats];
+      for (int k = 0; k < 3; ++k) {
+        d[k] = static_cast<float>(frame->positions[i][k]);
+        d[3 + k] = static_cast<float>(frame->normals[i][k]);
+      }
+      d[6] = static_cast<float>(frame->radii[i]);
+    }
+    glBindBuffer(GL_ARRAY_BUFFER, floater_vbo_);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)),
+                 data.data(), GL_STREAM_DRAW);
+    floater_count_ = static_cast<GLsizei>(n);
+    uploaded_floaters_ = frame;
+  }
+  if (floater_count_ == 0) return;
+  const DisplaySettings& display = state.display();
+  if (display.draw_points) {
+    set_shading(points_, state, view, proj);
+    glUniform1f(points_.point_size, static_cast<float>(display.point_size_px));
+  } else {
+    set_shading(disks_, state, view, proj);
+    glUniform1f(disks_.scale, static_cast<float>(display.disk_scale));
+    glUniform4fv(disks_.viewport, 1, viewport.data());
+  }
+  glEnable(GL_PROGRAM_POINT_SIZE);
+  glBindVertexArray(floater_vao_);
+  glDrawArrays(GL_POINTS, 0, floater_count_);
+  glDisable(GL_PROGRAM_POINT_SIZE);
+}
+
+void GlView::draw_mesh(const ViewerState& state, const Eigen::Matrix4f& view,
+                       const Eigen::Matrix4f& proj) {
+  const auto frame = state.mesh();
+  if (!frame) return;
+  glBindVertexArray(mesh_vao_);
+  if (frame != uploaded_mesh_) {
+    const Mesh& m = frame->mesh;
+    const bool has_normals = m.normals.size() == m.positions.size();
+    std::vector<float> vertices(m.positions.size() * 6);
+    for (size_t i = 0; i < m.positions.size(); ++i)
+      for (int k = 0; k < 3; ++k) {
+        vertices[6 * i + k] = static_cast<float>(m.positions[i][k]);
+        vertices[6 * i + 3 + k] = has_normals ? static_cast<float>(m.normals[i][k]) : 0.0f;
+      }
+    glBindBuffer(GL_ARRAY_BUFFER, mesh_vbo_);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(float)),
+                 vertices.data(), GL_STREAM_DRAW);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+                 static_cast<GLsizeiptr>(m.triangles.size() * 3 * sizeof(std::uint32_t)),
+                 m.triangles.data(), GL_STREAM_DRAW);
+    mesh_index_count_ = static_cast<GLsizei>(m.triangles.size() * 3);
+    uploaded_mesh_ = frame;
+  }
+  if (mesh_index_count_ == 0) return;
+  set_shading(mesh_, state, view, proj);
+  const bool wireframe = state.display().wireframe;
+  if (wireframe) {
+    // Push the faces back a little so the edges drawn on top win the depth test.
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(1.0f, 1.0f);
+  }
+  glDrawElements(GL_TRIANGLES, mesh_index_count_, GL_UNSIGNED_INT, nullptr);
+  if (wireframe) {
+    glDisable(GL_POLYGON_OFFSET_FILL);
+    glUniform4fv(mesh_.flat_color, 1, kWireColor);
+    glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
+    glDrawElements(GL_TRIANGLES, mesh_index_count_, GL_UNSIGNED_INT, nullptr);
+    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+  }
+}
+
+}  // namespace zeroset::viewer

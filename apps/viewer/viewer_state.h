@@ -1,0 +1,317 @@
+#pragma once
+// Everything the viewer knows and does, without a window: the surface and its parameters, the
+// camera, the animation, the settings of each mode, the background jobs that compute what is
+// drawn, and every user action. The GL view and the ImGui panel only read this state and call
+// its actions, so tests drive it like a user ("Drive viewer state without a window").
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "job_worker.h"
+#include "viewer.h"
+#include "zeroset/floaters/floaters.h"
+#include "zeroset/io/image.h"
+#include "zeroset/mesh/improve.h"
+#include "zeroset/mesh/mesh.h"
+#include "zeroset/mesh/polygonize.h"
+#include "zeroset/render/render.h"
+#include "zeroset/render/view.h"
+#include "zeroset/surface/scene.h"
+
+namespace zeroset::viewer {
+
+struct CommandLine;
+
+/// One ray-traced preview: the picture at 1/divisor of the viewport's resolution.
+struct PreviewFrame {
+  Image image;
+  int divisor = 1;            ///< 8, 4, 2, then 1 (full resolution)
+  RenderStats stats;
+  std::uint64_t generation = 0;  ///< the job it came from
+};
+
+/// A copy of the floaters after one step, for drawing and saving.
+struct FloaterFrame {
+  std::vector<Vec3> positions;
+  std::vector<Vec3> normals;    ///< unit ∇F
+  std::vector<double> radii;    ///< σ_i
+  StepStats last;               ///< the step that produced this state
+  double steps_per_second = 0;  ///< simulation rate over the last half second or so
+  double nominal_radius = 0;    ///< σ̂ in use
+  std::uint64_t generation = 0;
+  std::uint64_t surface_version = 0;  ///< the equation / clip edit it reflects
+  std::uint64_t params_version = 0;   ///< the parameter edit it reflects
+};
+
+/// The mesh as polygonized, then after each improver step.
+struct MeshFrame {
+  Mesh mesh;                    ///< with unit normals (∇F, face normals where ∇F vanishes)
+  PolygonizeStats polygonize;
+  ImproveStats improve;         ///< after the last step (default before the first)
+  int improver_steps = 0;       ///< steps applied to `mesh` so far
+  bool is_final = false;        ///< no more steps will follow for this generation
+  std::uint64_t generation = 0;
+};
+
+/// A parameter animation: the parameter runs through its range at `speed` ranges per second,
+/// back and forth when `loop`, else it stops at the end.
+struct Animation {
+  std::string parameter;  ///< empty: the first parameter of the surface
+  bool is_playing = false;
+  bool loop = true;
+  double speed = 0.1;     ///< fraction of the parameter's range per second
+  int direction = 1;      ///< +1 towards max, -1 towards min
+};
+
+/// How the GL modes draw.
+struct DisplaySettings {
+  bool draw_points = false;  ///< floaters as round points instead of oriented disks
+  double disk_scale = 0.75;  ///< disk radius = disk_scale·σ_i (as `zeroset sample --png`)
+  double point_size_px = 3;  ///< size of a point in pixels
+  bool wireframe = false;    ///< mesh: overlay the edges
+};
+
+/// Mesh mode settings.
+struct MeshSettings {
+  int cells = 64;          ///< marching cubes cells along the longest side of the clip box
+  bool improve = true;     ///< run the improver after polygonizing
+  int max_improver_steps = 200;
+};
+
+/// A status line: the result of the last action, or a worker's message.
+struct StatusLine {
+  std::string text;
+  bool is_error = false;
+};
+
+/// Live figures for the panel, `stats` and --stats-out.
+struct ViewerStats {
+  Mode mode = Mode::kRaytrace;
+  double fps = 0;           ///< frames drawn per second (frames are drawn when something changed)
+  double draw_seconds = 0;  ///< wall time of drawing one frame
+  // floaters
+  std::size_t floater_count = 0;
+  std::size_t floater_steps = 0;
+  double steps_per_second = 0;
+  double median_residual = 0;
+  double max_residual = 0;
+  bool converged = false;
+  double nominal_radius = 0;
+  // mesh
+  std::size_t mesh_vertices = 0;
+  std::size_t mesh_triangles = 0;
+  int improver_steps = 0;
+  double polygonize_seconds = 0;
+  // ray tracing
+  int preview_divisor = 0;  ///< 0: nothing yet
+  double preview_seconds = 0;
+  bool is_busy = false;     ///< the mode's job has not finished yet
+
+  nlohmann::json to_json() const;
+};
+
+/// The viewer's state and actions. Not thread-safe: the UI thread owns it; background jobs
+/// only communicate through mailboxes and a control block. Every action goes through guard():
+/// an exception becomes an error status line and the action returns false, so no exception
+/// crosses the frame loop; on failure the previous state stays (in particular the last good
+/// surface stays on screen).
+class ViewerState {
+ public:
+  /// Opens `scene` in `mode` (nullopt: the scene's saved mode, else ray tracing). Applies the
+  /// scene's saved viewer settings; throws BadInput naming the JSON entry when they are
+  /// malformed. An unbounded clip is replaced by a sphere (with a status line saying so).
+  /// `threads` for the background work, 0: all cores for the ray caster and marching cubes,
+  /// half of them for the floater simulation. `origin` names the scene in messages (its file).
+  ViewerState(Scene scene, std::optional<Mode> mode, int threads = 0,
+              const std::string& origin = "scene");
+  ~ViewerState();
+  ViewerState(const ViewerState&) = delete;
+  ViewerState& operator=(const ViewerState&) = delete;
+
+  // ---- the guard -----------------------------------------------------------------------------
+  /// Runs `body`; an exception becomes the error status "`action`: message". Returns success.
+  bool guard(std::string_view action, const std::function<void()>& body);
+  /// Receives every status line as it is set (e.g. to print a script log).
+  void set_status_sink(std::function<void(const StatusLine&)> sink) { sink_ = std::move(sink); }
+  const StatusLine& status() const { return status_; }
+  void set_status(std::string text, bool is_error = false);
+
+  // ---- surface -------------------------------------------------------------------------------
+  /// Parses `text`; on error the diagnostics (with caret) go to equation_error() and the
+  /// current surface stays (equation_text() is `text` either way). Parameters keep their values and ranges by name; new ones start
+  /// at 1 with range [0, 2]. The clip and camera stay.
+  bool set_equation(const std::string& text);
+  /// Switches to a catalog surface with its defaults and camera.
+  bool select_catalog(std::string_view name);
+  /// Loads a scene file (surface, camera and saved settings).
+  bool load_scene(const std::string& path);
+  bool set_parameter(std::string_view name, double value);
+  bool set_parameter_range(std::string_view name, double min, double max);
+  /// Replaces the clip; it must be bounded.
+  bool set_clip(const Clip& clip);
+  bool set_clip_specs(const std::vector<std::string>& specs);
+
+  const Surface& surface() const { return surface_; }
+  /// The equation as last typed (it may be the rejected one while equation_error() is set).
+  const std::string& equation_text() const { return equation_text_; }
+  /// Formatted diagnostics of the last rejected equation; empty when the last one was good.
+  const std::string& equation_error() const { return equation_error_; }
+
+  // ---- modes, animation, settings ------------------------------------------------------------
+  void set_mode(Mode mode);
+  Mode mode() const { return mode_; }
+  /// Starts the animation of `parameter` (empty: the current or first parameter).
+  bool play(std::string_view parameter = {});
+  void pause();
+  /// Chooses the parameter to animate (keeps playing if it was).
+  bool set_animation_parameter(std::string_view parameter);
+  void set_loop(bool loop) { animation_.loop = loop; }
+  bool set_speed(double ranges_per_second);
+  const Animation& animation() const { return animation_; }
+
+  bool set_floater_options(const FloaterOptions& options);
+  const FloaterOptions& floater_options() const { return floater_options_; }
+  /// Removes every floater and seeds again.
+  void reset_floaters();
+  bool set_mesh_settings(const MeshSettings& settings);
+  const MeshSettings& mesh_settings() const { return mesh_settings_; }
+  bool set_display(const DisplaySettings& display);
+  const DisplaySettings& display() const { return display_; }
+
+  /// Lights, materials and background shared by the GL modes and the ray caster.
+  const RenderOptions& look() const { return look_; }
+  bool set_look(const RenderOptions& look);
+  /// Lights follow the camera (directions in camera coordinates) or stay put in the world.
+  void set_lights_follow_camera(bool follow);
+  bool lights_follow_camera() const;
+
+  // ---- camera --------------------------------------------------------------------------------
+  /// Sets the size of the 3D view in pixels (the ray caster renders at this size).
+  void set_viewport(int width, int height);
+  int viewport_width() const { return viewport_w_; }
+  int viewport_height() const { return viewport_h_; }
+  const Camera& camera() const { return surface_.camera; }
+  bool set_camera(const Camera& camera);
+  void orbit(double dx_px, double dy_px);
+  void pan(double dx_px, double dy_px);
+  void zoom(double factor);
+  /// Back to the camera the surface came with.
+  void reset_view();
+  /// The view through the camera at the viewport's size.
+  View view() const;
+
+  // ---- files ---------------------------------------------------------------------------------
+  bool save_scene(const std::string& path);
+  /// The current mesh (mesh mode) as PLY, OBJ or STL.
+  bool save_mesh(const std::string& path);
+  /// The current floaters as PLY with normals and radii.
+  bool save_floaters(const std::string& path);
+  /// The current view as a POV-Ray scene.
+  bool save_pov(const std::string& path);
+  /// The scene (surface, camera, settings of every mode) as saved by save_scene.
+  Scene scene() const;
+
+  // ---- commands ------------------------------------------------------------------------------
+  /// Runs one command line of the viewer's command language (docs/viewer.md), e.g.
+  /// "param mu 2", "mode mesh", "equation x^2 + y^2 - z^2". Guarded; returns success.
+  bool command(std::string_view line);
+
+  // ---- frames --------------------------------------------------------------------------------
+  /// Often (at least once per frame) on the UI thread: advances the animation to wall time
+  /// `now_s` (seconds), restarts the mode's job when something it depends on changed, and
+  /// collects results (live ones at most 30 times a second). Returns true when there is
+  /// something new to draw.
+  bool update(double now_s);
+  /// Tells the state a frame was drawn at `now_s` and took `seconds` (smoothed), for stats().
+  void frame_drawn(double now_s, double seconds);
+  /// Live results (floater and improver steps) are taken for drawing at most once per this
+  /// many seconds (kept within [1/30, 1/2]; default 1/30). The window lengthens it when
+  /// drawing is slow, so that drawing never takes the CPU the simulation needs.
+  void set_live_frame_interval(double seconds);
+  static constexpr double kMinLiveFrameInterval = 1.0 / 30;
+  static constexpr double kMaxLiveFrameInterval = 0.5;
+  /// The mode's work is finished: full-resolution preview, mesh improved (or improvement
+  /// off), floaters converged.
+  bool is_settled() const;
+
+  std::shared_ptr<const PreviewFrame> preview() const { return preview_; }
+  std::shared_ptr<const FloaterFrame> floaters() const { return floaters_; }
+  std::shared_ptr<const MeshFrame> mesh() const { return mesh_; }
+  ViewerStats stats() const;
+
+ private:
+  struct FloaterControl;
+
+  void apply_settings(const nlohmann::json& settings, const std::string& origin);
+  nlohmann::json settings() const;
+  void open_scene(Scene scene, const std::string& origin);
+  void ensure_bounded_clip();
+  /// Publishes the surface to the floater job: `structure` for a new equation or clip
+  /// (FloaterSystem::set_surface), else new parameter values.
+  void surface_changed(bool structure);
+  void advance_animation(double dt);
+  void restart_job();
+  void start_preview_job();
+  void start_floater_job();
+  void start_mesh_job();
+  bool collect_results(double now_s);
+  void restart_if_needed();
+  int floater_threads() const;
+  void command_unguarded(const CommandLine& command);
+
+  // what is shown
+  Surface surface_;
+  Camera home_camera_;
+  std::string equation_text_;
+  std::string equation_error_;
+  nlohmann::json extra_settings_ = nlohmann::json::object();  // scene keys we keep as they are
+  Mode mode_ = Mode::kRaytrace;
+  Animation animation_;
+  FloaterOptions floater_options_;
+  MeshSettings mesh_settings_;
+  DisplaySettings display_;
+  RenderOptions look_;
+  int threads_ = 0;
+  int viewport_w_ = 800;
+  int viewport_h_ = 800;
+
+  // status
+  StatusLine status_;
+  std::function<void(const StatusLine&)> sink_;
+
+  // timing
+  double last_update_s_ = -1;
+  double last_frame_s_ = -1;
+  double last_live_frame_s_ = -1e9;
+  double live_frame_interval_s_ = kMinLiveFrameInterval;
+  double fps_ = 0;
+  double draw_seconds_ = 0;
+
+  // what changed since the job started
+  bool needs_restart_ = true;     // anything the current job depends on changed
+  // Restart at once (mode, catalog, scene, equation, mesh settings); other changes (camera,
+  // parameters, clip, look) let the running job show its first result before it is replaced.
+  bool cancel_now_ = false;
+  bool fresh_floaters_ = true;      // floaters: start a new system (new seeding)
+
+  // background work
+  std::uint64_t generation_ = 0;  // of the job currently wanted
+  std::shared_ptr<FloaterControl> floater_control_;
+  Mailbox<PreviewFrame> preview_box_;
+  Mailbox<FloaterFrame> floater_box_;
+  Mailbox<MeshFrame> mesh_box_;
+  std::shared_ptr<std::atomic<bool>> mesh_wants_frame_ = std::make_shared<std::atomic<bool>>(true);
+  std::shared_ptr<const PreviewFrame> preview_;
+  std::shared_ptr<const FloaterFrame> floaters_;
+  std::shared_ptr<const MeshFrame> mesh_;
+  JobWorker worker_;  // last: its thread stops before the mailboxes it writes go away
+};
+
+}  // namespace zeroset::viewer

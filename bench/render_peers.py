@@ -1,0 +1,148 @@
+#!/usr/bin/python3
+"""Ray tracing the reference scenes: zeroset beside surf and POV-Ray, side by side in one run.
+
+Every tool renders the same surfaces, clips and picture size (800×800, one ray per pixel, no
+anti-aliasing) as whole processes, timed from start to exit, each several times; the table
+gives medians. zeroset runs with 2 threads (`--threads 2`) and its `--stats` file also gives
+the time of the ray casting alone (without start-up and PNG encoding). surf
+(`surf-alggeo-nox`, single threaded) gets a script written here from each surface's
+equation; POV-Ray 3.7 gets the scene `zeroset export` writes (`polynomial ... sturm`,
+`clipped_by`) and uses its default threads. Each tool's pictures are kept in the output
+directory so they can be compared. Writes section "render" of docs/benchmarks.md.
+
+Usage: /usr/bin/python3 bench/render_peers.py BUILD_DIR [--repeat N] [--out DIR]
+"""
+import argparse
+import json
+import os
+import pathlib
+import resource
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = pathlib.Path(__file__).resolve().parent
+
+# name, catalog arguments, clip radius R, surf equation (surf's language: ^ powers, `poly`
+# and `double` variables).
+SCENES = [
+    ("Kummer mu = 1.5, R = 3", ["kummer", "--param", "mu=1.5"], 3.0,
+     "double mu=1.5;\npoly p=1-z-sqrt(2)*x;\npoly q=1-z+sqrt(2)*x;\n"
+     "poly r=1+z+sqrt(2)*y;\npoly s=1+z-sqrt(2)*y;\n"
+     "surface=(3-mu)*(x^2+y^2+z^2-mu)^2-(3*mu-1)*p*q*r*s;"),
+    ("Barth sextic, R = 1.8", ["barth6"], 1.8,
+     "double phi=(1+sqrt(5))/2;\n"
+     "surface=4*(phi^2*x^2-y^2)*(phi^2*y^2-z^2)*(phi^2*z^2-x^2)-(1+2*phi)*(x^2+y^2+z^2-1)^2;"),
+    ("cone, R = 1.5", ["cone"], 1.5, "surface=x^2+y^2-z^2;"),
+    ("planes, R = 1", ["planes"], 1.0, "surface=x*y;"),
+    ("Roman, R = 0.6", ["roman"], 0.6, "surface=x^2*y^2+y^2*z^2+z^2*x^2-x*y*z;"),
+]
+
+
+def surf_script(equation, radius, ppm):
+    """surf draws world [-10, 10]: scale the surface so that its clip sphere (radius 9.5 in
+    surf's units) is the scene's R; colours as zeroset's defaults (front orange, back blue)."""
+    scale = radius / 9.5
+    return "\n".join([
+        "width=800;", "height=800;", "clip=sphere;", "radius=9.5;",
+        f"scale_x={scale:.6f};", f"scale_y={scale:.6f};", f"scale_z={scale:.6f};",
+        "rot_x=-1.2;", "rot_y=0.5;",
+        "surface_red=230;", "surface_green=170;", "surface_blue=90;",
+        "inside_red=70;", "inside_green=95;", "inside_blue=160;",
+        "antialiasing=1;", equation, "draw_surface;",
+        f'filename="{ppm}";', "color_file_format=ppm;", "save_color_image;", ""])
+
+
+def timed(cmd, repeat, cwd=None):
+    """Median wall time and median CPU time (user + system, all threads) of `cmd`."""
+    wall, cpu = [], []
+    for _ in range(repeat):
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        t0 = time.perf_counter()
+        r = subprocess.run(cmd, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+        wall.append(time.perf_counter() - t0)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu.append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
+        if r.returncode != 0:
+            sys.exit(f"render_peers: {' '.join(map(str, cmd))} failed:\n{r.stdout.decode()}")
+    return statistics.median(wall), statistics.median(cpu)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("build_dir")
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--out", help="keep the pictures here (default: a temporary directory)")
+    args = ap.parse_args()
+    zeroset = pathlib.Path(args.build_dir) / "apps" / "cli" / "zeroset"
+    if not zeroset.exists():
+        sys.exit(f"render_peers: {zeroset} not found; build the `zeroset` target first")
+    have_surf = shutil.which("surf-alggeo-nox") is not None
+    have_pov = shutil.which("povray") is not None
+    out = pathlib.Path(args.out or tempfile.mkdtemp(prefix="zeroset-render-peers-"))
+    out.mkdir(parents=True, exist_ok=True)
+    load = os.getloadavg()[0]
+
+    rows = []
+    for i, (title, spec, radius, equation) in enumerate(SCENES):
+        tag = spec[0]
+        png, stats = out / f"{tag}-zeroset.png", out / f"{tag}-zeroset.json"
+        z_cmd = [str(zeroset), "--threads", "2", "-q", "render", *spec, "--size", "800x800",
+                 "--aa", "1", "-o", str(png), "--stats", str(stats)]
+        t_z = timed(z_cmd, args.repeat)
+        t_cast = json.loads(stats.read_text())["seconds"]
+        t_surf = t_pov = None
+        if have_surf:
+            pic = out / f"{tag}.pic"
+            pic.write_text(surf_script(equation, radius, out / f"{tag}-surf.ppm"))
+            t_surf = timed(["surf-alggeo-nox", str(pic)], args.repeat)
+        if have_pov:
+            pov = out / f"{tag}.pov"
+            subprocess.run([str(zeroset), "-q", "export", *spec, "--size", "800x800", "-o",
+                            str(pov)], check=True)
+            t_pov = timed(["povray", "-D", "-V", "+W800", "+H800", f"+I{pov}",
+                           f"+O{out / (tag + '-povray.png')}"], args.repeat, cwd=out)
+        rows.append((title, t_z, t_cast, t_surf, t_pov))
+        print(f"{title}: zeroset {t_z}, surf {t_surf}, POV-Ray {t_pov} (wall, CPU seconds)",
+              file=sys.stderr)
+
+    def cell(t):
+        return "–" if t is None else f"{t[0]:.3f} / {t[1]:.3f}"
+
+    def ratio(t, z, i):
+        return "–" if t is None else f"{t[i] / z[i]:.1f}×"
+
+    lines = [
+        "## Ray tracing (render)",
+        "",
+        f"800×800 pixels, one ray per pixel, whole processes (start-up and image output "
+        f"included), median of {args.repeat} runs, as wall / CPU seconds (CPU: user + system "
+        f"of all threads); load average {load:.1f} when the run started (other work on the "
+        f"machine slows the 2-thread zeroset more than the 1-thread surf, so also compare the "
+        f"CPU columns). zeroset: `zeroset --threads 2 render SURFACE --aa 1` (exact "
+        f"polynomial ray casting), with the wall time of the ray casting alone from `--stats` "
+        f"(no start-up, no PNG encoding); surf: `surf-alggeo-nox` (1 thread) with a script "
+        f"from the same equation; POV-Ray 3.7: the scene of `zeroset export` (`polynomial`, "
+        f"`sturm`, `clipped_by`), its default threads.",
+        "",
+        "| scene | zeroset | casting only | surf | POV-Ray | surf / zeroset (wall, CPU) "
+        "| POV-Ray / zeroset (wall, CPU) |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for title, t_z, t_cast, t_surf, t_pov in rows:
+        lines.append(f"| {title} | {cell(t_z)} | {t_cast:.3f} | {cell(t_surf)} | {cell(t_pov)} "
+                     f"| {ratio(t_surf, t_z, 0)}, {ratio(t_surf, t_z, 1)} "
+                     f"| {ratio(t_pov, t_z, 0)}, {ratio(t_pov, t_z, 1)} |")
+    lines += ["", "Regenerate: `/usr/bin/python3 bench/render_peers.py BUILD_DIR` "
+              "(pictures of every tool with `--out DIR`)."]
+    md = out / "render.md"
+    md.write_text("\n".join(lines) + "\n")
+    subprocess.run([sys.executable, str(HERE / "update_doc.py"), "render", str(md)], check=True)
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()

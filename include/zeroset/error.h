@@ -1,0 +1,63 @@
+#pragma once
+/// The exceptions the core throws. Front ends catch `Error`: `BadInput` and its subclasses
+/// are the user's to fix (CLI exit code 2), everything else is a runtime failure (exit 1).
+#include <stdexcept>
+#include <string>
+
+namespace zeroset {
+
+/// Base of every zeroset exception.
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// The input (an equation, a flag, a file's content, a parameter value) is wrong.
+class BadInput : public Error {
+ public:
+  using Error::Error;
+};
+
+/// A parse error: `what()` is the full formatted message (with line, column and caret line).
+class ParseError : public BadInput {
+ public:
+  ParseError(std::string message, int line, int column, std::string formatted)
+      : BadInput(std::move(formatted)), message_(std::move(message)), line_(line), column_(column) {}
+  const std::string& message() const { return message_; }
+  int line() const { return line_; }      ///< 1-based
+  int column() const { return column_; }  ///< 1-based, in characters of that line
+
+ private:
+  std::string message_;
+  int line_;
+  int column_;
+};
+
+/// An option or parameter has a value that cannot be used; the message names both.
+class InvalidArgument : public BadInput {
+ public:
+  InvalidArgument(const std::string& name, const std::string& value, const std::string& why)
+      : BadInput(name + " = " + value + ": " + why) {}
+  explicit InvalidArgument(const std::string& message) : BadInput(message) {}
+};
+
+/// A file could not be read or written (unreadable input is bad input: exit code 2).
+class IoError : public BadInput {
+ public:
+  IoError(const std::string& path, const std::string& reason)
+      : BadInput("'" + path + "': " + reason), path_(path) {}
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+/// An internal invariant does not hold: a bug in zeroset.
+#define ZS_ASSERT(cond)                                                                   \
+  do {                                                                                    \
+    if (!(cond))                                                                          \
+      throw ::zeroset::Error(std::string("internal error: ") + #cond + " at " + __FILE__ + \
+                             ":" + std::to_string(__LINE__));                             \
+  } while (0)
+
+}  // namespace zeroset

@@ -1,0 +1,106 @@
+#pragma once
+/// The compiled field F(x, y, z; q): an immutable instruction tape plus parameter values.
+#include <map>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "zeroset/types.h"
+
+namespace zeroset {
+
+class Polynomial;
+namespace detail {
+struct Tape;
+}
+
+/// A compiled scalar field. Copying is cheap (the tape is shared and immutable); each copy has
+/// its own parameter values, and changing one never recompiles. Thread safety: a const Field
+/// may be shared between threads; evaluate it through one `Evaluator` per thread.
+class Field {
+ public:
+  Field();  ///< the zero field (no parameters)
+  explicit Field(std::shared_ptr<const detail::Tape> tape);
+
+  /// Parameter names in order of first appearance in the source.
+  const std::vector<std::string>& parameter_names() const;
+  /// Index of a parameter, or -1.
+  int parameter_index(std::string_view name) const;
+  /// Current values (NaN for a parameter that has none yet).
+  const std::vector<double>& parameter_values() const { return params_; }
+  /// Sets one value. Throws InvalidArgument for an unknown name or a non-finite value.
+  void set_parameter(std::string_view name, double value);
+  void set_parameter(int index, double value);
+  /// Sets every listed value; names the field does not have are an InvalidArgument.
+  void set_parameters(const std::map<std::string, double>& values);
+  /// Names of parameters that still have no value.
+  std::vector<std::string> missing_parameters() const;
+  /// Throws InvalidArgument naming every parameter without a value.
+  void require_parameters() const;
+
+  /// True when F is a polynomial in x, y, z (parameters and constants allowed in coefficients).
+  bool is_polynomial() const;
+  /// Total degree in x, y, z; -1 when not a polynomial.
+  int degree() const;
+  /// The expanded polynomial for the current parameter values. Throws BadInput when F is not
+  /// a polynomial, when its degree exceeds 24 (the expansion limit), or when a parameter has
+  /// no value (InvalidArgument). Cost: milliseconds for degree ≤ 12.
+  Polynomial polynomial() const;
+
+  /// The source text it was compiled from.
+  const std::string& source() const;
+  /// The final expression as a readable string (definitions substituted), e.g. for `info`.
+  std::string expression_string() const;
+
+  const detail::Tape& tape() const { return *tape_; }
+
+ private:
+  std::shared_ptr<const detail::Tape> tape_;
+  std::vector<double> params_;
+};
+
+/// Value and derivatives of F at one point.
+struct FieldSample {
+  double value = 0;
+  Vec3 gradient = Vec3::Zero();  ///< ∇_x F
+  Mat3 hessian = Mat3::Zero();   ///< ∇_x² F (only when requested)
+  std::vector<double> dq;        ///< ∂F/∂q_k for every parameter (only when requested)
+};
+
+/// Evaluates a Field. Owns scratch memory: one per thread, never shared. Holds a copy of the
+/// field (cheap), so later changes to the caller's Field do not reach it; use
+/// `set_parameter` or `reset` for that. Throws InvalidArgument at construction when a
+/// parameter has no value. Non-finite results (log of a negative number, 0/0) come out as
+/// NaN; they are never an exception.
+class Evaluator {
+ public:
+  explicit Evaluator(const Field& field);
+  ~Evaluator();
+  Evaluator(Evaluator&&) noexcept;
+  Evaluator& operator=(Evaluator&&) noexcept;
+
+  void reset(const Field& field);
+  void set_parameter(int index, double value);
+  const Field& field() const { return field_; }
+
+  double value(const Vec3& p);
+  double value_gradient(const Vec3& p, Vec3& gradient);
+  /// Value, gradient, and (on request) Hessian and parameter derivatives.
+  FieldSample sample(const Vec3& p, bool hessian = true, bool parameter_derivatives = true);
+
+  /// Batched, structure of arrays: out[i] = F(x[i], y[i], z[i]). All spans the same length.
+  void values(std::span<const double> x, std::span<const double> y, std::span<const double> z,
+              std::span<double> out);
+  /// Batched value and gradient.
+  void values_gradients(std::span<const double> x, std::span<const double> y,
+                        std::span<const double> z, std::span<double> value,
+                        std::span<double> gx, std::span<double> gy, std::span<double> gz);
+
+ private:
+  struct Scratch;
+  Field field_;
+  std::unique_ptr<Scratch> scratch_;
+};
+
+}  // namespace zeroset

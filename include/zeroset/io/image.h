@@ -1,0 +1,32 @@
+#pragma once
+/// 8-bit RGB images and PNG output.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "zeroset/types.h"
+
+namespace zeroset {
+
+/// Row-major RGB image, row 0 at the top.
+struct Image {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint8_t> rgb;  ///< width*height*3 bytes
+
+  Image() = default;
+  Image(int w, int h) : width(w), height(h), rgb(static_cast<size_t>(w) * h * 3, 0) {}
+  std::uint8_t* pixel(int x, int y) { return &rgb[(static_cast<size_t>(y) * width + x) * 3]; }
+  const std::uint8_t* pixel(int x, int y) const {
+    return &rgb[(static_cast<size_t>(y) * width + x) * 3];
+  }
+  /// Stores a linear colour (clamped, gamma 2.2 encoded).
+  void set_linear(int x, int y, const Color& c);
+};
+
+/// Writes a PNG atomically. Throws IoError.
+void write_png(const Image& image, const std::string& path);
+/// Reads a PNG (or any format stb_image reads) as RGB. Throws IoError.
+Image read_image(const std::string& path);
+
+}  // namespace zeroset

@@ -1,0 +1,56 @@
+#pragma once
+/// Mesh connectivity built on demand (DESIGN §4): unique edges with the triangles on each
+/// side, vertex rings, and a topology summary (closedness, Euler characteristic).
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "zeroset/mesh/mesh.h"
+
+namespace zeroset {
+
+/// Undirected edges and vertex rings of a mesh. A plain value: it does not follow later
+/// changes of the mesh it was built from.
+struct MeshAdjacency {
+  static constexpr std::uint32_t kNone = 0xffffffffu;
+
+  /// Unique undirected edges (a < b), sorted by (a, b).
+  std::vector<std::array<std::uint32_t, 2>> edges;
+  /// The first two triangles that contain each edge (kNone where there are fewer).
+  std::vector<std::array<std::uint32_t, 2>> edge_triangles;
+  /// How many triangles contain each edge: 1 on a boundary, 2 inside, more when non-manifold.
+  std::vector<std::uint32_t> edge_triangle_count;
+  /// Vertex rings in CSR form: the neighbours of v are
+  /// neighbors[neighbor_offsets[v] .. neighbor_offsets[v + 1]), sorted.
+  std::vector<std::uint32_t> neighbor_offsets;
+  std::vector<std::uint32_t> neighbors;
+
+  size_t valence(std::uint32_t v) const { return neighbor_offsets[v + 1] - neighbor_offsets[v]; }
+};
+
+/// Builds the adjacency in O(V + T) time and memory (bucketed by the smaller vertex index).
+/// Throws InvalidArgument when a triangle refers to a vertex that does not exist.
+MeshAdjacency build_adjacency(const Mesh& mesh);
+
+/// Counts that decide whether a mesh is a closed, consistently oriented 2-manifold.
+struct MeshTopology {
+  size_t vertices = 0;            ///< vertices used by at least one triangle
+  size_t edges = 0;
+  size_t triangles = 0;
+  size_t boundary_edges = 0;      ///< in exactly one triangle
+  size_t non_manifold_edges = 0;  ///< in three or more triangles
+  size_t misoriented_edges = 0;   ///< interior edges traversed twice in the same direction
+  size_t degenerate_triangles = 0;  ///< a vertex index repeated
+  long long euler_characteristic = 0;  ///< V − E + T over the used vertices
+
+  /// Every edge in exactly two triangles, each traversed once in each direction.
+  bool is_watertight() const {
+    return boundary_edges == 0 && non_manifold_edges == 0 && misoriented_edges == 0 &&
+           degenerate_triangles == 0;
+  }
+};
+
+/// Topology summary. Cost: one `build_adjacency`.
+MeshTopology mesh_topology(const Mesh& mesh);
+
+}  // namespace zeroset

@@ -1,0 +1,75 @@
+#pragma once
+/// The CPU renderer (DESIGN §5): exact ray casting of algebraic surfaces, and shaded
+/// point sets and meshes, so every figure can be made without a GPU.
+#include <functional>
+#include <optional>
+#include <span>
+#include <stop_token>
+#include <vector>
+
+#include "zeroset/io/image.h"
+#include "zeroset/mesh/mesh.h"
+#include "zeroset/surface/surface.h"
+
+namespace zeroset {
+
+/// A directional light; `direction` points from the surface towards the light. With
+/// `follows_camera` the direction is given in camera coordinates (x right, y up, z towards
+/// the viewer), otherwise in world coordinates.
+struct Light {
+  Vec3 direction = Vec3(0.3, 0.5, 1.0);
+  Color color = Color(1, 1, 1);
+  bool follows_camera = true;
+};
+
+/// Phong material.
+struct Material {
+  Color diffuse = Color(0.8, 0.42, 0.1);  ///< linear RGB
+  double ambient = 0.12;
+  double specular = 0.35;
+  double shininess = 40;
+};
+
+struct RenderOptions {
+  int width = 800;
+  int height = 800;
+  int samples = 1;                ///< anti-aliasing: samples×samples rays per pixel
+  std::optional<Camera> camera;   ///< default: the surface's camera
+  std::vector<Light> lights;      ///< empty: a three-light rig that follows the camera
+  Material front;                 ///< the side ∇F points to
+  Material back{.diffuse = Color(0.06, 0.12, 0.35)};  ///< the other side, darker (paper's figures)
+  Color background = Color(1, 1, 1);
+  int threads = 0;                ///< 0: all cores
+  /// Called now and then with the fraction done (from one thread at a time).
+  std::function<void(double)> progress;
+};
+
+/// Statistics of one render.
+struct RenderStats {
+  double seconds = 0;
+  long long rays = 0;
+  long long hits = 0;
+  long long singular_normals = 0;  ///< hits where ∇F vanished and the fallback normal was used
+  int threads = 0;                 ///< worker threads used
+  bool exact = false;              ///< polynomial root isolation (else interval arithmetic)
+};
+
+/// Ray casts the surface inside its clip. Polynomials: exact restriction to the ray and robust
+/// root isolation; other expressions: interval arithmetic along the ray. Throws BadInput when
+/// the surface has no bounded clip or the size is not positive. Returns an empty image when
+/// stopped through `stop`.
+Image render_surface(const Surface& surface, const RenderOptions& options,
+                     RenderStats* stats = nullptr, std::stop_token stop = {});
+
+/// Draws a point set as shaded disks (oriented by `normals`, radius per point), as in the
+/// paper's figures 3–5. The surface gives the camera and the scene size.
+Image render_points(const Surface& surface, std::span<const Vec3> positions,
+                    std::span<const Vec3> normals, std::span<const double> radii,
+                    const RenderOptions& options);
+
+/// Draws a triangle mesh, smooth-shaded with front and back materials; `wireframe` overlays
+/// the edges.
+Image render_mesh(const Surface& surface, const Mesh& mesh, const RenderOptions& options,
+                  bool wireframe = false);
+
+}  // namespace zeroset

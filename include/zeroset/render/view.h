@@ -1,0 +1,41 @@
+#pragma once
+/// The pinhole view of an orbit camera: eye point, orthonormal frame, and the map between
+/// image positions and rays. Shared by the ray caster, the disk and mesh renderers and the
+/// POV-Ray export so that they all show exactly the same picture.
+#include <Eigen/Geometry>
+
+#include "zeroset/surface/surface.h"
+#include "zeroset/types.h"
+
+namespace zeroset {
+
+struct View {
+  Vec3 eye = Vec3(0, 0, 1);
+  Vec3 target = Vec3::Zero();
+  Vec3 forward = Vec3(0, 0, -1);  ///< unit, from the eye towards the target
+  Vec3 right = Vec3(1, 0, 0);     ///< unit, image x direction
+  Vec3 up = Vec3(0, 1, 0);        ///< unit, image y direction (z up unless looking along z)
+  double tan_half_fov = 0.27;     ///< tan of half the vertical field of view
+  int width = 1;                  ///< pixels
+  int height = 1;                 ///< pixels
+
+  /// The view of `camera` for a scene of radius `scene_radius` (used when camera.distance
+  /// is 0) on a width × height image. Throws InvalidArgument for a non-positive size, a field
+  /// of view outside (0°, 180°) or a non-finite camera.
+  static View from_camera(const Camera& camera, double scene_radius, int width, int height);
+
+  double aspect() const { return static_cast<double>(width) / height; }
+  /// Unit direction of the ray through image position (x, y), in pixels from the top-left
+  /// corner (pixel centres at +0.5).
+  Vec3 direction(double x, double y) const;
+  /// Image position and depth (distance along `forward`) of a world point; false when the
+  /// point is not in front of the eye.
+  bool project(const Vec3& p, double& x, double& y, double& depth) const;
+  /// World-space size of one pixel at depth 1.
+  double pixel_angle() const { return 2.0 * tan_half_fov / height; }
+  /// A direction given in camera coordinates (x right, y up, z towards the viewer) in world
+  /// coordinates.
+  Vec3 camera_to_world(const Vec3& v) const { return v.x() * right + v.y() * up - v.z() * forward; }
+};
+
+}  // namespace zeroset

@@ -1,0 +1,60 @@
+#pragma once
+/// Clip volumes (DESIGN §2, paper §3.2): an intersection of spheres and half spaces.
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "zeroset/types.h"
+
+namespace zeroset {
+
+/// The ball |x - center| ≤ radius.
+struct SphereClip {
+  Vec3 center = Vec3::Zero();
+  double radius = 1;
+};
+
+/// The half space normal·x ≤ offset; `normal` has unit length.
+struct HalfSpaceClip {
+  Vec3 normal = Vec3::UnitZ();
+  double offset = 0;
+};
+
+/// An intersection of spheres and half spaces; empty lists mean "no clip" (all of space).
+/// The signed clip function G is negative inside, zero on the boundary and positive outside:
+/// G(x) = max over parts of (|x - c| - r) and (n·x - d).
+struct Clip {
+  std::vector<SphereClip> spheres;
+  std::vector<HalfSpaceClip> planes;
+
+  static Clip sphere(double radius, const Vec3& center = Vec3::Zero());
+  static Clip box(const Box3& box);  ///< six half spaces
+
+  /// Parses one clip spec and intersects it into this clip. Specs:
+  ///   sphere:R  sphere:R@cx,cy,cz  box:H (cube [-H,H]^3)  box:x0,y0,z0,x1,y1,z1
+  ///   plane:nx,ny,nz,d (keeps n·x ≤ d; n is normalised)
+  /// Throws InvalidArgument naming the spec and what is wrong.
+  void add(std::string_view spec);
+
+  bool is_empty_spec() const { return spheres.empty() && planes.empty(); }
+  /// True when the clip volume has a finite bounding box (a sphere, or axis-aligned planes
+  /// closing a box; oblique planes alone are not recognised as bounding).
+  bool is_bounded() const;
+  bool contains(const Vec3& p, double tolerance = 0) const;
+  /// G(p) (see above).
+  double value(const Vec3& p) const;
+  /// G(p) and the gradient of the active part.
+  double value_gradient(const Vec3& p, Vec3& gradient) const;
+  /// Paper §3.2: for each part the point violates, project it back onto that part's boundary:
+  /// orthogonally onto a plane, radially towards a sphere's centre. Returns p when inside.
+  Vec3 project(const Vec3& p) const;
+  /// A bounding box of the clip volume. Throws BadInput when the clip is unbounded.
+  Box3 bounds() const;
+  /// Parameter interval [t0, t1] of the ray o + t·d inside the clip (t ≥ t_min);
+  /// false when the ray misses it.
+  bool ray_interval(const Vec3& o, const Vec3& d, double t_min, double& t0, double& t1) const;
+  /// The specs that rebuild this clip ("sphere:3", "plane:0,0,1,0.5", ...).
+  std::vector<std::string> to_specs() const;
+};
+
+}  // namespace zeroset

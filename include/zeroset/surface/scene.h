@@ -1,0 +1,46 @@
+#pragma once
+/// Surfaces from the command line or a scene file (JSON).
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "zeroset/surface/surface.h"
+
+namespace zeroset {
+
+/// A surface plus the settings of each stage (objects "render", "floaters", "mesh",
+/// "animation" in the file, read by those stages; unknown keys are kept).
+struct Scene {
+  Surface surface;
+  nlohmann::json settings = nlohmann::json::object();
+};
+
+/// Overrides applied on top of a surface's defaults.
+struct SurfaceOverrides {
+  std::map<std::string, double> params;  ///< --param k=v
+  std::vector<std::string> clip_specs;   ///< --clip specs; non-empty replaces the default clip
+};
+
+/// Resolves a SURFACE argument: a catalog name, a scene file (an existing path ending in
+/// .json) or an equation in the surface language. Applies overrides, then checks that every
+/// parameter has a value. An equation given without --clip gets a default clip sphere when
+/// it is a polynomial whose surface is provably bounded (its top-degree part is definite);
+/// otherwise it stays unclipped, and stages that need a volume ask for --clip. Throws ParseError, InvalidArgument or IoError (all BadInput).
+Scene resolve_scene(const std::string& spec, const SurfaceOverrides& overrides = {});
+inline Surface resolve_surface(const std::string& spec, const SurfaceOverrides& o = {}) {
+  return resolve_scene(spec, o).surface;
+}
+
+/// Builds a surface from an equation (no catalog entry). Parameters get no values.
+Surface surface_from_equation(const std::string& equation);
+
+nlohmann::json scene_to_json(const Scene& scene);
+/// Throws BadInput with the JSON path of the offending entry.
+Scene scene_from_json(const nlohmann::json& j, const std::string& origin);
+Scene read_scene(const std::string& path);
+/// Written atomically (temporary file + rename).
+void write_scene(const Scene& scene, const std::string& path);
+
+}  // namespace zeroset

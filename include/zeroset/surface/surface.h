@@ -1,0 +1,59 @@
+#pragma once
+/// A surface: compiled field + parameter values + clip + how to look at it (DESIGN §2).
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "zeroset/expr/field.h"
+#include "zeroset/surface/clip.h"
+#include "zeroset/types.h"
+
+namespace zeroset {
+
+/// A parameter with its range (for sliders and animation).
+struct ParamSpec {
+  std::string name;
+  double value = 0;
+  double min = 0;
+  double max = 1;
+};
+
+/// An orbit camera: looks at `target` from `distance` along the direction given by azimuth
+/// (around +z, from +x) and elevation (above the xy plane). z is up.
+struct Camera {
+  double azimuth_deg = 30;
+  double elevation_deg = 20;
+  double distance = 0;  ///< 0: chosen from the clip's size so the whole volume is in view
+  double fov_deg = 30;  ///< vertical field of view
+  Vec3 target = Vec3::Zero();
+
+  /// The eye position; `scene_radius` is used when distance == 0.
+  Vec3 eye(double scene_radius) const;
+};
+
+/// Known singular points of a surface for given parameter values (may be empty).
+using SingularPointsFn = std::function<std::vector<Vec3>(const Field&)>;
+
+/// Everything that defines what is drawn. A value type: copying is cheap (the field's tape is
+/// shared). `name` is the catalog name, or empty for a typed equation.
+struct Surface {
+  std::string name;
+  std::string title;
+  Field field;
+  Clip clip;
+  Camera camera;
+  std::vector<ParamSpec> ranges;  ///< one per parameter of `field`, in its order
+  SingularPointsFn singular_points_fn;
+
+  /// Known singular points for the current parameter values, inside the clip.
+  std::vector<Vec3> singular_points() const;
+  /// The clip's bounding box; throws BadInput naming the surface when it has no bounded clip.
+  Box3 bounds() const;
+  /// Radius of a ball around the clip's bounding box centre that holds the clip volume.
+  double scene_radius() const;
+  /// A short label: the catalog name or the equation.
+  std::string label() const;
+};
+
+}  // namespace zeroset

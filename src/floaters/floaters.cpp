@@ -1,0 +1,1039 @@
+#include "zeroset/floaters/floaters.h"
+
+#include <fmt/core.h>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <deque>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <optional>
+
+#include "critical_detail.h"
+#include "rng_detail.h"
+#include "spatial_hash_detail.h"
+#include "zeroset/error.h"
+#include "zeroset/floaters/metrics.h"
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace zeroset {
+namespace {
+
+using detail::Rng;
+using detail::Stream;
+
+// Floaters are processed in fixed chunks, whatever the thread count, so batched field
+// evaluation sees the same batches (and gives the same bits) on 1 or 2 threads.
+constexpr std::size_t kChunk = 256;
+// Fewer floaters than this are stepped on one thread: a parallel region costs more than it
+// saves, and much more when other processes keep the cores busy.
+constexpr std::size_t kParallelMin = 4096;
+// Storage is re-sorted by spatial cell this often, so neighbours stay close in memory.
+constexpr std::size_t kResortInterval = 16;
+// Cells are as large as the largest reach 3σ, so a floater's neighbours lie in the 3×3×3 cells
+// around its own. (Cells thinner along x, the rows' direction, would hold fewer candidates;
+// measured on the Kummer scene, the longer rows and larger grid cost as much as they save.)
+// A floater still far from F = 0 after this many steps is a stray (it never settles).
+constexpr std::uint32_t kStrayAge = 200;
+// Snapping to nodes: a floater whose Newton step towards ∇F = 0 is shorter than this fraction
+// of its radius tries to reach the node; a node's Hessian has no eigenvalue below kNondegenerate
+// times its largest (singular curves, with a null direction, are left to the dynamics).
+constexpr double kSnapFraction = 0.5;
+constexpr double kNondegenerate = 1e-3;
+constexpr int kNodeIterations = 12;
+// Settled: the population changed by at most this fraction over the convergence window.
+constexpr double kStationary = 0.01;
+// σ never leaves [kMinRadius·σ̂, kMaxRadius·σ_max]; reaching the floor marks it degenerate.
+constexpr double kMinRadius = 0.01;
+constexpr double kMaxRadius = 2.0;
+// One step moves a floater by at most this fraction of the scene radius, tangentially and
+// normally, so a near-critical point of F (tiny ∇F, F ≠ 0) cannot fling it away.
+constexpr double kMaxStepScene = 0.1;
+// σ̂ chosen from the area assumes each floater covers about this many σ̂² at equilibrium
+// (hexagonal spacing between 1.25σ̂ and 1.78σ̂).
+constexpr double kAreaPerFloater = 2.0;
+constexpr double kMinNominal = 1e-9;
+
+int resolve_threads(int requested) {
+#ifdef _OPENMP
+  return requested > 0 ? requested : omp_get_max_threads();
+#else
+  (void)requested;
+  return 1;
+#endif
+}
+
+int thread_index() {
+#ifdef _OPENMP
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+
+// |F|/|∇F| without infinities: 0 on the surface, the largest double where ∇F = 0 and F ≠ 0.
+double residual_of(double value, double gradient_norm) {
+  if (value == 0) return 0;
+  if (!std::isfinite(value) || !std::isfinite(gradient_norm))
+    return std::numeric_limits<double>::max();
+  const double r = std::abs(value) / gradient_norm;
+  return std::isfinite(r) ? r : std::numeric_limits<double>::max();
+}
+
+// Two unit vectors spanning the plane orthogonal to the unit vector n (any basis if n = 0).
+void tangent_basis(const Vec3& n, Vec3& t1, Vec3& t2) {
+  if (n.squaredNorm() == 0) {
+    t1 = Vec3::UnitX();
+    t2 = Vec3::UnitY();
+    return;
+  }
+  const Vec3 a = std::abs(n.x()) < 0.6 ? Vec3::UnitX() : Vec3::UnitY();
+  t1 = n.cross(a).normalized();
+  t2 = n.cross(t1);
+}
+
+void check(bool ok, const char* name, double value, const char* why) {
+  if (!ok) throw InvalidArgument(name, fmt::format("{}", value), why);
+}
+
+void validate(const FloaterOptions& o) {
+  auto finite = [](double v) { return std::isfinite(v); };
+  check(finite(o.radius) && o.radius >= 0, "radius", o.radius,
+        "must be a positive length (or 0 to choose it from the surface's area)");
+  check(o.max_count >= 1 && o.max_count <= 100'000'000, "max_count",
+        static_cast<double>(o.max_count), "must be between 1 and 100,000,000");
+  check(o.seed_count <= 100'000'000, "seed_count", static_cast<double>(o.seed_count),
+        "must be at most 100,000,000");
+  check(finite(o.dt) && o.dt > 0, "dt", o.dt, "must be positive");
+  check(finite(o.repulsion) && o.repulsion > 0, "repulsion", o.repulsion, "must be positive");
+  check(finite(o.desired_energy_factor) && o.desired_energy_factor > 0, "desired_energy_factor",
+        o.desired_energy_factor, "must be positive");
+  check(finite(o.radius_rate) && o.radius_rate >= 0, "radius_rate", o.radius_rate,
+        "must not be negative");
+  check(finite(o.radius_damping) && o.radius_damping > 0, "radius_damping", o.radius_damping,
+        "must be positive");
+  check(finite(o.feedback) && o.feedback >= 0, "feedback", o.feedback, "must not be negative");
+  check(finite(o.max_step_fraction) && o.max_step_fraction > 0, "max_step_fraction",
+        o.max_step_fraction, "must be positive");
+  check(finite(o.equilibrium_speed) && o.equilibrium_speed >= 0, "equilibrium_speed",
+        o.equilibrium_speed, "must not be negative");
+  check(finite(o.fission_energy_factor) && o.fission_energy_factor >= 0,
+        "fission_energy_factor", o.fission_energy_factor, "must not be negative");
+  check(finite(o.death_radius_factor) && o.death_radius_factor >= 0 &&
+            o.death_radius_factor < 1,
+        "death_radius_factor", o.death_radius_factor, "must be in [0, 1)");
+  check(finite(o.max_radius_factor) && o.max_radius_factor >= 1, "max_radius_factor",
+        o.max_radius_factor, "must be at least 1");
+  check(o.estimator_interval >= 1, "estimator_interval", o.estimator_interval,
+        "must be at least 1");
+  check(o.curvature_samples >= 1 && o.curvature_samples <= 64, "curvature_samples",
+        o.curvature_samples, "must be between 1 and 64");
+  check(finite(o.singular_scale) && o.singular_scale >= 0, "singular_scale", o.singular_scale,
+        "must be a positive length (or 0 for scene_radius/3)");
+  check(finite(o.min_radius_factor) && o.min_radius_factor > 0 && o.min_radius_factor <= 1,
+        "min_radius_factor", o.min_radius_factor, "must be in (0, 1]");
+  check(finite(o.radius_grading) && o.radius_grading >= 0, "radius_grading", o.radius_grading,
+        "must not be negative");
+  check(o.converge_window >= 1, "converge_window", o.converge_window, "must be at least 1");
+  check(finite(o.converge_churn) && o.converge_churn >= 0, "converge_churn", o.converge_churn,
+        "must not be negative");
+  check(finite(o.converge_speed) && o.converge_speed >= 0, "converge_speed", o.converge_speed,
+        "must not be negative");
+  check(o.threads >= 0, "threads", o.threads, "must not be negative");
+}
+
+}  // namespace
+
+RadiusAdapt parse_radius_adapt(std::string_view text, std::string_view flag) {
+  for (RadiusAdapt m : {RadiusAdapt::kWitkinHeckbert, RadiusAdapt::kCurvature,
+                        RadiusAdapt::kSingular, RadiusAdapt::kMixed})
+    if (text == to_string(m)) return m;
+  throw InvalidArgument(std::string(flag), std::string(text),
+                        "expected wh, curvature, singular or mixed");
+}
+
+std::string_view to_string(RadiusAdapt mode) {
+  switch (mode) {
+    case RadiusAdapt::kWitkinHeckbert: return "wh";
+    case RadiusAdapt::kCurvature: return "curvature";
+    case RadiusAdapt::kSingular: return "singular";
+    case RadiusAdapt::kMixed: return "mixed";
+  }
+  return "mixed";
+}
+
+struct FloaterSystem::Impl {
+  Surface surface;
+  FloaterOptions opt;
+  double sigma_hat = 1;       // σ̂ in use
+  double singular_scale = 1;  // γ_s in use
+  double scene_radius = 1;
+  Box3 box;
+  std::size_t step_count = 0;
+  std::uint64_t next_id = 0;
+  // The last converge_window steps, for StepStats::converged.
+  struct Recent {
+    std::size_t events = 0, count = 0;
+    double speed = 0;
+  };
+  std::deque<Recent> recent;
+
+  // Floater state, one entry per floater. value/gnorm/unit always belong to the current
+  // positions and parameters.
+  std::vector<Vec3> pos;
+  std::vector<double> sigma;
+  std::vector<std::uint64_t> id;
+  std::vector<double> mu;    // μ_i from the estimators
+  std::vector<double> smax;  // σ_max^i = μ_i σ_max, graded (see repulsion())
+  std::vector<std::uint32_t> age;
+  std::vector<std::uint8_t> pinned;  // sits on a node (snap_to_nodes) and does not move
+  std::vector<double> value;
+  std::vector<double> gnorm;
+  std::vector<Vec3> unit;  // ∇F/|∇F|, or 0 where that is undefined
+
+  // Per-step scratch.
+  std::vector<double> energy, denergy, graded, fq, speed, new_sigma;
+  std::vector<Vec3> desired, new_pos;
+  std::vector<std::uint8_t> outside;
+  std::vector<double> px, py, pz, ps, pcut, pm, nx, ny, nz;  // packed in hash slot order
+  std::vector<std::uint64_t> pid;
+  detail::SpatialHash hash;
+
+  std::vector<Evaluator> evaluators;
+  int threads = 1;
+  mutable std::vector<Vec3> shown_normals;
+  mutable bool shown_normals_valid = false;
+
+  Impl(const Surface& s, const FloaterOptions& o) : opt(o) {
+    validate(opt);
+    adopt_surface(s);
+    insert_random(initial_count());
+    evaluate_all();
+  }
+
+  std::size_t initial_count() const {
+    const std::size_t wanted = opt.seed_count > 0 ? opt.seed_count : 200;
+    return std::min(wanted, opt.max_count);
+  }
+
+  void adopt_surface(const Surface& s) {
+    s.field.require_parameters();
+    box = s.bounds();  // throws BadInput for an unbounded clip
+    surface = s;
+    scene_radius = surface.scene_radius();
+    resolve_lengths();
+    evaluators.clear();
+    ensure_evaluators();
+  }
+
+  void resolve_lengths() {
+    if (opt.radius > 0) {
+      // Beyond these bounds nothing sensible can happen (one floater larger than the scene, or
+      // radii whose squares underflow), so σ̂ is kept inside them.
+      sigma_hat = std::clamp(opt.radius, kMinNominal * scene_radius, scene_radius);
+    } else {
+      const double area = estimate_area(surface);
+      const double target = std::max<double>(1, static_cast<double>(opt.max_count) / 3);
+      sigma_hat = area > 0 ? std::sqrt(area / (kAreaPerFloater * target)) : scene_radius / 10;
+      sigma_hat = std::clamp(sigma_hat, 1e-4 * scene_radius, scene_radius);
+    }
+    singular_scale = opt.singular_scale > 0 ? opt.singular_scale : scene_radius / 3;
+  }
+
+  void ensure_evaluators() {
+    threads = resolve_threads(opt.threads);
+    while (static_cast<int>(evaluators.size()) < threads) evaluators.emplace_back(surface.field);
+  }
+
+  double sigma_max() const { return opt.max_radius_factor * sigma_hat; }
+  double desired_energy() const { return opt.desired_energy_factor * opt.repulsion; }
+
+  template <class Body>
+  void parallel_chunks(std::size_t n, Body&& body) {
+    const auto chunks = static_cast<std::int64_t>((n + kChunk - 1) / kChunk);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (n >= kParallelMin)
+    for (std::int64_t c = 0; c < chunks; ++c) {
+      const std::size_t b = static_cast<std::size_t>(c) * kChunk;
+      body(b, std::min(n, b + kChunk), evaluators[thread_index()]);
+    }
+  }
+
+  // ---- state bookkeeping ---------------------------------------------------------------------
+
+  std::size_t size() const { return pos.size(); }
+
+  void push(const Vec3& p, double s, double m) {
+    pos.push_back(p);
+    sigma.push_back(s);
+    id.push_back(next_id++);
+    mu.push_back(m);
+    smax.push_back(m * sigma_max());
+    age.push_back(0);
+    pinned.push_back(0);
+    value.push_back(0);
+    gnorm.push_back(0);
+    unit.push_back(Vec3::Zero());
+  }
+
+  template <class Keep>
+  void compact(Keep&& keep) {
+    std::size_t w = 0;
+    for (std::size_t r = 0; r < size(); ++r) {
+      if (!keep(r)) continue;
+      pos[w] = pos[r];
+      sigma[w] = sigma[r];
+      id[w] = id[r];
+      mu[w] = mu[r];
+      smax[w] = smax[r];
+      age[w] = age[r];
+      pinned[w] = pinned[r];
+      value[w] = value[r];
+      gnorm[w] = gnorm[r];
+      unit[w] = unit[r];
+      ++w;
+    }
+    resize_state(w);
+  }
+
+  void resize_state(std::size_t n) {
+    pos.resize(n);
+    sigma.resize(n);
+    id.resize(n);
+    mu.resize(n);
+    smax.resize(n);
+    age.resize(n);
+    pinned.resize(n);
+    value.resize(n);
+    gnorm.resize(n);
+    unit.resize(n);
+  }
+
+  template <class T>
+  static void permute(std::vector<T>& v, std::span<const std::uint32_t> order) {
+    std::vector<T> out(v.size());
+    for (std::size_t s = 0; s < order.size(); ++s) out[s] = v[order[s]];
+    v.swap(out);
+  }
+
+  void permute_state(std::span<const std::uint32_t> order) {
+    permute(pos, order);
+    permute(sigma, order);
+    permute(id, order);
+    permute(mu, order);
+    permute(smax, order);
+    permute(age, order);
+    permute(pinned, order);
+    permute(value, order);
+    permute(gnorm, order);
+    permute(unit, order);
+  }
+
+  // ---- seeding ------------------------------------------------------------------------------
+
+  Vec3 random_point_in_clip(Rng& rng) const {
+    Vec3 p = box.center();
+    for (int attempt = 0; attempt < 64; ++attempt) {
+      for (int k = 0; k < 3; ++k) p[k] = rng.uniform(box.lo[k], box.hi[k]);
+      if (surface.clip.contains(p)) return p;
+    }
+    return surface.clip.project(p);  // a sliver of a clip volume: its boundary will do
+  }
+
+  std::size_t insert_random(std::size_t count) {
+    count = std::min(count, opt.max_count - std::min(opt.max_count, size()));
+    for (std::size_t k = 0; k < count; ++k) {
+      Rng rng(opt.seed, next_id, 0, Stream::kInsert);
+      push(random_point_in_clip(rng), sigma_hat, 1.0);
+    }
+    shown_normals_valid = false;
+    return count;
+  }
+
+  // ---- field evaluation ---------------------------------------------------------------------
+
+  // F and ∇F at every floater, batched in fixed chunks.
+  void evaluate_all() {
+    const std::size_t n = size();
+    parallel_chunks(n, [&](std::size_t b, std::size_t e, Evaluator& ev) {
+      std::array<double, kChunk> x, y, z, f, gx, gy, gz;
+      const std::size_t m = e - b;
+      for (std::size_t k = 0; k < m; ++k) {
+        x[k] = pos[b + k].x();
+        y[k] = pos[b + k].y();
+        z[k] = pos[b + k].z();
+      }
+      ev.values_gradients({x.data(), m}, {y.data(), m}, {z.data(), m}, {f.data(), m},
+                          {gx.data(), m}, {gy.data(), m}, {gz.data(), m});
+      for (std::size_t k = 0; k < m; ++k) {
+        const Vec3 g(gx[k], gy[k], gz[k]);
+        const double len = g.norm();
+        value[b + k] = f[k];
+        gnorm[b + k] = len;
+        unit[b + k] = (len > 0 && std::isfinite(len)) ? Vec3(g / len) : Vec3(Vec3::Zero());
+      }
+    });
+    shown_normals_valid = false;
+  }
+
+  void apply_parameters(std::span<const double> q) {
+    for (std::size_t k = 0; k < q.size(); ++k) {
+      surface.field.set_parameter(static_cast<int>(k), q[k]);
+      for (Evaluator& ev : evaluators) ev.set_parameter(static_cast<int>(k), q[k]);
+    }
+  }
+
+  void check_parameters(std::span<const double> q) const {
+    const std::size_t want = surface.field.parameter_names().size();
+    if (q.size() != want)
+      throw InvalidArgument(fmt::format("expected {} parameter values for {}, got {}", want,
+                                        surface.label(), q.size()));
+    for (std::size_t k = 0; k < q.size(); ++k)
+      if (!std::isfinite(q[k]))
+        throw InvalidArgument(surface.field.parameter_names()[k], fmt::format("{}", q[k]),
+                              "a parameter must be finite");
+  }
+
+  // ---- Rösch et al. §3.3: μ_i from the curvature (α_i) and singularity (β_i) estimators ----
+
+  // Every estimator_interval steps: μ_i for the fission radii, and floaters that have come
+  // near a node are snapped onto it.
+  void update_estimators() {
+    const RadiusAdapt mode = opt.radius_adapt;
+    const std::size_t n = size();
+    const bool need_alpha = mode == RadiusAdapt::kCurvature || mode == RadiusAdapt::kMixed;
+    const bool need_beta = mode == RadiusAdapt::kSingular || mode == RadiusAdapt::kMixed;
+    const bool need_hessian = need_beta || opt.snap_to_nodes;
+    if (!need_alpha && !need_hessian) return;
+    std::vector<std::uint8_t> candidate(n, 0);
+    const int samples = opt.curvature_samples;
+    parallel_chunks(n, [&](std::size_t b, std::size_t e, Evaluator& ev) {
+      const std::size_t m = e - b;
+      std::vector<double> alpha(m, 1.0), beta(m, 1.0);
+      if (need_hessian) {
+        for (std::size_t k = 0; k < m; ++k) {
+          const std::size_t i = b + k;
+          const FieldSample fs = ev.sample(pos[i], true, false);
+          const detail::Corrector c = detail::newton_corrector(fs.gradient, fs.hessian);
+          const double r = c.reaches ? c.step.norm() : std::numeric_limits<double>::infinity();
+          beta[k] = std::isfinite(r) ? std::min(r / singular_scale, 1.0) : 1.0;
+          candidate[i] = opt.snap_to_nodes && !pinned[i] && r < kSnapFraction * sigma[i] &&
+                         c.smallest > kNondegenerate * c.largest;
+        }
+      }
+      if (need_alpha) curvature_estimates(b, e, samples, ev, alpha);
+      if (mode == RadiusAdapt::kWitkinHeckbert) return;
+      for (std::size_t k = 0; k < m; ++k) {
+        double f = 1;
+        switch (mode) {
+          case RadiusAdapt::kCurvature: f = alpha[k]; break;
+          case RadiusAdapt::kSingular: f = beta[k]; break;
+          case RadiusAdapt::kMixed: f = alpha[k] / 3 + 2 * beta[k] / 3; break;
+          case RadiusAdapt::kWitkinHeckbert: break;
+        }
+        mu[b + k] = 0.5 * (mu[b + k] + std::clamp(f, opt.min_radius_factor, 1.0));
+      }
+    });
+    if (opt.snap_to_nodes) snap(candidate);
+  }
+
+  // Newton's method on ∇F = 0 from p, staying within `reach` of it. Succeeds at a
+  // nondegenerate critical point that lies on the surface (F there is negligible against the
+  // change of F over the floater's radius): a node.
+  std::optional<Vec3> find_node(Evaluator& ev, const Vec3& p, double reach) const {
+    Vec3 q = p;
+    for (int it = 0; it < kNodeIterations; ++it) {
+      const FieldSample fs = ev.sample(q, true, false);
+      const detail::Corrector c = detail::newton_corrector(fs.gradient, fs.hessian);
+      if (!c.reaches || !(c.smallest > kNondegenerate * c.largest)) return std::nullopt;
+      if (c.step.squaredNorm() == 0 ||
+          c.step.norm() <= 1e-14 * (q.norm() + scene_radius)) {
+        const double change = c.largest * reach * reach;
+        if (!(std::abs(fs.value) <= 1e-8 * change)) return std::nullopt;  // off the surface
+        return q;
+      }
+      q -= c.step;
+      if (!q.allFinite() || (q - p).norm() > reach) return std::nullopt;
+    }
+    return std::nullopt;
+  }
+
+  // Serial, so which floater takes a node does not depend on threads: the first candidate in
+  // storage order whose Newton iteration lands on a node no floater holds yet.
+  void snap(const std::vector<std::uint8_t>& candidate) {
+    std::vector<Vec3> held;
+    for (std::size_t i = 0; i < size(); ++i)
+      if (pinned[i]) held.push_back(pos[i]);
+    for (std::size_t i = 0; i < size(); ++i) {
+      if (!candidate[i]) continue;
+      const auto node = find_node(evaluators[0], pos[i], sigma[i]);
+      if (!node || !surface.clip.contains(*node)) continue;
+      const bool taken = std::any_of(held.begin(), held.end(), [&](const Vec3& h) {
+        return (h - *node).norm() < 0.5 * sigma[i];
+      });
+      if (taken) continue;
+      pos[i] = *node;
+      pinned[i] = 1;
+      held.push_back(*node);
+    }
+  }
+
+  // After a parameter change nodes move: each pinned floater follows its node by Newton's
+  // method, and is released when the node has gone (or turned degenerate).
+  void track_nodes() {
+    for (std::size_t i = 0; i < size(); ++i) {
+      if (!pinned[i]) continue;
+      const auto node = find_node(evaluators[0], pos[i], sigma[i]);
+      if (node && surface.clip.contains(*node))
+        pos[i] = *node;
+      else
+        pinned[i] = 0;
+    }
+  }
+
+  // α_i = min_k |cos(∇F(p_i), ∇F(v_k))| over random points v_k on the floater's perimeter
+  // (radius σ_i in the tangent plane), each moved onto F = 0 by one Newton step.
+  void curvature_estimates(std::size_t b, std::size_t e, int samples, Evaluator& ev,
+                           std::vector<double>& alpha) {
+    const std::size_t m = (e - b) * static_cast<std::size_t>(samples);
+    std::vector<double> x(m), y(m), z(m), f(m), gx(m), gy(m), gz(m);
+    for (std::size_t k = 0; k < e - b; ++k) {
+      const std::size_t i = b + k;
+      Vec3 t1, t2;
+      tangent_basis(unit[i], t1, t2);
+      Rng rng(opt.seed, id[i], step_count, Stream::kCurvature);
+      const double phase = rng.uniform();
+      for (int j = 0; j < samples; ++j) {
+        // Stratified angles: every direction around the floater gets looked at.
+        const double theta = 2 * std::numbers::pi * (j + phase) / samples;
+        const Vec3 v = pos[i] + sigma[i] * (std::cos(theta) * t1 + std::sin(theta) * t2);
+        const std::size_t s = k * samples + j;
+        x[s] = v.x();
+        y[s] = v.y();
+        z[s] = v.z();
+      }
+    }
+    ev.values_gradients(x, y, z, f, gx, gy, gz);
+    for (std::size_t s = 0; s < m; ++s) {
+      const Vec3 g(gx[s], gy[s], gz[s]);
+      const double g2 = g.squaredNorm();
+      if (!(g2 > 0) || !std::isfinite(g2) || !std::isfinite(f[s])) continue;
+      Vec3 step = -(f[s] / g2) * g;
+      const double limit = sigma[b + s / samples];
+      if (step.norm() > limit) step *= limit / step.norm();
+      x[s] += step.x();
+      y[s] += step.y();
+      z[s] += step.z();
+    }
+    ev.values_gradients(x, y, z, f, gx, gy, gz);
+    for (std::size_t k = 0; k < e - b; ++k) {
+      const Vec3& n = unit[b + k];
+      if (n.squaredNorm() == 0) {
+        alpha[k] = 0;  // ∇F vanishes here: as bent as it gets
+        continue;
+      }
+      double a = 1;
+      for (int j = 0; j < samples; ++j) {
+        const std::size_t s = k * samples + j;
+        const Vec3 g(gx[s], gy[s], gz[s]);
+        const double len = g.norm();
+        const double c = (len > 0 && std::isfinite(len)) ? std::abs(n.dot(g) / len) : 0.0;
+        a = std::min(a, c);
+      }
+      alpha[k] = a;
+    }
+  }
+
+  // ---- the step -----------------------------------------------------------------------------
+
+  // Builds the hash over the current positions and the packed neighbour data in slot order.
+  void build_neighbours() {
+    const std::size_t n = size();
+    double largest = 0;
+    for (double s : sigma) largest = std::max(largest, s);
+    hash.build(pos, box, 1.5 * largest);
+    if (step_count % kResortInterval == 0) {
+      permute_state(hash.order());
+      hash.build(pos, box, 1.5 * largest);
+    }
+    for (auto* v : {&px, &py, &pz, &ps, &pcut, &pm, &nx, &ny, &nz}) v->resize(n);
+    pid.resize(n);
+    const auto order = hash.order();
+    for (std::size_t s = 0; s < n; ++s) {
+      const std::uint32_t i = order[s];
+      px[s] = pos[i].x();
+      py[s] = pos[i].y();
+      pz[s] = pos[i].z();
+      ps[s] = sigma[i];
+      pcut[s] = 9 * sigma[i] * sigma[i];
+      pm[s] = smax[i];
+      // A floater on a node has no tangent plane: it repels every sheet through the node.
+      const Vec3 n = pinned[i] ? Vec3::Zero() : unit[i];
+      nx[s] = n.x();
+      ny[s] = n.y();
+      nz[s] = n.z();
+      pid[s] = id[i];
+    }
+  }
+
+  // Slot ranges of the cells within reach of one cell.
+  struct Candidates {
+    std::array<std::pair<std::uint32_t, std::uint32_t>, detail::SpatialHash::kMaxBlockRanges>
+        ranges;
+    int count = 0;
+    std::vector<double> r2;
+    std::vector<std::uint32_t> near;
+  };
+
+  // Gather pass (ALGORITHMS A.1–A.3, B): for floater i, E_i = Σ_j E_ij, ∂E_i/∂σ_i and the
+  // desired velocity P_i = Σ_j r_ij (E_ij + (σ_i/σ_j)² E_ji) (or its scaled form). Each
+  // floater computes E_ji itself, so no two threads write the same entry, and each sums its
+  // neighbours in a fixed order: the result does not depend on the number of threads.
+  // The same pass grades the fission radii: σ_max^i ≤ σ_max^j + g·|r_ij| for every neighbour
+  // j (one relaxation sweep per step). Without it, where μ_i jumps (α_i drops from ~1 to ~0
+  // once a floater's perimeter reaches across a node) the density wanted on either side
+  // differs by more than fission and death tolerate (a factor 1/δ), and they fight forever.
+  void repulsion() {
+    const std::size_t n = size();
+    energy.resize(n);
+    denergy.resize(n);
+    graded.resize(n);
+    desired.resize(n);
+    const auto runs = hash.runs();
+    const auto order = hash.order();
+#pragma omp parallel num_threads(threads) if (n >= kParallelMin)
+    {
+      Candidates c;
+#pragma omp for schedule(dynamic, 16)
+      for (std::int64_t r = 0; r < static_cast<std::int64_t>(runs.size()); ++r) {
+        const auto& run = runs[static_cast<std::size_t>(r)];
+        gather_candidates(run.key, c);
+        for (std::uint32_t s = run.first; s < run.last; ++s) interact(s, order[s], c);
+      }
+    }
+    smax.swap(graded);
+  }
+
+  void gather_candidates(std::uint64_t key, Candidates& c) const {
+    c.count = hash.block_ranges(key, c.ranges);
+    if (c.r2.size() < pz.size()) {
+      c.r2.resize(pz.size());
+      c.near.resize(pz.size());
+    }
+  }
+
+  void interact(std::uint32_t s, std::uint32_t i, Candidates& c) {
+    const double alpha = opt.repulsion, grading = opt.radius_grading;
+    const bool cos_weight = opt.cos_weight, scaled = opt.scaled_repulsion;
+    const double xi = px[s], yi = py[s], zi = pz[s], si = ps[s];
+    const double nxi = nx[s], nyi = ny[s], nzi = nz[s];
+    const bool has_normal_i = nxi != 0 || nyi != 0 || nzi != 0;
+    const double si2 = si * si, cut_i = 9 * si2, inv_i = 1 / (2 * si2), taper_i = 1 / cut_i;
+    // Distances first, in one branch-free sweep that lists the candidates within reach (most
+    // of the 27 cells' floaters are not).
+    double* r2 = c.r2.data();
+    std::uint32_t* near = c.near.data();
+    std::size_t m = 0;
+    const double *x = px.data(), *y = py.data(), *z = pz.data(), *cut = pcut.data();
+    for (int r = 0; r < c.count; ++r) {
+      const std::uint32_t first = c.ranges[r].first, last = c.ranges[r].second;
+      for (std::uint32_t t = first; t < last; ++t) {
+        const double dx = xi - x[t], dy = yi - y[t], dz = zi - z[t];
+        r2[t] = dx * dx + dy * dy + dz * dz;
+      }
+      for (std::uint32_t t = first; t < last; ++t) {
+        near[m] = t;
+        m += static_cast<std::size_t>(r2[t] < std::max(cut_i, cut[t]));
+      }
+    }
+    double e_sum = 0, de_sum = 0, vx = 0, vy = 0, vz = 0;
+    double limit = mu[i] * sigma_max();
+    for (std::size_t q = 0; q < m; ++q) {
+      const std::uint32_t t = near[q];
+      if (t == s) continue;
+      const double sj = ps[t], sj2 = sj * sj, cut_j = pcut[t];
+      double d2 = r2[t];
+      double dx = xi - px[t], dy = yi - py[t], dz = zi - pz[t];
+      if (grading > 0) limit = std::min(limit, pm[t] + grading * std::sqrt(d2));
+      if (d2 < 1e-18 * si2) {
+        // Coincident floaters feel no force along r = 0; separate them along a direction
+        // both derive from their ids, with opposite signs.
+        const std::uint64_t lo = std::min(pid[s], pid[t]), hi = std::max(pid[s], pid[t]);
+        const std::uint64_t h = detail::mix64(lo * 0x9e3779b97f4a7c15ULL ^ hi);
+        const double sign = pid[s] < pid[t] ? 1.0 : -1.0;
+        const double a = 2 * std::numbers::pi * static_cast<double>(h >> 11) * 0x1.0p-53;
+        dx = sign * 1e-3 * si * std::cos(a);
+        dy = sign * 1e-3 * si * std::sin(a);
+        dz = 0;
+        d2 = dx * dx + dy * dy;
+      }
+      double w = 1;
+      if (cos_weight && has_normal_i && (nx[t] != 0 || ny[t] != 0 || nz[t] != 0))
+        w = std::abs(nxi * nx[t] + nyi * ny[t] + nzi * nz[t]);
+      double coef = 0;
+      if (d2 < cut_i) {
+        const double eij = alpha * w * std::exp(-d2 * inv_i) * (1 - d2 * taper_i);
+        e_sum += eij;
+        de_sum += d2 * eij;
+        if (!scaled) coef += eij;
+      }
+      if (scaled) {
+        const double sm = 0.5 * (si + sj), sm2 = sm * sm;
+        if (d2 < 9 * sm2)
+          coef += 2 * (si / sm) * alpha * w * std::exp(-d2 / (2 * sm2)) * (1 - d2 / (9 * sm2));
+      } else if (d2 < cut_j) {
+        coef += (si2 / sj2) * alpha * w * std::exp(-d2 / (2 * sj2)) * (1 - d2 / cut_j);
+      }
+      vx += coef * dx;
+      vy += coef * dy;
+      vz += coef * dz;
+    }
+    energy[i] = e_sum;
+    denergy[i] = de_sum / (si2 * si);
+    desired[i] = Vec3(vx, vy, vz);
+    graded[i] = limit;
+  }
+
+  // F_q·q̇ at every floater (exact parameter derivatives).
+  void parameter_terms(std::span<const double> qdot) {
+    const std::size_t n = size();
+    fq.assign(n, 0);
+    if (std::all_of(qdot.begin(), qdot.end(), [](double v) { return v == 0; })) return;
+    parallel_chunks(n, [&](std::size_t b, std::size_t e, Evaluator& ev) {
+      for (std::size_t i = b; i < e; ++i) {
+        const FieldSample s = ev.sample(pos[i], false, true);
+        double d = 0;
+        for (std::size_t k = 0; k < qdot.size() && k < s.dq.size(); ++k) d += s.dq[k] * qdot[k];
+        fq[i] = std::isfinite(d) ? d : 0;
+      }
+    });
+  }
+
+  // ALGORITHMS A.3–A.6: radius adaptation, constrained velocity with the φF and F_q·q̇ terms,
+  // bounded Euler step, clip projection.
+  void move() {
+    const std::size_t n = size();
+    new_pos.resize(n);
+    new_sigma.resize(n);
+    speed.resize(n);
+    outside.assign(n, 0);
+    const double dt = opt.dt, e_hat = desired_energy();
+    const double max_scene_step = kMaxStepScene * scene_radius;
+    const double lo = kMinRadius * sigma_hat, hi = kMaxRadius * sigma_max();
+#pragma omp parallel for schedule(static) num_threads(threads) if (n >= kParallelMin)
+    for (std::int64_t signed_i = 0; signed_i < static_cast<std::int64_t>(n); ++signed_i) {
+      const auto i = static_cast<std::size_t>(signed_i);
+      const double s = sigma[i];
+      const double rate = -opt.radius_rate * (energy[i] - e_hat) / (denergy[i] + opt.radius_damping);
+      new_sigma[i] = std::clamp(std::clamp(s + dt * rate, 0.5 * s, 2 * s), lo, hi);
+      if (pinned[i]) {
+        new_pos[i] = pos[i];
+        speed[i] = 0;
+        continue;
+      }
+      // Constrained velocity ṗ = P − [(F_x·P + F_q·q̇ + φF)/(F_x·F_x)] F_x, split into the
+      // tangential part of P and the pull along the unit normal. Where ∇F vanishes (or F is
+      // not finite) there is no normal: the floater moves by repulsion alone, and the pull
+      // resumes as soon as it leaves the critical point.
+      Vec3 tangential = desired[i];
+      Vec3 normal_move = Vec3::Zero();
+      const Vec3& nrm = unit[i];
+      if (nrm.squaredNorm() > 0 && std::isfinite(value[i])) {
+        tangential -= nrm.dot(tangential) * nrm;
+        double pull = -(opt.feedback * value[i] + fq[i]) / gnorm[i] * dt;
+        if (!std::isfinite(pull)) pull = std::copysign(max_scene_step, pull);
+        normal_move = std::clamp(pull, -max_scene_step, max_scene_step) * nrm;
+      }
+      Vec3 tangential_move = dt * tangential;
+      const double limit = std::min(opt.max_step_fraction * s, max_scene_step);
+      const double len = tangential_move.norm();
+      if (len > limit) tangential_move *= limit / len;
+      Vec3 p = pos[i] + tangential_move + normal_move;
+      if (opt.clip_projection) {
+        const Vec3 projected = surface.clip.project(p);
+        if (projected != p) p = onto_boundary_curve(evaluators[thread_index()], projected, s);
+      } else if (!surface.clip.contains(p)) {
+        outside[i] = 1;
+      }
+      new_pos[i] = p;
+      speed[i] = (p - pos[i]).norm() / dt;
+    }
+  }
+
+  // Paper §3.2 projects a floater that left the clip back onto the clip's boundary, which
+  // leaves it off F = 0 by about its step times the angle between surface and boundary; the
+  // repulsion pushes it out again each step, so boundary floaters would never settle on the
+  // surface. Newton's method along the boundary (in the direction of ∇F projected onto the
+  // boundary's tangent plane) puts it on the curve F = 0 ∩ ∂clip instead.
+  Vec3 onto_boundary_curve(Evaluator& ev, Vec3 p, double sigma_i) const {
+    for (int it = 0; it < 2; ++it) {
+      Vec3 g, ng;
+      const double f = ev.value_gradient(p, g);
+      surface.clip.value_gradient(p, ng);
+      const Vec3 t = g - g.dot(ng) * ng;
+      const double t2 = t.squaredNorm();
+      if (!std::isfinite(f) || !(t2 > 0) || !std::isfinite(t2)) break;
+      Vec3 step = -(f / t2) * t;
+      const double len = step.norm();
+      if (len > 0.5 * sigma_i) step *= 0.5 * sigma_i / len;
+      p = surface.clip.project(p + step);
+    }
+    return p;
+  }
+
+  struct Fate {
+    std::size_t births = 0, deaths = 0, removed = 0;
+  };
+
+  // ALGORITHMS A.7, serial so the outcome is the same on any number of threads: strays are
+  // removed; floaters near equilibrium may fission or die (at most one event each).
+  Fate decide_fates() {
+    Fate fate;
+    const std::size_t n = size();
+    const double e_hat = desired_energy(), lo = kMinRadius * sigma_hat;
+    std::vector<std::uint8_t> keep(n, 1);
+    std::size_t live = n;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double s = sigma[i];
+      const bool near_eq = speed[i] < opt.equilibrium_speed * s;
+      const double residual = residual_of(value[i], gnorm[i]);
+      const bool stray = !std::isfinite(value[i]) ||
+                         (!pinned[i] && (s <= lo || outside[i] ||
+                                         (residual > sigma_hat && (near_eq || age[i] > kStrayAge))));
+      if (stray) {
+        keep[i] = 0;
+        --live;
+        ++fate.removed;
+        continue;
+      }
+      if (!near_eq) continue;
+      const double local_max = smax[i];
+      const double local_nominal = std::min(sigma_hat, local_max);
+      const bool fission = live < opt.max_count &&
+                           (s > local_max ||
+                            (energy[i] > opt.fission_energy_factor * e_hat && s > local_nominal));
+      if (fission && split(i)) {
+        ++live;
+        ++fate.births;
+        continue;
+      }
+      const double threshold = opt.death_radius_factor * local_nominal;
+      if (s < threshold && !pinned[i]) {
+        Rng rng(opt.seed, id[i], step_count, Stream::kDeath);
+        if (rng.uniform() > s / threshold) {
+          keep[i] = 0;
+          --live;
+          ++fate.deaths;
+        }
+      }
+    }
+    keep.resize(size(), 1);  // children
+    compact([&](std::size_t i) { return keep[i] != 0; });
+    return fate;
+  }
+
+  // Fission: both halves get σ/√2; the child starts at a random tangential offset of a quarter
+  // to half the old radius (never zero: coincident twins would feel no force). Without clip
+  // projection a child that would start outside the clip is not made (returns false).
+  bool split(std::size_t i) {
+    Rng rng(opt.seed, id[i], step_count, Stream::kFission);
+    const double s = sigma[i];
+    Vec3 t1, t2;
+    tangent_basis(unit[i], t1, t2);
+    const double theta = rng.uniform(0, 2 * std::numbers::pi);
+    const double r = rng.uniform(0.25, 0.5) * s;
+    Vec3 p = pos[i] + r * (std::cos(theta) * t1 + std::sin(theta) * t2);
+    if (opt.clip_projection)
+      p = surface.clip.project(p);
+    else if (!surface.clip.contains(p))
+      return false;
+    sigma[i] = s / std::numbers::sqrt2;
+    push(p, s / std::numbers::sqrt2, mu[i]);
+    smax.back() = smax[i];
+    return true;
+  }
+
+  StepStats step(std::span<const double> next_q) {
+    const auto t0 = std::chrono::steady_clock::now();
+    StepStats st;
+    ensure_evaluators();
+    if (size() == 0) {
+      st.inserted = insert_random(initial_count());
+      evaluate_all();
+    }
+    if (opt.radius_adapt == RadiusAdapt::kWitkinHeckbert) std::fill(mu.begin(), mu.end(), 1.0);
+    if (step_count % static_cast<std::size_t>(opt.estimator_interval) == 0) update_estimators();
+
+    std::vector<double> qdot;
+    if (!next_q.empty()) {
+      const auto q = surface.field.parameter_values();
+      for (std::size_t k = 0; k < q.size(); ++k) qdot.push_back((next_q[k] - q[k]) / opt.dt);
+    }
+    build_neighbours();
+    parameter_terms(qdot);
+    repulsion();
+    move();
+
+    double sq = 0;
+    std::size_t near_eq = 0;
+    for (std::size_t i = 0; i < size(); ++i) {
+      const double v = speed[i] / sigma[i];
+      sq += v * v;
+      if (speed[i] < opt.equilibrium_speed * sigma[i]) ++near_eq;
+    }
+    st.rms_speed = size() > 0 ? std::sqrt(sq / static_cast<double>(size())) : 0;
+    st.near_equilibrium = near_eq;
+
+    // Fates are judged on this step's motion and energies, at the moved positions.
+    pos.swap(new_pos);
+    sigma.swap(new_sigma);
+    const Fate fate = decide_fates();
+    for (auto& a : age) a = a == std::numeric_limits<std::uint32_t>::max() ? a : a + 1;
+    if (!next_q.empty()) {
+      apply_parameters(next_q);
+      track_nodes();
+    }
+    evaluate_all();
+
+    ++step_count;
+    st.step = step_count;
+    st.births = fate.births;
+    st.deaths = fate.deaths;
+    st.removed = fate.removed;
+    st.count = size();
+    st.converged = judge_convergence(st);
+    residual_stats(st);
+    st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return st;
+  }
+
+  bool judge_convergence(const StepStats& st) {
+    const auto window = static_cast<std::size_t>(opt.converge_window);
+    recent.push_back({st.births + st.deaths + st.removed + st.inserted, st.count, st.rms_speed});
+    while (recent.size() > window + 1) recent.pop_front();
+    if (recent.size() <= window || st.count == 0) return false;
+    std::size_t events = 0;
+    double speed = 0;
+    for (std::size_t k = 1; k < recent.size(); ++k) {
+      events += recent[k].events;
+      speed += recent[k].speed;
+    }
+    const double n = static_cast<double>(st.count), w = static_cast<double>(window);
+    const double drift = std::abs(n - static_cast<double>(recent.front().count));
+    return static_cast<double>(events) <= opt.converge_churn * n * w && drift <= kStationary * n &&
+           speed / w < opt.converge_speed;
+  }
+
+  void residual_stats(StepStats& st) const {
+    // Floaters on nodes are left out: there F and ∇F both vanish and |F|/|∇F| means nothing.
+    std::vector<double> r;
+    r.reserve(size());
+    for (std::size_t i = 0; i < size(); ++i)
+      if (!pinned[i]) r.push_back(residual_of(value[i], gnorm[i]));
+    if (r.empty()) return;
+    const auto mid = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
+    std::nth_element(r.begin(), mid, r.end());
+    st.median_residual = *mid;
+    st.max_residual = *std::max_element(r.begin(), r.end());
+  }
+
+  void reset() {
+    resize_state(0);
+    next_id = 0;
+    step_count = 0;
+    recent.clear();
+    insert_random(initial_count());
+    evaluate_all();
+  }
+
+  void set_options(const FloaterOptions& o) {
+    validate(o);
+    const bool lengths = o.radius != opt.radius || o.singular_scale != opt.singular_scale ||
+                         (o.radius == 0 && o.max_count != opt.max_count);
+    opt = o;
+    if (lengths) resolve_lengths();
+    if (size() > opt.max_count) resize_state(opt.max_count);
+    if (opt.radius_adapt == RadiusAdapt::kWitkinHeckbert) std::fill(mu.begin(), mu.end(), 1.0);
+    ensure_evaluators();
+    shown_normals_valid = false;
+  }
+
+  const std::vector<Vec3>& shown() const {
+    if (!shown_normals_valid) {
+      shown_normals.resize(size());
+      for (std::size_t i = 0; i < size(); ++i)
+        shown_normals[i] = unit[i].squaredNorm() > 0 ? unit[i] : Vec3(Vec3::UnitZ());
+      shown_normals_valid = true;
+    }
+    return shown_normals;
+  }
+};
+
+FloaterSystem::FloaterSystem(const Surface& surface, const FloaterOptions& options)
+    : impl_(std::make_unique<Impl>(surface, options)) {}
+FloaterSystem::~FloaterSystem() = default;
+FloaterSystem::FloaterSystem(FloaterSystem&&) noexcept = default;
+FloaterSystem& FloaterSystem::operator=(FloaterSystem&&) noexcept = default;
+
+StepStats FloaterSystem::step() { return impl_->step({}); }
+
+StepStats FloaterSystem::step(std::span<const double> next_parameters) {
+  impl_->check_parameters(next_parameters);
+  return impl_->step(next_parameters);
+}
+
+void FloaterSystem::set_parameters(std::span<const double> values) {
+  impl_->check_parameters(values);
+  impl_->apply_parameters(values);
+  impl_->track_nodes();
+  impl_->evaluate_all();
+}
+
+void FloaterSystem::set_parameter(std::string_view name, double value) {
+  const int k = impl_->surface.field.parameter_index(name);
+  if (k < 0)
+    throw InvalidArgument(std::string(name), fmt::format("{}", value),
+                          fmt::format("{} has no such parameter", impl_->surface.label()));
+  std::vector<double> q = impl_->surface.field.parameter_values();
+  q[static_cast<std::size_t>(k)] = value;
+  set_parameters(q);
+}
+
+std::span<const double> FloaterSystem::parameters() const {
+  return impl_->surface.field.parameter_values();
+}
+
+void FloaterSystem::set_surface(const Surface& surface) {
+  impl_->adopt_surface(surface);
+  for (Vec3& p : impl_->pos) p = impl_->surface.clip.project(p);
+  impl_->evaluate_all();
+}
+
+const Surface& FloaterSystem::surface() const { return impl_->surface; }
+
+void FloaterSystem::set_options(const FloaterOptions& options) { impl_->set_options(options); }
+const FloaterOptions& FloaterSystem::options() const { return impl_->opt; }
+
+void FloaterSystem::reset() { impl_->reset(); }
+
+void FloaterSystem::reseed(std::uint64_t seed) {
+  impl_->opt.seed = seed;
+  impl_->reset();
+}
+
+double FloaterSystem::nominal_radius() const { return impl_->sigma_hat; }
+std::size_t FloaterSystem::size() const { return impl_->size(); }
+std::size_t FloaterSystem::steps_taken() const { return impl_->step_count; }
+std::span<const Vec3> FloaterSystem::positions() const { return impl_->pos; }
+std::span<const double> FloaterSystem::radii() const { return impl_->sigma; }
+std::span<const Vec3> FloaterSystem::normals() const { return impl_->shown(); }
+std::span<const std::uint64_t> FloaterSystem::ids() const { return impl_->id; }
+std::span<const double> FloaterSystem::max_radii() const { return impl_->smax; }
+
+}  // namespace zeroset

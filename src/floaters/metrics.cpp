@@ -1,0 +1,244 @@
+#include "zeroset/floaters/metrics.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include "critical_detail.h"
+#include "rng_detail.h"
+#include "spatial_hash_detail.h"
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace zeroset {
+namespace {
+
+constexpr std::size_t kBlock = 16384;  // candidates per parallel round
+constexpr std::size_t kChunk = 256;    // candidates per batched evaluation
+constexpr int kNewtonIterations = 40;
+
+int max_threads() {
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+
+int thread_index() {
+#ifdef _OPENMP
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+
+// Newton's method onto F = 0 from p; false when it does not converge to `tolerance` (in
+// |F|/|∇F|) or strays more than `max_move` from where it started.
+bool project_onto_surface(Evaluator& ev, Vec3& p, double tolerance, double max_move) {
+  const Vec3 start = p;
+  for (int it = 0; it < kNewtonIterations; ++it) {
+    Vec3 g;
+    const double f = ev.value_gradient(p, g);
+    const double g2 = g.squaredNorm();
+    if (!std::isfinite(f) || !(g2 > 0) || !std::isfinite(g2)) return f == 0;
+    if (std::abs(f) / std::sqrt(g2) < tolerance) return (p - start).norm() <= max_move;
+    p -= (f / g2) * g;
+    if ((p - start).norm() > max_move) return false;
+  }
+  return false;
+}
+
+std::vector<Evaluator> make_evaluators(const Surface& surface) {
+  std::vector<Evaluator> evs;
+  for (int t = 0; t < max_threads(); ++t) evs.emplace_back(surface.field);
+  return evs;
+}
+
+}  // namespace
+
+double singular_distance(const Vec3& gradient, const Mat3& hessian) {
+  if (gradient.squaredNorm() == 0) return 0;
+  const detail::Corrector c = detail::newton_corrector(gradient, hessian);
+  return c.reaches ? c.step.norm() : std::numeric_limits<double>::infinity();
+}
+
+ReferenceSampling reference_sampling(const Surface& surface, const ReferenceOptions& options) {
+  ReferenceSampling out;
+  const Box3 box = surface.bounds();
+  const double radius = surface.scene_radius();
+  const double shell = options.shell > 0 ? options.shell : radius / 200;
+  const std::size_t budget =
+      options.max_candidates > 0 ? options.max_candidates : 400 * std::max<std::size_t>(options.count, 1);
+  const double tolerance = 1e-9 * radius;
+  std::vector<Evaluator> evs = make_evaluators(surface);
+  std::size_t in_shell = 0;
+
+  while (out.points.size() < options.count && out.candidates < budget) {
+    const std::size_t base = out.candidates;
+    const std::size_t m = std::min(kBlock, budget - base);
+    const auto chunks = static_cast<std::int64_t>((m + kChunk - 1) / kChunk);
+    std::vector<std::vector<Vec3>> found(static_cast<std::size_t>(chunks));
+    std::vector<std::size_t> shell_hits(static_cast<std::size_t>(chunks), 0);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(static_cast<int>(evs.size()))
+    for (std::int64_t c = 0; c < chunks; ++c) {
+      Evaluator& ev = evs[thread_index()];
+      const std::size_t b = static_cast<std::size_t>(c) * kChunk;
+      const std::size_t e = std::min(m, b + kChunk);
+      std::array<double, kChunk> x, y, z, f, gx, gy, gz;
+      std::array<std::uint8_t, kChunk> inside{};
+      for (std::size_t k = b; k < e; ++k) {
+        detail::Rng rng(options.seed, base + k, 0, detail::Stream::kReference);
+        const Vec3 p(rng.uniform(box.lo.x(), box.hi.x()), rng.uniform(box.lo.y(), box.hi.y()),
+                     rng.uniform(box.lo.z(), box.hi.z()));
+        x[k - b] = p.x();
+        y[k - b] = p.y();
+        z[k - b] = p.z();
+        inside[k - b] = surface.clip.contains(p) ? 1 : 0;
+      }
+      const std::size_t len = e - b;
+      ev.values_gradients({x.data(), len}, {y.data(), len}, {z.data(), len}, {f.data(), len},
+                          {gx.data(), len}, {gy.data(), len}, {gz.data(), len});
+      for (std::size_t k = 0; k < len; ++k) {
+        if (!inside[k]) continue;
+        const double g = std::sqrt(gx[k] * gx[k] + gy[k] * gy[k] + gz[k] * gz[k]);
+        if (!std::isfinite(f[k]) || !(std::abs(f[k]) < shell * g)) continue;
+        ++shell_hits[static_cast<std::size_t>(c)];
+        Vec3 p(x[k], y[k], z[k]);
+        if (project_onto_surface(ev, p, tolerance, 4 * shell) &&
+            surface.clip.contains(p, tolerance))
+          found[static_cast<std::size_t>(c)].push_back(p);
+      }
+    }
+    // Appending in chunk order (and stopping at `count`) keeps the result thread-independent.
+    for (std::size_t c = 0; c < found.size(); ++c) {
+      in_shell += shell_hits[c];
+      for (const Vec3& p : found[c])
+        if (out.points.size() < options.count) out.points.push_back(p);
+    }
+    out.candidates += m;
+  }
+  const double box_volume = box.size().prod();
+  out.area = out.candidates > 0 ? box_volume * static_cast<double>(in_shell) /
+                                      static_cast<double>(out.candidates) / (2 * shell)
+                                : 0;
+  return out;
+}
+
+double estimate_area(const Surface& surface, std::uint64_t seed) {
+  ReferenceOptions o;
+  o.count = 3000;
+  o.seed = seed;
+  o.max_candidates = 400'000;
+  return reference_sampling(surface, o).area;
+}
+
+SampleMetrics measure_samples(const Surface& surface, std::span<const Vec3> samples,
+                              const MetricsOptions& options) {
+  SampleMetrics m;
+  const std::size_t n = samples.size();
+  m.count = n;
+  const std::vector<Vec3> singular = surface.singular_points();
+  const bool need_reference = options.covering || options.band_halfwidth > 0;
+  if (n == 0 && !need_reference) return m;
+
+  // Nearest-neighbour spacing through a grid of about two samples per occupied cell.
+  Box3 box{Vec3::Constant(std::numeric_limits<double>::infinity()),
+           Vec3::Constant(-std::numeric_limits<double>::infinity())};
+  for (const Vec3& p : samples) {
+    box.lo = box.lo.cwiseMin(p);
+    box.hi = box.hi.cwiseMax(p);
+  }
+  if (n == 0) box = surface.bounds();
+  const double extent = std::max(box.size().maxCoeff(), 1e-12);
+  detail::SpatialHash grid;
+  grid.build(samples, box, 1.5 * extent / std::sqrt(static_cast<double>(std::max<std::size_t>(n, 1))));
+  std::vector<double> nn(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto [j, d] = grid.nearest(samples[i], samples, static_cast<std::int64_t>(i));
+    nn[i] = j >= 0 ? d : 0;
+  }
+  if (n >= 2) {
+    double sum = 0, sq = 0;
+    for (double d : nn) sum += d;
+    m.spacing_mean = sum / static_cast<double>(n);
+    for (double d : nn) sq += (d - m.spacing_mean) * (d - m.spacing_mean);
+    m.spacing_cv = m.spacing_mean > 0 ? std::sqrt(sq / static_cast<double>(n)) / m.spacing_mean : 0;
+  }
+
+  // Residual, leaving out the balls around known singular points.
+  Evaluator ev(surface.field);
+  const double exclusion =
+      options.singular_exclusion > 0 ? options.singular_exclusion : m.spacing_mean;
+  std::vector<double> residuals;
+  residuals.reserve(n);
+  for (const Vec3& p : samples) {
+    bool excluded = false;
+    for (const Vec3& s : singular) excluded = excluded || (p - s).norm() < exclusion;
+    if (excluded) {
+      ++m.residual_excluded;
+      continue;
+    }
+    Vec3 g;
+    const double f = ev.value_gradient(p, g);
+    const double gn = g.norm();
+    double r = f == 0 ? 0 : std::abs(f) / gn;
+    if (!std::isfinite(r)) r = std::numeric_limits<double>::max();
+    residuals.push_back(r);
+  }
+  if (!residuals.empty()) {
+    const auto mid = residuals.begin() + static_cast<std::ptrdiff_t>(residuals.size() / 2);
+    std::nth_element(residuals.begin(), mid, residuals.end());
+    m.residual_median = *mid;
+    m.residual_max = *std::max_element(residuals.begin(), residuals.end());
+  }
+
+  // Known singular points: distance to the nearest sample in units of the local spacing.
+  if (n > 0) {
+    for (const Vec3& s : singular) {
+      SingularCoverage c;
+      c.point = s;
+      const auto near = grid.k_nearest(s, samples, static_cast<std::size_t>(std::max(1, options.local_neighbours)));
+      c.distance = (samples[near.front()] - s).norm();
+      double sum = 0;
+      for (std::uint32_t j : near) sum += nn[j];
+      c.local_spacing = sum / static_cast<double>(near.size());
+      c.ratio = c.local_spacing > 0 ? c.distance / c.local_spacing : 0;
+      m.singular_ratio_max = std::max(m.singular_ratio_max, c.ratio);
+      m.singular.push_back(c);
+    }
+  }
+
+  if (!need_reference) return m;
+  const ReferenceSampling ref = reference_sampling(surface, options.reference);
+  m.reference_count = ref.points.size();
+  if (options.covering && n > 0) {
+    for (const Vec3& q : ref.points)
+      m.covering_radius = std::max(m.covering_radius, grid.nearest(q, samples, -1).second);
+    m.covering_relative = m.spacing_mean > 0 ? m.covering_radius / m.spacing_mean : 0;
+  } else if (options.covering && !ref.points.empty()) {
+    m.covering_radius = 2 * surface.scene_radius();  // nothing sampled: the whole surface is a gap
+  }
+
+  if (options.band_halfwidth > 0) {
+    auto in_band = [&](const Vec3& p) {
+      const FieldSample s = ev.sample(p, true, false);
+      return singular_distance(s.gradient, s.hessian) < options.band_halfwidth;
+    };
+    std::size_t ref_in = 0, sample_in = 0;
+    for (const Vec3& q : ref.points) ref_in += in_band(q) ? 1 : 0;
+    for (const Vec3& p : samples) sample_in += in_band(p) ? 1 : 0;
+    m.band_samples = sample_in;
+    m.band_reference = ref_in;
+    const std::size_t ref_out = ref.points.size() - ref_in, sample_out = n - sample_in;
+    if (ref_in > 0 && ref_out > 0 && sample_out > 0)
+      m.band_density_ratio = (static_cast<double>(sample_in) / static_cast<double>(ref_in)) /
+                             (static_cast<double>(sample_out) / static_cast<double>(ref_out));
+  }
+  return m;
+}
+
+}  // namespace zeroset

@@ -1,0 +1,230 @@
+#include "spatial_hash_detail.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <limits>
+
+#include "rng_detail.h"
+
+namespace zeroset::detail {
+namespace {
+// A dense grid may have this many cells per point before hashing is cheaper in memory.
+constexpr std::int64_t kDenseCellsPerPoint = 64;
+constexpr std::int64_t kDenseMinCells = 1 << 16;
+}  // namespace
+
+void SpatialHash::build(std::span<const Vec3> points, const Box3& box, double cell) {
+  origin_ = box.lo;
+  const Vec3 extent = (box.hi - box.lo).cwiseMax(Vec3::Zero());
+  const double max_extent = std::max(extent.maxCoeff(), 1e-300);
+  const double min_cell = max_extent / static_cast<double>(std::int64_t{1} << (kBits - 1));
+  if (!std::isfinite(cell) || cell <= 0) cell = max_extent;
+  cell_ = std::max(cell, min_cell);
+  inv_cell_ = 1 / cell_;
+  std::int64_t cells = 1;
+  for (int k = 0; k < 3; ++k) {
+    dims_[k] = std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(extent[k] * inv_cell_)));
+    cells = cells > std::numeric_limits<std::int64_t>::max() / dims_[k]
+                ? std::numeric_limits<std::int64_t>::max()
+                : cells * dims_[k];
+  }
+  const std::int64_t n = static_cast<std::int64_t>(points.size());
+  dense_ = cells <= std::max(kDenseCellsPerPoint * n, kDenseMinCells);
+  std::size_t buckets;
+  if (dense_) {
+    buckets = static_cast<std::size_t>(cells);
+  } else {
+    buckets = std::bit_ceil(static_cast<std::size_t>(std::max<std::int64_t>(2 * n, 16)));
+    mask_ = buckets - 1;
+  }
+
+  // Counting sort by bucket: count, prefix sums, then place in input order (stable).
+  keys_.resize(points.size());
+  order_.resize(points.size());
+  start_.assign(buckets + 1, 0);
+  std::vector<std::uint64_t> key_in(points.size());
+  std::vector<std::uint32_t> bucket_in(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const auto c = cell_of(points[i]);
+    key_in[i] = pack(c[0], c[1], c[2]);
+    bucket_in[i] = static_cast<std::uint32_t>(bucket_index(key_in[i]));
+    ++start_[bucket_in[i] + 1];
+  }
+  for (std::size_t b = 0; b < buckets; ++b) start_[b + 1] += start_[b];
+  std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const std::uint32_t slot = fill[bucket_in[i]]++;
+    order_[slot] = static_cast<std::uint32_t>(i);
+    keys_[slot] = key_in[i];
+  }
+  // A hashed bucket may mix cells: order its slots by key (stably, so equal cells keep input
+  // order) to make every cell one run of slots.
+  runs_.clear();
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> mixed;
+  for (std::size_t b = 0; b < buckets; ++b) {
+    const std::uint32_t first = start_[b], last = start_[b + 1];
+    if (first == last) continue;
+    if (!dense_ && std::any_of(keys_.begin() + first, keys_.begin() + last,
+                               [&](std::uint64_t k) { return k != keys_[first]; })) {
+      mixed.clear();
+      for (std::uint32_t s = first; s < last; ++s) mixed.emplace_back(keys_[s], order_[s]);
+      std::stable_sort(mixed.begin(), mixed.end(),
+                       [](const auto& a, const auto& b) { return a.first < b.first; });
+      for (std::uint32_t s = first; s < last; ++s) {
+        keys_[s] = mixed[s - first].first;
+        order_[s] = mixed[s - first].second;
+      }
+    }
+    for (std::uint32_t s = first; s < last;) {
+      std::uint32_t e = s + 1;
+      while (e < last && keys_[e] == keys_[s]) ++e;
+      runs_.push_back({keys_[s], s, e});
+      s = e;
+    }
+  }
+}
+
+std::pair<std::uint32_t, std::uint32_t> SpatialHash::cell_range(std::uint64_t key) const {
+  auto [first, last] = bucket(key);
+  if (dense_) return {first, last};
+  while (first < last && keys_[first] != key) ++first;
+  std::uint32_t end = first;
+  while (end < last && keys_[end] == key) ++end;
+  return {first, end};
+}
+
+std::array<std::int64_t, 3> SpatialHash::cell_of(const Vec3& p) const {
+  std::array<std::int64_t, 3> c;
+  for (int k = 0; k < 3; ++k) {
+    const double t = (p[k] - origin_[k]) * inv_cell_;
+    // Clamp before converting: a point outside the box (or a huge coordinate) must not
+    // overflow the integer.
+    const double clamped = std::clamp(t, 0.0, static_cast<double>(dims_[k] - 1));
+    c[k] = static_cast<std::int64_t>(clamped);
+  }
+  return c;
+}
+
+std::uint64_t SpatialHash::bucket_index(std::uint64_t key) const {
+  if (dense_) {
+    const auto [x, y, z] = unpack(key);
+    return static_cast<std::uint64_t>(x + dims_[0] * (y + dims_[1] * z));
+  }
+  return mix64(key) & mask_;
+}
+
+int SpatialHash::block_ranges(std::uint64_t key,
+                              std::span<std::pair<std::uint32_t, std::uint32_t>> out) const {
+  const auto [x, y, z] = unpack(key);
+  const std::int64_t x0 = std::max<std::int64_t>(0, x - 2);
+  const std::int64_t x1 = std::min(dims_[0] - 1, x + 2);
+  int count = 0;
+  auto add = [&](std::pair<std::uint32_t, std::uint32_t> r) {
+    if (r.first < r.second) out[count++] = r;
+  };
+  for (std::int64_t cz = std::max<std::int64_t>(0, z - 2); cz <= std::min(dims_[2] - 1, z + 2); ++cz)
+    for (std::int64_t cy = std::max<std::int64_t>(0, y - 2); cy <= std::min(dims_[1] - 1, y + 2);
+         ++cy) {
+      if (dense_) {
+        // A row of cells is a run of consecutive buckets, hence of consecutive slots.
+        add({start_[bucket_index(pack(x0, cy, cz))], start_[bucket_index(pack(x1, cy, cz)) + 1]});
+      } else {
+        for (std::int64_t cx = x0; cx <= x1; ++cx) add(cell_range(pack(cx, cy, cz)));
+      }
+    }
+  return count;
+}
+
+template <class Visit>
+bool SpatialHash::visit_ring(const std::array<std::int64_t, 3>& c, std::int64_t ring,
+                             Visit&& visit) const {
+  bool any = false;
+  const std::int64_t z0 = std::max<std::int64_t>(0, c[2] - ring);
+  const std::int64_t z1 = std::min(dims_[2] - 1, c[2] + ring);
+  const std::int64_t y0 = std::max<std::int64_t>(0, c[1] - ring);
+  const std::int64_t y1 = std::min(dims_[1] - 1, c[1] + ring);
+  const std::int64_t x0 = std::max<std::int64_t>(0, c[0] - ring);
+  const std::int64_t x1 = std::min(dims_[0] - 1, c[0] + ring);
+  for (std::int64_t z = z0; z <= z1; ++z)
+    for (std::int64_t y = y0; y <= y1; ++y) {
+      const bool inner_zy = std::abs(z - c[2]) < ring && std::abs(y - c[1]) < ring;
+      // On rows strictly inside the ring only the two end cells belong to it.
+      const std::int64_t step = inner_zy ? std::max<std::int64_t>(1, 2 * ring) : 1;
+      for (std::int64_t x = inner_zy ? c[0] - ring : x0; x <= x1; x += step) {
+        if (x < x0) continue;
+        any = true;
+        visit(pack(x, y, z));
+      }
+    }
+  return any;
+}
+
+std::pair<std::int64_t, double> SpatialHash::nearest(const Vec3& p, std::span<const Vec3> points,
+                                                     std::int64_t skip) const {
+  std::int64_t best = -1;
+  double best_d2 = std::numeric_limits<double>::infinity();
+  if (order_.empty()) return {best, best_d2};
+  const auto c = cell_of(p);
+  auto visit = [&](std::uint64_t key) {
+    const auto [b, e] = bucket(key);
+    for (std::uint32_t s = b; s < e; ++s) {
+      if (keys_[s] != key) continue;
+      const std::int64_t i = order_[s];
+      if (i == skip) continue;
+      const double d2 = (points[i] - p).squaredNorm();
+      if (d2 < best_d2 || (d2 == best_d2 && i < best)) {
+        best_d2 = d2;
+        best = i;
+      }
+    }
+  };
+  // Every point in ring r is at least r - 1 cell edges away from p, so once the best distance
+  // is below that the search is complete. Far-apart sparse points would make rings expensive: after a
+  // few empty rings fall back to a linear scan.
+  const std::int64_t max_ring = std::max({dims_[0], dims_[1], dims_[2]});
+  for (std::int64_t ring = 0; ring <= max_ring; ++ring) {
+    if (best >= 0 && std::sqrt(best_d2) <= static_cast<double>(ring - 1) * cell_) break;
+    if (ring > 8 && best < 0) {
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        if (static_cast<std::int64_t>(i) == skip) continue;
+        const double d2 = (points[i] - p).squaredNorm();
+        if (d2 < best_d2) {
+          best_d2 = d2;
+          best = static_cast<std::int64_t>(i);
+        }
+      }
+      break;
+    }
+    if (!visit_ring(c, ring, visit)) break;
+  }
+  return {best, std::sqrt(best_d2)};
+}
+
+std::vector<std::uint32_t> SpatialHash::k_nearest(const Vec3& p, std::span<const Vec3> points,
+                                                  std::size_t k) const {
+  std::vector<std::pair<double, std::uint32_t>> found;
+  if (order_.empty() || k == 0) return {};
+  k = std::min(k, order_.size());
+  const auto c = cell_of(p);
+  auto visit = [&](std::uint64_t key) {
+    const auto [b, e] = bucket(key);
+    for (std::uint32_t s = b; s < e; ++s)
+      if (keys_[s] == key) found.emplace_back((points[order_[s]] - p).squaredNorm(), order_[s]);
+  };
+  const std::int64_t max_ring = std::max({dims_[0], dims_[1], dims_[2]});
+  for (std::int64_t ring = 0; ring <= max_ring; ++ring) {
+    if (found.size() >= k) {
+      std::nth_element(found.begin(), found.begin() + static_cast<std::ptrdiff_t>(k - 1),
+                       found.end());
+      if (std::sqrt(found[k - 1].first) <= static_cast<double>(ring - 1) * cell_) break;
+    }
+    if (!visit_ring(c, ring, visit)) break;
+  }
+  std::sort(found.begin(), found.end());
+  std::vector<std::uint32_t> out;
+  for (std::size_t i = 0; i < std::min(k, found.size()); ++i) out.push_back(found[i].second);
+  return out;
+}
+
+}  // namespace zeroset::detail

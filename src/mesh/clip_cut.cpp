@@ -1,0 +1,204 @@
+// Cutting a mesh at the clip surface (polygonize.h) and projections onto the clip curve.
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "mesh_detail.h"
+#include "parallel_detail.h"
+#include "zeroset/mesh/adjacency.h"
+
+namespace zeroset::detail {
+namespace {
+
+enum Side : std::uint8_t { kIn = 0, kOn = 1, kOut = 2 };
+
+// The point where G = 0 on the segment from `in` (G < 0) to `out` (G > 0), by bisection
+// with a secant guess (G is 1-Lipschitz and piecewise smooth for spheres and planes).
+Vec3 clip_crossing(const Clip& clip, const Vec3& in, const Vec3& out) {
+  double lo = 0, hi = 1, g_lo = clip.value(in), g_hi = clip.value(out);
+  for (int it = 0; it < 80 && hi - lo > 1e-15; ++it) {
+    double t = lo + (hi - lo) * g_lo / (g_lo - g_hi);
+    if (!(t > lo && t < hi)) t = 0.5 * (lo + hi);
+    // Alternate with bisection so a one-sided secant cannot stall.
+    if (it % 2) t = 0.5 * (lo + hi);
+    const double g = clip.value(in + t * (out - in));
+    if (g == 0) return in + t * (out - in);
+    if (g < 0) lo = t, g_lo = g;
+    else hi = t, g_hi = g;
+  }
+  return in + 0.5 * (lo + hi) * (out - in);
+}
+
+}  // namespace
+
+Vec3 snap_to_clip(const Clip& clip, Vec3 p) {
+  for (int it = 0; it < 4; ++it) {
+    Vec3 grad;
+    const double g = clip.value_gradient(p, grad);
+    const double n2 = grad.squaredNorm();
+    if (!std::isfinite(g) || n2 == 0) break;
+    if (g == 0) break;
+    p -= (g / n2) * grad;
+  }
+  return p;
+}
+
+Vec3 project_onto_clip_curve(Evaluator& ev, const Clip& clip, const Vec3& p, double max_move) {
+  Vec3 x = p;
+  for (int it = 0; it < 40; ++it) {
+    Vec3 gf, gg;
+    const double f = ev.value_gradient(x, gf);
+    const double g = clip.value_gradient(x, gg);
+    if (!std::isfinite(f) || !gf.allFinite()) return snap_to_clip(clip, p);
+    // Minimum-norm step: x -= Jᵀ (J Jᵀ)⁻¹ (f, g), J = [∇F; ∇G], regularised where ∇F ∥ ∇G.
+    double a = gf.dot(gf), b = gf.dot(gg), d = gg.dot(gg);
+    const double reg = 1e-12 * (a + d);
+    a += reg, d += reg;
+    const double det = a * d - b * b;
+    if (!(det > 0)) return snap_to_clip(clip, p);
+    const double l0 = (d * f - b * g) / det, l1 = (a * g - b * f) / det;
+    const Vec3 step = l0 * gf + l1 * gg;
+    x -= step;
+    if ((x - p).norm() > max_move || !x.allFinite()) return snap_to_clip(clip, p);
+    if (step.norm() <= 1e-15 * (1 + x.norm())) break;
+  }
+  return snap_to_clip(clip, x);
+}
+
+void flag_open_boundary(Mesh& mesh) {
+  mesh.is_boundary.resize(mesh.positions.size(), 0);
+  const MeshAdjacency adj = build_adjacency(mesh);
+  for (size_t e = 0; e < adj.edges.size(); ++e)
+    if (adj.edge_triangle_count[e] == 1) {
+      mesh.is_boundary[adj.edges[e][0]] = 1;
+      mesh.is_boundary[adj.edges[e][1]] = 1;
+    }
+}
+
+ClipCutStats cut_at_clip(Mesh& mesh, const Surface& surface, double snap_distance, int workers) {
+  ClipCutStats st;
+  const Clip& clip = surface.clip;
+  const long long nv = static_cast<long long>(mesh.positions.size());
+  std::vector<double> g(static_cast<size_t>(nv));
+  std::vector<std::uint8_t> side(static_cast<size_t>(nv));
+#pragma omp parallel for num_threads(workers) schedule(static)
+  for (long long v = 0; v < nv; ++v) {
+    const double gv = clip.value(mesh.positions[static_cast<size_t>(v)]);
+    g[static_cast<size_t>(v)] = gv;
+    side[static_cast<size_t>(v)] = std::abs(gv) <= snap_distance ? kOn : gv < 0 ? kIn : kOut;
+  }
+  const MeshAdjacency adj = build_adjacency(mesh);
+  auto kept = [&](std::uint32_t t) {
+    const auto& tri = mesh.triangles[t];
+    bool any_in = false, all_on = true;
+    for (std::uint32_t v : tri) any_in |= side[v] == kIn, all_on &= side[v] == kOn;
+    return any_in || all_on;
+  };
+  // A vertex moved onto the clip must keep a single fan of triangles: where the clip curve
+  // passes it so that kept and dropped triangles alternate, it is cut normally instead.
+  for (int round = 0; round < 8; ++round) {
+    std::vector<std::uint8_t> fan_edges(static_cast<size_t>(nv), 0);
+    for (size_t e = 0; e < adj.edges.size(); ++e) {
+      int k = 0;
+      for (std::uint32_t t : adj.edge_triangles[e])
+        if (t != MeshAdjacency::kNone) k += kept(t);
+      if (k != 1) continue;
+      for (std::uint32_t v : adj.edges[e])
+        if (side[v] == kOn && fan_edges[v] < 255) ++fan_edges[v];
+    }
+    bool changed = false;
+    for (long long v = 0; v < nv; ++v)
+      if (side[static_cast<size_t>(v)] == kOn && fan_edges[static_cast<size_t>(v)] > 2) {
+        side[static_cast<size_t>(v)] = g[static_cast<size_t>(v)] < 0 ? kIn : kOut;
+        changed = true;
+      }
+    if (!changed) break;
+  }
+
+  // New vertices on edges from inside to outside, numbered after the old ones.
+  std::vector<std::uint32_t> edge_vertex(adj.edges.size(), MeshAdjacency::kNone);
+  std::vector<size_t> cut_edges;
+  for (size_t e = 0; e < adj.edges.size(); ++e) {
+    const auto [a, b] = adj.edges[e];
+    if ((side[a] == kIn && side[b] == kOut) || (side[a] == kOut && side[b] == kIn)) {
+      edge_vertex[e] = static_cast<std::uint32_t>(mesh.positions.size() + cut_edges.size());
+      cut_edges.push_back(e);
+    }
+  }
+  std::vector<long long> snapped;
+  for (long long v = 0; v < nv; ++v)
+    if (side[static_cast<size_t>(v)] == kOn) snapped.push_back(v);
+  mesh.positions.resize(mesh.positions.size() + cut_edges.size());
+  mesh.is_boundary.resize(mesh.positions.size(), 0);
+
+  EvaluatorPool pool(surface.field, workers);
+  const long long ncut = static_cast<long long>(cut_edges.size());
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 64)
+  for (long long c = 0; c < ncut; ++c) {
+    const auto [a, b] = adj.edges[cut_edges[static_cast<size_t>(c)]];
+    const Vec3& pa = mesh.positions[a];
+    const Vec3& pb = mesh.positions[b];
+    const Vec3 x = side[a] == kIn ? clip_crossing(clip, pa, pb) : clip_crossing(clip, pb, pa);
+    mesh.positions[static_cast<size_t>(nv + c)] =
+        project_onto_clip_curve(pool.local(), clip, x, (pb - pa).norm());
+  }
+  const long long nsnap = static_cast<long long>(snapped.size());
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 64)
+  for (long long s = 0; s < nsnap; ++s) {
+    Vec3& p = mesh.positions[static_cast<size_t>(snapped[static_cast<size_t>(s)])];
+    p = project_onto_clip_curve(pool.local(), clip, p, 4 * snap_distance + 1e-300);
+  }
+  for (long long v : snapped) mesh.is_boundary[static_cast<size_t>(v)] = 1;
+  for (long long c = 0; c < ncut; ++c) mesh.is_boundary[static_cast<size_t>(nv + c)] = 1;
+  st.cut_edges = ncut;
+  st.snapped = nsnap;
+
+  // Clip every triangle (Sutherland–Hodgman against G ≤ 0, vertices on G = 0 kept as they are).
+  auto cut_vertex = [&](std::uint32_t a, std::uint32_t b) {
+    const std::array<std::uint32_t, 2> key = {std::min(a, b), std::max(a, b)};
+    const auto it = std::lower_bound(adj.edges.begin(), adj.edges.end(), key);
+    return edge_vertex[static_cast<size_t>(it - adj.edges.begin())];
+  };
+  std::vector<std::array<std::uint32_t, 3>> out;
+  out.reserve(mesh.triangles.size());
+  for (const auto& tri : mesh.triangles) {
+    bool any_in = false, any_out = false, all_on = true;
+    for (std::uint32_t v : tri)
+      any_in |= side[v] == kIn, any_out |= side[v] == kOut, all_on &= side[v] == kOn;
+    if (!any_out) {
+      out.push_back(tri);
+      continue;
+    }
+    if (!any_in || all_on) continue;
+    std::uint32_t poly[4];
+    int n = 0;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = tri[static_cast<size_t>(k)], b = tri[static_cast<size_t>((k + 1) % 3)];
+      if (side[a] != kOut) poly[n++] = a;
+      if ((side[a] == kIn && side[b] == kOut) || (side[a] == kOut && side[b] == kIn))
+        poly[n++] = cut_vertex(a, b);
+    }
+    if (n == 3) {
+      out.push_back({poly[0], poly[1], poly[2]});
+    } else if (n == 4) {
+      const auto& P = mesh.positions;
+      const double q02 = std::min(mean_ratio(P[poly[0]], P[poly[1]], P[poly[2]]),
+                                  mean_ratio(P[poly[0]], P[poly[2]], P[poly[3]]));
+      const double q13 = std::min(mean_ratio(P[poly[0]], P[poly[1]], P[poly[3]]),
+                                  mean_ratio(P[poly[1]], P[poly[2]], P[poly[3]]));
+      if (q02 >= q13) {
+        out.push_back({poly[0], poly[1], poly[2]});
+        out.push_back({poly[0], poly[2], poly[3]});
+      } else {
+        out.push_back({poly[0], poly[1], poly[3]});
+        out.push_back({poly[1], poly[2], poly[3]});
+      }
+    }
+  }
+  mesh.triangles = std::move(out);
+  return st;
+}
+
+}  // namespace zeroset::detail

@@ -1,0 +1,102 @@
+// Generates the marching cubes cycles from the face rule (see mc_table_detail.h): on each face
+// a segment runs from a point where the sign changes from positive to negative (walking the
+// face counter-clockwise seen from outside) to one where it changes back, so the positive
+// side is on its left. Every edge point then has one outgoing and one incoming segment (its
+// two faces walk the edge in opposite directions), and the segments close into cycles
+// oriented counter-clockwise seen from the positive side.
+#include <vector>
+
+#include "mc_table_detail.h"
+#include "zeroset/error.h"
+
+namespace zeroset::detail {
+namespace {
+
+int edge_between(int a, int b) {
+  for (int e = 0; e < 12; ++e) {
+    const auto& c = kEdgeCorners[e];
+    if ((c[0] == a && c[1] == b) || (c[0] == b && c[1] == a)) return e;
+  }
+  ZS_ASSERT(false);
+  return -1;
+}
+
+CellPolygons build_cell(int cube_case, int connected) {
+  auto positive = [&](int corner) { return ((cube_case >> corner) & 1) != 0; };
+  std::array<int, 12> next;
+  next.fill(-1);
+  for (int f = 0; f < 6; ++f) {
+    const auto& q = kFaceCcw[f];
+    std::array<int, 4> edge{};  // edge k joins q[k] and q[k+1]
+    for (int k = 0; k < 4; ++k) edge[k] = edge_between(q[k], q[(k + 1) % 4]);
+    int changes = 0;
+    for (int k = 0; k < 4; ++k) changes += positive(q[k]) != positive(q[(k + 1) % 4]);
+    auto link = [&](int from, int to) {
+      ZS_ASSERT(next[from] == -1);
+      next[from] = to;
+    };
+    if (changes == 2) {
+      int from = -1, to = -1;
+      for (int k = 0; k < 4; ++k) {
+        if (positive(q[k]) == positive(q[(k + 1) % 4])) continue;
+        (positive(q[k]) ? from : to) = edge[k];
+      }
+      link(from, to);
+    } else if (changes == 4) {
+      const bool joined = ((connected >> f) & 1) != 0;
+      for (int k = 0; k < 4; ++k) {
+        const int before = edge[(k + 3) % 4], after = edge[k];  // edges into and out of q[k]
+        if (joined && !positive(q[k])) link(before, after);    // cut off each negative corner
+        if (!joined && positive(q[k])) link(after, before);    // cut off each positive corner
+      }
+    }
+  }
+  CellPolygons cell;
+  std::array<bool, 12> seen{};
+  int written = 0;
+  for (int start = 0; start < 12; ++start) {
+    if (next[start] < 0 || seen[start]) continue;
+    int length = 0;
+    for (int e = start; !seen[e]; e = next[e]) {
+      ZS_ASSERT(next[e] >= 0);
+      seen[e] = true;
+      cell.edges[written++] = static_cast<std::uint8_t>(e);
+      ++length;
+    }
+    cell.cycle_length[cell.cycle_count++] = static_cast<std::uint8_t>(length);
+  }
+  return cell;
+}
+
+struct Tables {
+  std::vector<CellPolygons> cells;  // [case * 64 + connected]
+  std::array<std::uint8_t, 256> ambiguous{};
+
+  Tables() : cells(256 * 64) {
+    for (int c = 0; c < 256; ++c) {
+      for (int f = 0; f < 6; ++f) {
+        const auto& q = kFaceCcw[f];
+        const bool s0 = (c >> q[0]) & 1, s1 = (c >> q[1]) & 1, s2 = (c >> q[2]) & 1,
+                   s3 = (c >> q[3]) & 1;
+        if (s0 == s2 && s1 == s3 && s0 != s1) ambiguous[c] |= static_cast<std::uint8_t>(1 << f);
+      }
+      for (int d = 0; d < 64; ++d) cells[static_cast<size_t>(c * 64 + d)] = build_cell(c, d);
+    }
+  }
+};
+
+const Tables& tables() {
+  static const Tables t;
+  return t;
+}
+
+}  // namespace
+
+std::uint8_t ambiguous_faces(int cube_case) { return tables().ambiguous[cube_case]; }
+
+const CellPolygons& cell_polygons(int cube_case, int connected) {
+  const Tables& t = tables();
+  return t.cells[static_cast<size_t>(cube_case * 64 + (connected & t.ambiguous[cube_case]))];
+}
+
+}  // namespace zeroset::detail

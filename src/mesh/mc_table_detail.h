@@ -1,0 +1,67 @@
+#pragma once
+// Marching cubes tables generated from first principles (no hand-typed case table): for every
+// sign configuration of a cube and every resolution of its ambiguous faces, the oriented
+// cycles of edge points that bound the surface inside the cube.
+#include <array>
+#include <cstdint>
+
+namespace zeroset::detail {
+
+// Corners in Lorensen's numbering: bit 0 is x, bit 1 ... see kCorner.
+inline constexpr std::array<std::array<int, 3>, 8> kCorner = {
+    {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}}};
+// Each edge from its lower corner (the one owning it on the grid) to the upper one.
+inline constexpr std::array<std::array<int, 2>, 12> kEdgeCorners = {
+    {{0, 1}, {1, 2}, {3, 2}, {0, 3}, {4, 5}, {5, 6}, {7, 6}, {4, 7}, {0, 4}, {1, 5}, {2, 6},
+     {3, 7}}};
+inline constexpr std::array<int, 12> kEdgeAxis = {0, 1, 0, 1, 0, 1, 0, 1, 2, 2, 2, 2};
+// Faces -x, +x, -y, +y, -z, +z: corners counter-clockwise seen from outside the cube.
+inline constexpr std::array<std::array<int, 4>, 6> kFaceCcw = {
+    {{0, 4, 7, 3}, {1, 2, 6, 5}, {0, 1, 5, 4}, {3, 7, 6, 2}, {0, 3, 2, 1}, {4, 5, 6, 7}}};
+// The same faces' corners at (u, v) = (0,0), (1,0), (1,1), (0,1), u and v the face's two
+// axes in increasing order. Both cubes sharing a face see it in this order, so the
+// asymptotic decider gives them bit-identical answers.
+inline constexpr std::array<std::array<int, 4>, 6> kFaceCanonical = {
+    {{0, 3, 7, 4}, {1, 2, 6, 5}, {0, 1, 5, 4}, {3, 2, 6, 7}, {0, 1, 2, 3}, {4, 5, 6, 7}}};
+
+struct CellPolygons {
+  std::uint8_t cycle_count = 0;
+  std::array<std::uint8_t, 4> cycle_length{};
+  std::array<std::uint8_t, 12> edges{};  // cycles one after the other, in orientation order
+};
+
+// Faces whose corners alternate in sign (bit f for face f) for a case (bit k: corner k ≥ 0).
+std::uint8_t ambiguous_faces(int cube_case);
+// The cycles for a case; `connected` has bit f set when the positive corners of face f are
+// joined (saddle value ≥ 0). Bits of faces that are not ambiguous are ignored.
+const CellPolygons& cell_polygons(int cube_case, int connected);
+// Bit e2 of kFaceMates[e1] is set when edges e1 and e2 lie on one cube face.
+inline constexpr std::array<std::uint16_t, 12> kFaceMates = [] {
+  std::array<std::uint16_t, 12> mates{};
+  for (const auto& q : kFaceCcw) {
+    std::array<int, 4> edge{};
+    for (int k = 0; k < 4; ++k) {
+      const int a = q[k], b = q[(k + 1) % 4];
+      for (int e = 0; e < 12; ++e)
+        if ((kEdgeCorners[e][0] == a && kEdgeCorners[e][1] == b) ||
+            (kEdgeCorners[e][0] == b && kEdgeCorners[e][1] == a))
+          edge[k] = e;
+    }
+    for (int e1 : edge)
+      for (int e2 : edge) mates[e1] = static_cast<std::uint16_t>(mates[e1] | 1u << e2);
+  }
+  return mates;
+}();
+
+// True when both edges lie on one cube face (a diagonal between them would lie in that face).
+inline bool edges_share_face(int e1, int e2) { return (kFaceMates[e1] >> e2) & 1; }
+
+// Asymptotic decider on a face's canonical corner values: true when the positive corners
+// are connected through the face (the bilinear saddle value is ≥ 0).
+inline bool positive_corners_connected(double v00, double v10, double v11, double v01) {
+  const double num = v00 * v11 - v10 * v01;
+  const double den = v00 + v11 - v10 - v01;
+  return den > 0 ? num >= 0 : num <= 0;
+}
+
+}  // namespace zeroset::detail

@@ -1,0 +1,42 @@
+#pragma once
+// Pieces shared by the polygonizer and the improver.
+#include <Eigen/Geometry>
+
+#include "zeroset/expr/field.h"
+#include "zeroset/mesh/mesh.h"
+#include "zeroset/surface/surface.h"
+
+namespace zeroset::detail {
+
+struct ClipCutStats {
+  long long cut_edges = 0;  // new vertices where an edge crosses G = 0
+  long long snapped = 0;    // vertices moved onto the clip curve instead
+};
+
+// Cuts the mesh at the clip surface G = 0 (see polygonize.h): keeps what is inside, puts new
+// vertices on F = 0 ∩ G = 0, moves vertices within `snap_distance` of G = 0 onto that curve,
+// flags all of them in `is_boundary`. Leaves unused vertices (remove_unreferenced_vertices).
+ClipCutStats cut_at_clip(Mesh& mesh, const Surface& surface, double snap_distance, int workers);
+
+// Flags the vertices of edges that lie in one triangle only.
+void flag_open_boundary(Mesh& mesh);
+
+// Moves p exactly onto the clip surface G = 0 along ∇G (exact for spheres and planes).
+Vec3 snap_to_clip(const Clip& clip, Vec3 p);
+
+// Newton's method with minimum-norm steps on (F, G) = 0 from p, then snap_to_clip. When it
+// wanders farther than `max_move` from p it gives up and only snaps p onto G = 0.
+Vec3 project_onto_clip_curve(Evaluator& ev, const Clip& clip, const Vec3& p, double max_move);
+
+// Unit normal of triangle (a, b, c) times twice its area.
+inline Vec3 area_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
+  return (b - a).cross(c - a);
+}
+
+// Mean ratio 4√3·area / Σ edge², 1 for an equilateral triangle, 0 for a degenerate one.
+inline double mean_ratio(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const double sum = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
+  return sum > 0 ? 3.4641016151377544 * area_normal(a, b, c).norm() / sum : 0.0;
+}
+
+}  // namespace zeroset::detail

@@ -1,0 +1,471 @@
+#include "zeroset/mesh/mesh_io.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string_view>
+
+#include <Eigen/Geometry>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "zeroset/error.h"
+#include "zeroset/io/atomic_file.h"
+
+namespace zeroset {
+namespace {
+
+// Little-endian byte output independent of the host's byte order.
+class Bytes {
+ public:
+  void u8(std::uint8_t v) { data_.push_back(static_cast<char>(v)); }
+  void u16(std::uint16_t v) { u8(static_cast<std::uint8_t>(v)), u8(static_cast<std::uint8_t>(v >> 8)); }
+  void u32(std::uint32_t v) {
+    for (int k = 0; k < 4; ++k) u8(static_cast<std::uint8_t>(v >> (8 * k)));
+  }
+  void f32(double v) { u32(std::bit_cast<std::uint32_t>(static_cast<float>(v))); }
+  void text(std::string_view s) { data_.append(s); }
+  void pad(size_t multiple, char c) {
+    while (data_.size() % multiple) data_.push_back(c);
+  }
+  size_t size() const { return data_.size(); }
+  const std::string& str() const { return data_; }
+  void reserve(size_t n) { data_.reserve(n); }
+
+ private:
+  std::string data_;
+};
+
+bool has_normals(const Mesh& m) { return !m.normals.empty() && m.normals.size() == m.positions.size(); }
+
+Vec3 face_normal(const Mesh& m, const std::array<std::uint32_t, 3>& t) {
+  const Vec3 n = (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]);
+  const double len = n.norm();
+  return len > 0 ? Vec3(n / len) : Vec3::Zero();
+}
+
+std::string obj_bytes(const Mesh& m) {
+  fmt::memory_buffer out;
+  fmt::format_to(std::back_inserter(out), "# zeroset mesh: {} vertices, {} triangles\n",
+                 m.positions.size(), m.triangles.size());
+  for (const Vec3& p : m.positions) fmt::format_to(std::back_inserter(out), "v {:.9g} {:.9g} {:.9g}\n", p.x(), p.y(), p.z());
+  const bool normals = has_normals(m);
+  if (normals)
+    for (const Vec3& n : m.normals) fmt::format_to(std::back_inserter(out), "vn {:.6g} {:.6g} {:.6g}\n", n.x(), n.y(), n.z());
+  for (const auto& t : m.triangles) {
+    if (normals)
+      fmt::format_to(std::back_inserter(out), "f {0}//{0} {1}//{1} {2}//{2}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+    else
+      fmt::format_to(std::back_inserter(out), "f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+  }
+  return fmt::to_string(out);
+}
+
+std::string ply_bytes(const Mesh& m) {
+  const bool normals = has_normals(m);
+  const bool flags = m.is_boundary.size() == m.positions.size();
+  Bytes b;
+  b.reserve(64 + m.positions.size() * 28 + m.triangles.size() * 13);
+  b.text("ply\nformat binary_little_endian 1.0\ncomment zeroset mesh\n");
+  b.text(fmt::format("element vertex {}\n", m.positions.size()));
+  b.text("property float x\nproperty float y\nproperty float z\n");
+  if (normals) b.text("property float nx\nproperty float ny\nproperty float nz\n");
+  if (flags) b.text("property uchar boundary\n");
+  b.text(fmt::format("element face {}\n", m.triangles.size()));
+  b.text("property list uchar uint vertex_indices\nend_header\n");
+  for (size_t v = 0; v < m.positions.size(); ++v) {
+    for (int k = 0; k < 3; ++k) b.f32(m.positions[v][k]);
+    if (normals)
+      for (int k = 0; k < 3; ++k) b.f32(m.normals[v][k]);
+    if (flags) b.u8(m.is_boundary[v] ? 1 : 0);
+  }
+  for (const auto& t : m.triangles) {
+    b.u8(3);
+    for (std::uint32_t v : t) b.u32(v);
+  }
+  return b.str();
+}
+
+std::string stl_bytes(const Mesh& m) {
+  Bytes b;
+  b.reserve(84 + 50 * m.triangles.size());
+  std::string header = "zeroset mesh";
+  header.resize(80, ' ');
+  b.text(header);
+  b.u32(static_cast<std::uint32_t>(m.triangles.size()));
+  for (const auto& t : m.triangles) {
+    const Vec3 n = face_normal(m, t);
+    for (int k = 0; k < 3; ++k) b.f32(n[k]);
+    for (std::uint32_t v : t)
+      for (int k = 0; k < 3; ++k) b.f32(m.positions[v][k]);
+    b.u16(0);
+  }
+  return b.str();
+}
+
+std::string glb_bytes(const Mesh& m) {
+  const bool normals = has_normals(m);
+  const size_t nv = m.positions.size(), nt = m.triangles.size();
+  Bytes bin;
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const Vec3& p : m.positions)
+    for (int k = 0; k < 3; ++k) {
+      // min/max must match the stored floats exactly.
+      const double f = static_cast<float>(p[k]);
+      lo[k] = std::min(lo[k], f), hi[k] = std::max(hi[k], f);
+      bin.f32(p[k]);
+    }
+  const size_t pos_bytes = bin.size();
+  if (normals)
+    for (const Vec3& n : m.normals)
+      for (int k = 0; k < 3; ++k) bin.f32(n[k]);
+  const size_t nrm_bytes = bin.size() - pos_bytes;
+  for (const auto& t : m.triangles)
+    for (std::uint32_t v : t) bin.u32(v);
+  const size_t idx_bytes = bin.size() - pos_bytes - nrm_bytes;
+  bin.pad(4, '\0');
+  using nlohmann::json;
+  json attributes = {{"POSITION", 0}};
+  json views = json::array({{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", pos_bytes}, {"target", 34962}}});
+  json accessors = json::array();
+  json position = {{"bufferView", 0}, {"componentType", 5126}, {"count", nv}, {"type", "VEC3"}};
+  if (nv > 0) position["min"] = {lo.x(), lo.y(), lo.z()}, position["max"] = {hi.x(), hi.y(), hi.z()};
+  accessors.push_back(position);
+  if (normals) {
+    attributes["NORMAL"] = 1;
+    views.push_back({{"buffer", 0}, {"byteOffset", pos_bytes}, {"byteLength", nrm_bytes}, {"target", 34962}});
+    accessors.push_back({{"bufferView", 1}, {"componentType", 5126}, {"count", nv}, {"type", "VEC3"}});
+  }
+  const int index_view = normals ? 2 : 1;
+  views.push_back({{"buffer", 0}, {"byteOffset", pos_bytes + nrm_bytes}, {"byteLength", idx_bytes}, {"target", 34963}});
+  accessors.push_back({{"bufferView", index_view}, {"componentType", 5125}, {"count", 3 * nt}, {"type", "SCALAR"}});
+  const json doc = {
+      {"asset", {{"version", "2.0"}, {"generator", "zeroset"}}},
+      {"scene", 0},
+      {"scenes", json::array({{{"nodes", json::array({0})}}})},
+      {"nodes", json::array({{{"mesh", 0}}})},
+      {"meshes", json::array({{{"primitives", json::array({{{"attributes", attributes},
+                                                             {"indices", static_cast<int>(accessors.size()) - 1},
+                                                             {"mode", 4}}})}}})},
+      {"buffers", json::array({{{"byteLength", bin.size()}}})},
+      {"bufferViews", views},
+      {"accessors", accessors},
+  };
+  Bytes js;
+  js.text(doc.dump());
+  js.pad(4, ' ');
+  Bytes out;
+  out.u32(0x46546C67u);  // "glTF"
+  out.u32(2);
+  out.u32(static_cast<std::uint32_t>(12 + 8 + js.size() + 8 + bin.size()));
+  out.u32(static_cast<std::uint32_t>(js.size()));
+  out.u32(0x4E4F534Au);  // "JSON"
+  out.text(js.str());
+  out.u32(static_cast<std::uint32_t>(bin.size()));
+  out.u32(0x004E4942u);  // "BIN\0"
+  out.text(bin.str());
+  return out.str();
+}
+
+std::string known_list() {
+  std::string s;
+  for (const auto& e : mesh_file_extensions()) s += (s.empty() ? "." : ", .") + e;
+  return s;
+}
+
+std::string checked_extension(const std::string& path) {
+  const std::string ext = file_extension(path);
+  const auto& known = mesh_file_extensions();
+  if (std::find(known.begin(), known.end(), ext) == known.end())
+    throw InvalidArgument("output file", "'" + path + "'",
+                          (ext.empty() ? std::string("has no extension")
+                                       : "unknown mesh format '." + ext + "'") +
+                              "; known formats: " + known_list());
+  return ext;
+}
+
+// ---- reading -------------------------------------------------------------------------
+
+class Reader {
+ public:
+  Reader(const std::string& path, std::string data) : path_(path), data_(std::move(data)) {}
+  [[noreturn]] void fail(const std::string& why) const { throw IoError(path_, why); }
+  size_t size() const { return data_.size(); }
+  const std::string& data() const { return data_; }
+  void need(size_t at, size_t n) const {
+    if (at + n > data_.size() || at + n < at) fail("the file ends too early");
+  }
+  std::uint32_t u32(size_t at) const {
+    need(at, 4);
+    std::uint32_t v = 0;
+    for (int k = 0; k < 4; ++k) v |= static_cast<std::uint32_t>(static_cast<unsigned char>(data_[at + static_cast<size_t>(k)])) << (8 * k);
+    return v;
+  }
+  std::uint16_t u16(size_t at) const {
+    need(at, 2);
+    return static_cast<std::uint16_t>(static_cast<unsigned char>(data_[at]) |
+                                      (static_cast<unsigned char>(data_[at + 1]) << 8));
+  }
+  std::uint8_t u8(size_t at) const {
+    need(at, 1);
+    return static_cast<std::uint8_t>(data_[at]);
+  }
+  float f32(size_t at) const { return std::bit_cast<float>(u32(at)); }
+  double f64(size_t at) const {
+    need(at, 8);
+    std::uint64_t v = 0;
+    for (int k = 0; k < 8; ++k) v |= static_cast<std::uint64_t>(static_cast<unsigned char>(data_[at + static_cast<size_t>(k)])) << (8 * k);
+    return std::bit_cast<double>(v);
+  }
+
+ private:
+  std::string path_;
+  std::string data_;
+};
+
+void check_indices(const Reader& r, const Mesh& m) {
+  for (const auto& t : m.triangles)
+    for (std::uint32_t v : t)
+      if (v >= m.positions.size()) r.fail(fmt::format("a face refers to vertex {} of {}", v, m.positions.size()));
+}
+
+Mesh read_obj(const Reader& r) {
+  Mesh m;
+  std::istringstream in(r.data());
+  std::string line;
+  std::vector<Vec3> normals;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    std::istringstream ls(line);
+    std::string tag;
+    ls >> tag;
+    if (tag == "v" || tag == "vn") {
+      Vec3 p;
+      if (!(ls >> p.x() >> p.y() >> p.z())) r.fail(fmt::format("line {}: expected three numbers", line_no));
+      (tag == "v" ? m.positions : normals).push_back(p);
+    } else if (tag == "f") {
+      std::vector<std::uint32_t> idx;
+      std::string tok;
+      while (ls >> tok) {
+        long long i = 0;
+        try {
+          i = std::stoll(tok.substr(0, tok.find('/')));
+        } catch (const std::exception&) {
+          r.fail(fmt::format("line {}: bad vertex index '{}'", line_no, tok));
+        }
+        if (i < 0) i += static_cast<long long>(m.positions.size()) + 1;
+        if (i < 1) r.fail(fmt::format("line {}: bad vertex index '{}'", line_no, tok));
+        idx.push_back(static_cast<std::uint32_t>(i - 1));
+      }
+      if (idx.size() < 3) r.fail(fmt::format("line {}: a face needs three vertices", line_no));
+      for (size_t k = 1; k + 1 < idx.size(); ++k) m.triangles.push_back({idx[0], idx[k], idx[k + 1]});
+    }
+  }
+  if (normals.size() == m.positions.size()) m.normals = std::move(normals);
+  check_indices(r, m);
+  return m;
+}
+
+Mesh read_ply(const Reader& r) {
+  const std::string& d = r.data();
+  const size_t end = d.find("end_header\n");
+  if (d.rfind("ply\n", 0) != 0 || end == std::string::npos) r.fail("not a PLY file");
+  std::istringstream header(d.substr(0, end));
+  std::string line;
+  struct Prop {
+    std::string name, type;
+  };
+  std::vector<Prop> vprops;
+  size_t nv = 0, nf = 0;
+  std::string element, count_type, index_type;
+  bool binary_le = false;
+  while (std::getline(header, line)) {
+    std::istringstream ls(line);
+    std::string w;
+    ls >> w;
+    if (w == "format") {
+      std::string f;
+      ls >> f;
+      binary_le = f == "binary_little_endian";
+    } else if (w == "element") {
+      size_t n = 0;
+      ls >> element >> n;
+      (element == "vertex" ? nv : nf) = element == "vertex" || element == "face" ? n : 0;
+      if (element != "vertex" && element != "face" && n > 0) r.fail("unsupported element '" + element + "'");
+    } else if (w == "property") {
+      std::string type;
+      ls >> type;
+      if (element == "vertex") {
+        Prop p;
+        p.type = type;
+        ls >> p.name;
+        vprops.push_back(p);
+      } else if (type == "list") {
+        ls >> count_type >> index_type;
+      }
+    }
+  }
+  if (!binary_le) r.fail("only binary little-endian PLY is read");
+  auto type_size = [&](const std::string& t) -> size_t {
+    if (t == "float" || t == "float32" || t == "int" || t == "uint" || t == "int32" || t == "uint32") return 4;
+    if (t == "double" || t == "float64") return 8;
+    if (t == "uchar" || t == "char" || t == "uint8" || t == "int8") return 1;
+    if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+    r.fail("unsupported property type '" + t + "'");
+  };
+  size_t stride = 0;
+  std::map<std::string, std::pair<size_t, std::string>> at;
+  for (const Prop& p : vprops) {
+    at[p.name] = {stride, p.type};
+    stride += type_size(p.type);
+  }
+  for (const char* c : {"x", "y", "z"})
+    if (!at.count(c)) r.fail(std::string("the vertices have no '") + c + "'");
+  auto read_real = [&](size_t pos, const std::string& type) -> double {
+    if (type == "double" || type == "float64") return r.f64(pos);
+    if (type == "float" || type == "float32") return r.f32(pos);
+    r.fail("coordinates must be float or double");
+  };
+  Mesh m;
+  size_t pos = end + std::strlen("end_header\n");
+  r.need(pos, nv * stride);
+  const bool normals = at.count("nx") && at.count("ny") && at.count("nz");
+  const bool flags = at.count("boundary") > 0;
+  for (size_t v = 0; v < nv; ++v, pos += stride) {
+    m.positions.emplace_back(read_real(pos + at["x"].first, at["x"].second), read_real(pos + at["y"].first, at["y"].second),
+                             read_real(pos + at["z"].first, at["z"].second));
+    if (normals)
+      m.normals.emplace_back(read_real(pos + at["nx"].first, at["nx"].second), read_real(pos + at["ny"].first, at["ny"].second),
+                             read_real(pos + at["nz"].first, at["nz"].second));
+    if (flags) m.is_boundary.push_back(r.u8(pos + at["boundary"].first));
+  }
+  const size_t cs = nf ? type_size(count_type) : 1, is = nf ? type_size(index_type) : 4;
+  for (size_t f = 0; f < nf; ++f) {
+    const size_t n = cs == 1 ? r.u8(pos) : cs == 2 ? r.u16(pos) : r.u32(pos);
+    pos += cs;
+    std::vector<std::uint32_t> idx(n);
+    for (size_t k = 0; k < n; ++k, pos += is) idx[k] = is == 4 ? r.u32(pos) : is == 2 ? r.u16(pos) : r.u8(pos);
+    if (n < 3) r.fail("a face has fewer than three vertices");
+    for (size_t k = 1; k + 1 < n; ++k) m.triangles.push_back({idx[0], idx[k], idx[k + 1]});
+  }
+  check_indices(r, m);
+  return m;
+}
+
+Mesh read_stl(const Reader& r) {
+  if (r.size() < 84) r.fail("too short for a binary STL file");
+  const std::uint32_t n = r.u32(80);
+  if (r.size() != 84 + 50ull * n) r.fail("not a binary STL file (its size does not match its triangle count)");
+  Mesh m;
+  std::map<std::array<std::uint32_t, 3>, std::uint32_t> index;
+  for (std::uint32_t t = 0; t < n; ++t) {
+    std::array<std::uint32_t, 3> tri{};
+    for (int c = 0; c < 3; ++c) {
+      const size_t at = 84 + 50ull * t + 12 + 12ull * static_cast<size_t>(c);
+      const std::array<std::uint32_t, 3> key = {r.u32(at), r.u32(at + 4), r.u32(at + 8)};
+      auto [it, fresh] = index.try_emplace(key, static_cast<std::uint32_t>(m.positions.size()));
+      if (fresh) m.positions.emplace_back(r.f32(at), r.f32(at + 4), r.f32(at + 8));
+      tri[static_cast<size_t>(c)] = it->second;
+    }
+    m.triangles.push_back(tri);
+  }
+  return m;
+}
+
+Mesh read_glb(const Reader& r) {
+  if (r.size() < 20 || r.u32(0) != 0x46546C67u) r.fail("not a glTF binary file");
+  const std::uint32_t json_len = r.u32(12);
+  if (r.u32(16) != 0x4E4F534Au) r.fail("the first chunk is not JSON");
+  r.need(20, json_len);
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(r.data().substr(20, json_len));
+  } catch (const std::exception& e) {
+    r.fail(std::string("bad JSON chunk: ") + e.what());
+  }
+  const size_t bin_at = 20 + json_len;
+  const std::uint32_t bin_len = r.u32(bin_at);
+  if (r.u32(bin_at + 4) != 0x004E4942u) r.fail("the second chunk is not BIN");
+  r.need(bin_at + 8, bin_len);
+  const size_t base = bin_at + 8;
+  Mesh m;
+  try {
+    const auto& prim = doc.at("meshes").at(0).at("primitives").at(0);
+    auto accessor = [&](int i, auto&& read_one) {
+      const auto& acc = doc.at("accessors").at(static_cast<size_t>(i));
+      const auto& view = doc.at("bufferViews").at(acc.at("bufferView").get<size_t>());
+      const size_t off = base + view.value("byteOffset", size_t{0}) + acc.value("byteOffset", size_t{0});
+      const size_t count = acc.at("count").get<size_t>();
+      read_one(off, count, acc.at("componentType").get<int>());
+    };
+    accessor(prim.at("attributes").at("POSITION").get<int>(), [&](size_t off, size_t count, int type) {
+      if (type != 5126) r.fail("positions must be floats");
+      for (size_t v = 0; v < count; ++v)
+        m.positions.emplace_back(r.f32(off + 12 * v), r.f32(off + 12 * v + 4), r.f32(off + 12 * v + 8));
+    });
+    if (prim.at("attributes").contains("NORMAL"))
+      accessor(prim.at("attributes").at("NORMAL").get<int>(), [&](size_t off, size_t count, int) {
+        for (size_t v = 0; v < count; ++v)
+          m.normals.emplace_back(r.f32(off + 12 * v), r.f32(off + 12 * v + 4), r.f32(off + 12 * v + 8));
+      });
+    accessor(prim.at("indices").get<int>(), [&](size_t off, size_t count, int type) {
+      const size_t s = type == 5125 ? 4 : type == 5123 ? 2 : 1;
+      std::vector<std::uint32_t> idx(count);
+      for (size_t k = 0; k < count; ++k) idx[k] = s == 4 ? r.u32(off + 4 * k) : s == 2 ? r.u16(off + 2 * k) : r.u8(off + k);
+      for (size_t k = 0; k + 2 < count; k += 3) m.triangles.push_back({idx[k], idx[k + 1], idx[k + 2]});
+    });
+  } catch (const nlohmann::json::exception& e) {
+    r.fail(std::string("unexpected glTF structure: ") + e.what());
+  }
+  check_indices(r, m);
+  return m;
+}
+
+}  // namespace
+
+const std::vector<std::string>& mesh_file_extensions() {
+  static const std::vector<std::string> known = {"obj", "ply", "stl", "glb"};
+  return known;
+}
+
+void check_mesh_path(const std::string& path) {
+  checked_extension(path);
+  check_writable(path);
+}
+
+void write_mesh(const Mesh& mesh, const std::string& path) {
+  const std::string ext = checked_extension(path);
+  for (const auto& t : mesh.triangles)
+    for (std::uint32_t v : t)
+      if (v >= mesh.positions.size())
+        throw InvalidArgument("mesh", path, fmt::format("a triangle refers to vertex {} of {}", v, mesh.positions.size()));
+  const std::string bytes = ext == "obj"   ? obj_bytes(mesh)
+                            : ext == "ply" ? ply_bytes(mesh)
+                            : ext == "stl" ? stl_bytes(mesh)
+                                           : glb_bytes(mesh);
+  write_file_atomically(path, [&](std::ostream& os) {
+    os.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  });
+}
+
+Mesh read_mesh(const std::string& path) {
+  const std::string ext = file_extension(path);
+  const auto& known = mesh_file_extensions();
+  if (std::find(known.begin(), known.end(), ext) == known.end())
+    throw IoError(path, "unknown mesh format; known formats: " + known_list());
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(path, "cannot be opened");
+  std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const Reader r(path, std::move(data));
+  if (ext == "obj") return read_obj(r);
+  if (ext == "ply") return read_ply(r);
+  if (ext == "stl") return read_stl(r);
+  return read_glb(r);
+}
+
+}  // namespace zeroset

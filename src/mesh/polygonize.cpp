@@ -1,0 +1,954 @@
+#include "zeroset/mesh/polygonize.h"
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <fmt/core.h>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#include "mc_table_detail.h"
+#include "parallel_detail.h"
+#include "mesh_detail.h"
+#include "zeroset/error.h"
+#include "zeroset/expr/polynomial.h"
+#include "zeroset/mesh/mesh_ops.h"
+
+namespace zeroset {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using detail::cell_polygons;
+using detail::CellPolygons;
+using detail::kEdgeAxis;
+using detail::kEdgeCorners;
+using detail::kFaceCanonical;
+
+constexpr int kMaxCells = 32768;
+constexpr std::uint64_t kMaxVertices = 0xfffffff0ull;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// A grid of cubic cells; node (i, j, k) is at lo + h·(i, j, k).
+struct Grid {
+  Vec3 lo = Vec3::Zero();
+  double h = 1;
+  std::array<long long, 3> cells{0, 0, 0};
+  long long nx() const { return cells[0] + 1; }
+  long long ny() const { return cells[1] + 1; }
+  long long nz() const { return cells[2] + 1; }
+  double coord(int axis, long long i) const { return lo[axis] + static_cast<double>(i) * h; }
+  Vec3 node(long long i, long long j, long long k) const {
+    return {coord(0, i), coord(1, j), coord(2, k)};
+  }
+};
+
+void check_options(const PolygonizeOptions& o) {
+  if (o.cells < 1 || o.cells > kMaxCells)
+    throw InvalidArgument("cells", std::to_string(o.cells),
+                          fmt::format("must be between 1 and {}", kMaxCells));
+  if (o.brick_cells < 2 || o.brick_cells > 64)
+    throw InvalidArgument("brick_cells", std::to_string(o.brick_cells), "must be in [2, 64]");
+  if (!(o.sparse_margin > 0) || !std::isfinite(o.sparse_margin))
+    throw InvalidArgument("sparse_margin", fmt::format("{}", o.sparse_margin), "must be > 0");
+  if (o.refine_steps < 0 || o.refine_steps > 200)
+    throw InvalidArgument("refine_steps", std::to_string(o.refine_steps), "must be in [0, 200]");
+  if (!(o.clip_snap_fraction >= 0 && o.clip_snap_fraction < 0.5))
+    throw InvalidArgument("clip_snap_fraction", fmt::format("{}", o.clip_snap_fraction),
+                          "must be in [0, 0.5)");
+  if (!(o.collapse_fraction >= 0 && o.collapse_fraction < 0.5))
+    throw InvalidArgument("collapse_fraction", fmt::format("{}", o.collapse_fraction),
+                          "must be in [0, 0.5)");
+  if (o.threads < 0) throw InvalidArgument("threads", std::to_string(o.threads), "must be ≥ 0");
+}
+
+bool clips(const Surface& s, const PolygonizeOptions& o) {
+  return o.clip && !s.clip.is_empty_spec();
+}
+
+Grid make_grid(const Surface& surface, const PolygonizeOptions& o) {
+  check_options(o);
+  const Box3 box = o.bounds ? *o.bounds : surface.bounds();
+  if (!box.lo.allFinite() || !box.hi.allFinite() || box.is_empty() || box.size().maxCoeff() <= 0)
+    throw InvalidArgument("bounds", fmt::format("[{}, {}, {}] .. [{}, {}, {}]", box.lo.x(),
+                                                box.lo.y(), box.lo.z(), box.hi.x(), box.hi.y(),
+                                                box.hi.z()),
+                          "the box must be finite and have a positive size");
+  Grid g;
+  const Vec3 size = box.size();
+  g.h = size.maxCoeff() / o.cells;
+  // A half space of the clip may lie on the box's face; one more cell on each side then
+  // lets the cut, not the end of the grid, make the mesh boundary there.
+  const int pad = clips(surface, o) && !surface.clip.planes.empty() ? 1 : 0;
+  for (int a = 0; a < 3; ++a) {
+    const long long n = std::max(1LL, static_cast<long long>(std::ceil(size[a] / g.h - 1e-9)));
+    g.cells[a] = n + 2 * pad;
+    g.lo[a] = box.center()[a] - 0.5 * static_cast<double>(g.cells[a]) * g.h;
+  }
+  // A box that spans [-3, 3] with 128 cells should have its nodes exactly at -3 + i·h.
+  if (pad == 0)
+    for (int a = 0; a < 3; ++a)
+      if (g.cells[a] == static_cast<long long>(std::llround(size[a] / g.h))) g.lo[a] = box.lo[a];
+  return g;
+}
+
+double estimate_triangles(const Grid& g) {
+  const double cx = static_cast<double>(g.cells[0]), cy = static_cast<double>(g.cells[1]),
+               cz = static_cast<double>(g.cells[2]);
+  return 4.0 * (cx * cy + cy * cz + cz * cx);
+}
+
+bool use_sparse(const Grid& g, const PolygonizeOptions& o) {
+  if (o.mode != GridMode::kAuto) return o.mode == GridMode::kSparse;
+  return static_cast<double>(g.nx()) * static_cast<double>(g.ny()) * static_cast<double>(g.nz()) >
+         static_cast<double>(o.sparse_auto_nodes);
+}
+
+// Samples F at runs of grid nodes along x. For a polynomial, the restriction of F to the
+// row's line is a univariate polynomial of the surface's degree: Horner's rule then costs a
+// few multiply-adds per node. Its parameter t counts cells from the middle of the whole grid
+// row, so a node gets the bit-identical value whichever brick samples it. The row's
+// coefficients come from G(t, y, z) = F(x_mid + h·t, y, z), expanded once: coefficient m is
+// the sum of G's terms with t^m evaluated at the row's (y, z), a few dozen multiply-adds.
+class RowSampler {
+ public:
+  RowSampler(const Field& field, const Grid& grid, const Polynomial* poly)
+      : eval_(field), grid_(grid), poly_(poly) {
+    if (!poly_ || poly_->degree() < 0) return;
+    const long long mid = grid_.cells[0] / 2;
+    std::vector<Monomial> terms = poly_->translated(Vec3(grid_.coord(0, mid), 0, 0)).terms();
+    for (Monomial& m : terms) m.c *= std::pow(grid_.h, m.i);
+    row_terms_ = std::move(terms);
+    degree_ = poly_->degree();
+    coeffs_.resize(static_cast<size_t>(degree_ + 1));
+    y_powers_.resize(coeffs_.size());
+    z_powers_.resize(coeffs_.size());
+    t_.resize(static_cast<size_t>(grid_.nx()));
+    for (long long i = 0; i < grid_.nx(); ++i) t_[static_cast<size_t>(i)] = static_cast<double>(i - mid);
+  }
+
+  void sample(long long i0, long long count, long long j, long long k, double* out) {
+    if (poly_ && degree_ >= 0) {
+      const double y = grid_.coord(1, j), z = grid_.coord(2, k);
+      y_powers_[0] = z_powers_[0] = 1;
+      for (size_t a = 1; a < coeffs_.size(); ++a)
+        y_powers_[a] = y_powers_[a - 1] * y, z_powers_[a] = z_powers_[a - 1] * z;
+      std::fill(coeffs_.begin(), coeffs_.end(), 0.0);
+      for (const Monomial& m : row_terms_)
+        coeffs_[static_cast<size_t>(m.i)] +=
+            m.c * y_powers_[static_cast<size_t>(m.j)] * z_powers_[static_cast<size_t>(m.k)];
+      // Horner's rule on blocks of nodes held in registers, the block loop innermost so
+      // that it vectorizes; every node sees the same operations in the same order.
+      const double* t = &t_[static_cast<size_t>(i0)];
+      const double* c = coeffs_.data();
+      constexpr int kBlock = 8;
+      long long n = 0;
+      for (; n + kBlock <= count; n += kBlock) {
+        double acc[kBlock];
+        for (int q = 0; q < kBlock; ++q) acc[q] = c[degree_];
+        for (int m = degree_ - 1; m >= 0; --m)
+          for (int q = 0; q < kBlock; ++q) acc[q] = acc[q] * t[n + q] + c[m];
+        for (int q = 0; q < kBlock; ++q) out[n + q] = acc[q];
+      }
+      for (; n < count; ++n) {
+        double v = c[degree_];
+        for (int m = degree_ - 1; m >= 0; --m) v = v * t[n] + c[m];
+        out[n] = v;
+      }
+      return;
+    }
+    if (poly_) {  // the zero polynomial
+      std::fill(out, out + count, 0.0);
+      return;
+    }
+    x_.resize(static_cast<size_t>(count));
+    y_.assign(static_cast<size_t>(count), grid_.coord(1, j));
+    z_.assign(static_cast<size_t>(count), grid_.coord(2, k));
+    for (long long n = 0; n < count; ++n) x_[static_cast<size_t>(n)] = grid_.coord(0, i0 + n);
+    eval_.values(x_, y_, z_, std::span<double>(out, static_cast<size_t>(count)));
+  }
+
+ private:
+  Evaluator eval_;
+  const Grid& grid_;
+  const Polynomial* poly_;
+  int degree_ = -1;
+  std::vector<Monomial> row_terms_;  // G's terms (see above)
+  std::vector<double> coeffs_, y_powers_, z_powers_, t_, x_, y_, z_;
+};
+
+bool is_positive(double v) { return !(v < 0); }  // NaN counts as positive
+
+// One crossing edge: its lower node, axis and the field values at both ends.
+struct Crossing {
+  Vec3 a;
+  int axis;
+  double fa, fb;
+};
+
+// Places one vertex on each crossing edge: linear interpolation, then the Illinois variant
+// of regula falsi on F restricted to the edge, all edges of the batch evaluated together.
+void place_vertices(Evaluator& ev, std::span<const Crossing> in, double h, int steps,
+                    Vec3* out, long long& evaluations) {
+  const size_t n = in.size();
+  std::vector<double> t_lo(n, 0.0), t_hi(n, 1.0), f_lo(n), f_hi(n), t(n);
+  std::vector<int> last_side(n, 0);
+  for (size_t e = 0; e < n; ++e) {
+    f_lo[e] = in[e].fa;
+    f_hi[e] = in[e].fb;
+    const double s = in[e].fa / (in[e].fa - in[e].fb);
+    t[e] = std::isfinite(s) ? std::clamp(s, 0.0, 1.0) : 0.5;
+  }
+  std::vector<size_t> active(n);
+  for (size_t e = 0; e < n; ++e) active[e] = e;
+  std::vector<double> x, y, z, f;
+  for (int it = 0; it < steps && !active.empty(); ++it) {
+    const size_t m = active.size();
+    x.resize(m), y.resize(m), z.resize(m), f.resize(m);
+    for (size_t q = 0; q < m; ++q) {
+      const size_t e = active[q];
+      Vec3 p = in[e].a;
+      p[in[e].axis] += t[e] * h;
+      x[q] = p.x(), y[q] = p.y(), z[q] = p.z();
+    }
+    ev.values(x, y, z, f);
+    evaluations += static_cast<long long>(m);
+    size_t kept = 0;
+    for (size_t q = 0; q < m; ++q) {
+      const size_t e = active[q];
+      const double fv = f[q];
+      if (fv == 0) continue;  // exact root
+      // Keep the bracket [t_lo, t_hi] with opposite signs; Illinois halves the value kept
+      // twice in a row so the bracket shrinks from both sides.
+      if (is_positive(fv) == is_positive(f_hi[e])) {
+        t_hi[e] = t[e], f_hi[e] = fv;
+        if (last_side[e] == 1) f_lo[e] *= 0.5;
+        last_side[e] = 1;
+      } else {
+        t_lo[e] = t[e], f_lo[e] = fv;
+        if (last_side[e] == -1) f_hi[e] *= 0.5;
+        last_side[e] = -1;
+      }
+      double next = t_hi[e] - f_hi[e] * (t_hi[e] - t_lo[e]) / (f_hi[e] - f_lo[e]);
+      if (!std::isfinite(next) || next <= std::min(t_lo[e], t_hi[e]) ||
+          next >= std::max(t_lo[e], t_hi[e]))
+        next = 0.5 * (t_lo[e] + t_hi[e]);
+      const double moved = std::abs(next - t[e]);
+      t[e] = next;
+      if (moved > 1e-13 && std::abs(t_hi[e] - t_lo[e]) > 1e-15) active[kept++] = e;
+    }
+    active.resize(kept);
+  }
+  for (size_t e = 0; e < n; ++e) {
+    Vec3 p = in[e].a;
+    p[in[e].axis] += std::clamp(t[e], 0.0, 1.0) * h;
+    out[e] = p;
+  }
+}
+
+// Places a batch of crossings split over the workers (chunks of a few thousand edges).
+void place_vertices_parallel(detail::EvaluatorPool& pool, int workers,
+                             const std::vector<Crossing>& in, double h, int steps, Vec3* out,
+                             long long& evaluations, const std::stop_token& stop) {
+  constexpr size_t kChunk = 4096;
+  const long long chunks = static_cast<long long>((in.size() + kChunk - 1) / kChunk);
+  long long evals = 0;
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 1) reduction(+ : evals)
+  for (long long c = 0; c < chunks; ++c) {
+    if (stop.stop_requested()) continue;
+    const size_t b = static_cast<size_t>(c) * kChunk, e = std::min(in.size(), b + kChunk);
+    place_vertices(pool.local(), std::span<const Crossing>(in.data() + b, e - b), h, steps,
+                   out + b, evals);
+  }
+  evaluations += evals;
+}
+
+// The linear interpolation of the crossing on the edge from node (i, j, k) along `axis`. The
+// triangulation of each cube uses these points (not the refined ones) so that the dense and
+// the sparse path, which refines later, triangulate alike.
+Vec3 linear_point(const Grid& g, long long i, long long j, long long k, int axis, double fa,
+                  double fb) {
+  Vec3 p = g.node(i, j, k);
+  const double s = fa / (fa - fb);
+  p[axis] += (std::isfinite(s) ? std::clamp(s, 0.0, 1.0) : 0.5) * g.h;
+  return p;
+}
+
+// Triangulates a cycle of edge points (n ≤ 12) to maximise the smallest triangle quality
+// (mean ratio 4√3·area / Σ edge²), never using a diagonal between two points of one cube
+// face: such a diagonal could also appear in the neighbouring cube and make the edge
+// non-manifold. Emits triangles in cycle order (counter-clockwise seen from F > 0).
+template <class Emit>
+void triangulate_cycle(const std::uint8_t* edges, int n, const Vec3* pos, Emit&& emit) {
+  if (n == 3) {
+    emit(edges[0], edges[1], edges[2]);
+    return;
+  }
+  auto quality = [&](int a, int b, int c) {
+    const Vec3& pa = pos[edges[a]];
+    const Vec3& pb = pos[edges[b]];
+    const Vec3& pc = pos[edges[c]];
+    const double area2 = (pb - pa).cross(pc - pa).norm();
+    const double sum = (pb - pa).squaredNorm() + (pc - pb).squaredNorm() + (pa - pc).squaredNorm();
+    return sum > 0 ? 2 * std::sqrt(3.0) * area2 / sum : 0.0;
+  };
+  auto allowed = [&](int a, int b) {
+    return b - a == 1 || (a == 0 && b == n - 1) ||
+           !detail::edges_share_face(edges[a], edges[b]);
+  };
+  double best[12][12];
+  int split[12][12];
+  for (int len = 2; len < n; ++len)
+    for (int a = 0; a + len < n; ++a) {
+      const int b = a + len;
+      best[a][b] = -2;
+      split[a][b] = -1;
+      for (int m = a + 1; m < b; ++m) {
+        double s = quality(a, m, b);
+        if (!allowed(a, m) || !allowed(m, b)) s = -1;
+        if (m - a > 1) s = std::min(s, best[a][m]);
+        if (b - m > 1) s = std::min(s, best[m][b]);
+        if (s > best[a][b]) best[a][b] = s, split[a][b] = m;
+      }
+    }
+  // Explicit stack: (a, b) sub-polygons still to split.
+  int stack_a[12], stack_b[12], top = 0;
+  stack_a[top] = 0, stack_b[top] = n - 1, ++top;
+  while (top > 0) {
+    --top;
+    const int a = stack_a[top], b = stack_b[top];
+    const int m = split[a][b];
+    emit(edges[a], edges[m], edges[b]);
+    if (m - a > 1) stack_a[top] = a, stack_b[top] = m, ++top;
+    if (b - m > 1) stack_a[top] = m, stack_b[top] = b, ++top;
+  }
+}
+
+// The cube's case, its face decisions and its cycles.
+struct CellCase {
+  int cube_case = 0;
+  int ambiguous = 0;
+  const CellPolygons* polys = nullptr;
+};
+
+CellCase classify_cell(const double v[8]) {
+  CellCase c;
+  for (int k = 0; k < 8; ++k)
+    if (is_positive(v[k])) c.cube_case |= 1 << k;
+  const int amb = detail::ambiguous_faces(c.cube_case);
+  int connected = 0;
+  for (int f = 0; f < 6; ++f) {
+    if (!((amb >> f) & 1)) continue;
+    const auto& q = kFaceCanonical[f];
+    if (detail::positive_corners_connected(v[q[0]], v[q[1]], v[q[2]], v[q[3]]))
+      connected |= 1 << f;
+  }
+  c.ambiguous = std::popcount(static_cast<unsigned>(amb));
+  c.polys = &cell_polygons(c.cube_case, connected);
+  return c;
+}
+
+// Emits the triangles of one cell given the vertex handles and positions of its 12 edges.
+template <class Handle, class Out>
+void emit_cell(const CellPolygons& polys, const Handle* handle, const Vec3* pos, Out& out) {
+  int offset = 0;
+  for (int c = 0; c < polys.cycle_count; ++c) {
+    const int n = polys.cycle_length[c];
+    triangulate_cycle(&polys.edges[offset], n, pos, [&](int e0, int e1, int e2) {
+      out.push_back({handle[e0], handle[e1], handle[e2]});
+    });
+    offset += n;
+  }
+}
+
+using Triangle = std::array<std::uint32_t, 3>;
+
+// ---------------------------------------------------------------------------------------
+// Dense path: every node sampled; vertex ids from per-row prefix counts over bit sets.
+//
+// The grid is cut into slabs of kSlabLayers cell layers, handled one at a time by a worker
+// from sampling to triangles, so only a slab's values are held (not the whole volume) and
+// they are still in cache when its triangles are made. Vertices are numbered in row order
+// (row = (j, k), then axis, then x), the same order whatever the slabs: a slab numbers the
+// rows of its own node layers from 0 and carries on into the next slab's first layer (the
+// top faces of its last cells), so adding the slab's first global id makes all its ids
+// global. That numbering needs the z edges of that layer, so a slab samples two node
+// layers beyond its own. Slabs have a fixed size, so the mesh does not depend on the
+// thread count.
+
+struct DenseResult {
+  std::vector<Vec3> positions;
+  std::vector<Triangle> triangles;
+};
+
+constexpr long long kSlabLayers = 16;
+
+// Bit i of bits[i / 64] set where values[i] counts as positive (is_positive); returns how many
+// values are NaN. Two values per SSE2 compare where available.
+long long sign_bits(const double* values, long long n, std::uint64_t* bits) {
+  long long nans = 0;
+  for (long long b = 0; b < n; b += 64) {
+    const long long e = std::min(n, b + 64);
+    std::uint64_t word = 0;
+    long long i = b;
+#if defined(__SSE2__)
+    const __m128d zero = _mm_setzero_pd();
+    __m128d unordered = _mm_setzero_pd();
+    for (; i + 2 <= e; i += 2) {
+      const __m128d v = _mm_loadu_pd(values + i);
+      // not (v < 0): NaN counts as positive
+      const auto positive = static_cast<std::uint64_t>(~_mm_movemask_pd(_mm_cmplt_pd(v, zero)) & 3);
+      word |= positive << (i - b);
+      unordered = _mm_or_pd(unordered, _mm_cmpunord_pd(v, v));
+    }
+    if (_mm_movemask_pd(unordered))  // rare: count the NaNs one by one
+      for (long long q = b; q < i; ++q) nans += std::isnan(values[q]) ? 1 : 0;
+#endif
+    for (; i < e; ++i) {
+      word |= static_cast<std::uint64_t>(is_positive(values[i])) << (i - b);
+      nans += std::isnan(values[i]) ? 1 : 0;
+    }
+    bits[b / 64] = word;
+  }
+  return nans;
+}
+
+// What one slab made, with slab-local vertex ids.
+struct Slab {
+  std::vector<Vec3> positions;  // the vertices of the slab's own node layers
+  std::vector<Triangle> triangles;
+  std::uint64_t numbered = 0;   // vertices numbered, including the next slab's first layer
+  long long active_cells = 0, ambiguous = 0, samples = 0, nan_samples = 0, evaluations = 0;
+  double seconds_sampling = 0, seconds_refinement = 0;
+};
+
+// A worker's arrays, reused from slab to slab (resized, never cleared: every entry used is
+// written first).
+struct SlabScratch {
+  std::vector<double> values;
+  std::vector<std::uint64_t> positive, x_cross, y_cross, z_cross;
+  std::vector<std::uint32_t> first_id;
+  std::vector<Crossing> crossings;
+};
+
+// Samples, numbers and triangulates the cells of layers [k0, k0 + kSlabLayers).
+void extract_slab(RowSampler& sampler, Evaluator& ev, SlabScratch& scratch, const Grid& g,
+                  const PolygonizeOptions& o, long long k0, Slab& slab) {
+  const long long nx = g.nx(), ny = g.ny(), nz = g.nz();
+  const long long W = (nx + 63) / 64;
+  const long long k_cells = std::min(k0 + kSlabLayers, nz - 1);  // cell layers [k0, k_cells)
+  const long long k_own = k_cells == nz - 1 ? nz : k_cells;      // own node layers [k0, k_own)
+  const long long k_num = std::min(k_own + 1, nz);               // numbered node layers
+  const long long k_end = std::min(k_own + 2, nz);               // sampled node layers
+  const long long rows = ny * (k_end - k0);                      // slab-local rows j + ny·(k − k0)
+  const long long num_rows = ny * (k_num - k0);
+  const long long own_rows = ny * (k_own - k0);
+
+  // Sample F row by row, then its sign bits a word at a time.
+  const auto ts = Clock::now();
+  std::vector<double>& V = scratch.values;
+  std::vector<std::uint64_t>& P = scratch.positive;
+  V.resize(static_cast<size_t>(nx * rows));
+  P.resize(static_cast<size_t>(W * rows));
+  for (long long r = 0; r < rows; ++r) {
+    double* row = &V[static_cast<size_t>(r * nx)];
+    sampler.sample(0, nx, r % ny, k0 + r / ny, row);
+    std::uint64_t* bits = &P[static_cast<size_t>(r * W)];
+    const long long nans = sign_bits(row, nx, bits);
+    if (r < own_rows) slab.nan_samples += nans;
+  }
+  slab.samples += nx * rows;
+  slab.seconds_sampling += seconds_since(ts);
+
+  // Crossing bits per edge axis, per-row counts and the id of the first crossing of each
+  // (row, axis, word).
+  std::vector<std::uint64_t>& X = scratch.x_cross;
+  std::vector<std::uint64_t>& Y = scratch.y_cross;
+  std::vector<std::uint64_t>& Z = scratch.z_cross;
+  X.resize(static_cast<size_t>(W * num_rows)), Y.resize(X.size()), Z.resize(X.size());
+  const std::uint64_t last_node_mask = (nx % 64) ? (1ull << (nx % 64)) - 1 : ~0ull;
+  const std::uint64_t last_edge_mask =
+      ((nx - 1) % 64) ? (1ull << ((nx - 1) % 64)) - 1 : ~0ull;  // x edges: i ≤ nx − 2
+  const long long edge_words = (nx - 1 + 63) / 64;
+  std::vector<std::uint32_t>& off = scratch.first_id;
+  off.resize(static_cast<size_t>(num_rows * 3 * W));
+  std::uint64_t id = 0, own_count = 0;
+  for (long long r = 0; r < num_rows; ++r) {
+    const long long j = r % ny, k = k0 + r / ny;
+    const std::uint64_t* p = &P[static_cast<size_t>(r * W)];
+    if (r == own_rows) own_count = id;
+    for (long long w = 0; w < W; ++w) {
+      const std::uint64_t next = w + 1 < W ? p[w + 1] : 0;
+      std::uint64_t xb = p[w] ^ ((p[w] >> 1) | (next << 63));
+      if (w >= edge_words) xb = 0;
+      else if (w == edge_words - 1) xb &= last_edge_mask;
+      std::uint64_t yb = j + 1 < ny ? p[w] ^ p[w + W] : 0;
+      std::uint64_t zb = k + 1 < nz ? p[w] ^ p[w + W * ny] : 0;
+      if (w == W - 1) yb &= last_node_mask, zb &= last_node_mask;
+      const size_t at = static_cast<size_t>(r * W + w);
+      X[at] = xb, Y[at] = yb, Z[at] = zb;
+    }
+    const std::vector<std::uint64_t>* bits[3] = {&X, &Y, &Z};
+    for (int a = 0; a < 3; ++a)
+      for (long long w = 0; w < W; ++w) {
+        off[static_cast<size_t>((r * 3 + a) * W + w)] = static_cast<std::uint32_t>(id);
+        id += static_cast<std::uint64_t>(std::popcount((*bits[a])[static_cast<size_t>(r * W + w)]));
+      }
+    if (id > kMaxVertices) {  // the caller reports it
+      slab.numbered = id;
+      return;
+    }
+  }
+  if (num_rows == own_rows) own_count = id;
+  slab.numbered = id;
+
+  // Vertices of the own layers, in id order, refined in one batch.
+  const auto tr = Clock::now();
+  {
+    std::vector<Crossing>& crossings = scratch.crossings;
+    crossings.clear();
+    crossings.reserve(own_count);
+    const std::vector<std::uint64_t>* bits[3] = {&X, &Y, &Z};
+    const long long stride[3] = {1, nx, nx * ny};
+    for (long long r = 0; r < own_rows; ++r) {
+      const long long j = r % ny, k = k0 + r / ny;
+      for (int a = 0; a < 3; ++a)
+        for (long long w = 0; w < W; ++w) {
+          std::uint64_t b = (*bits[a])[static_cast<size_t>(r * W + w)];
+          while (b) {
+            const long long i = w * 64 + std::countr_zero(b);
+            b &= b - 1;
+            const long long at = r * nx + i;
+            crossings.push_back({g.node(i, j, k), a, V[static_cast<size_t>(at)],
+                                 V[static_cast<size_t>(at + stride[a])]});
+          }
+        }
+    }
+    slab.positions.resize(crossings.size());
+    place_vertices(ev, crossings, g.h, o.refine_steps, slab.positions.data(), slab.evaluations);
+  }
+  slab.seconds_refinement += seconds_since(tr);
+
+  // Triangles of the slab's cells, cell row by cell row.
+  const std::uint64_t last_cell_mask = last_edge_mask;
+  const long long cell_words = edge_words;
+  for (long long k = k0; k < k_cells; ++k)
+    for (long long j = 0; j + 1 < ny; ++j) {
+      // Node rows of corners (dy, dz) = (0,0), (1,0), (0,1), (1,1).
+      const long long r0 = j + ny * (k - k0);
+      const long long nr[4] = {r0, r0 + 1, r0 + ny, r0 + ny + 1};
+      for (long long w = 0; w < cell_words; ++w) {
+        std::uint64_t all = ~0ull, any = 0;
+        for (int q = 0; q < 4; ++q) {
+          const std::uint64_t* p = &P[static_cast<size_t>(nr[q] * W)];
+          const std::uint64_t next = w + 1 < W ? p[w + 1] : 0;
+          const std::uint64_t s = (p[w] >> 1) | (next << 63);
+          all &= p[w] & s;
+          any |= p[w] | s;
+        }
+        std::uint64_t act = any & ~all;
+        if (w == cell_words - 1) act &= last_cell_mask;
+        while (act) {
+          const long long i = w * 64 + std::countr_zero(act);
+          act &= act - 1;
+          // Corner c at (i + dx, j + dy, k + dz), Lorensen numbering.
+          double v[8];
+          for (int c = 0; c < 8; ++c) {
+            const auto& d = detail::kCorner[c];
+            v[c] = V[static_cast<size_t>(nr[d[1] + 2 * d[2]] * nx + i + d[0])];
+          }
+          const CellCase cc = classify_cell(v);
+          ++slab.active_cells;
+          slab.ambiguous += cc.ambiguous;
+          std::uint32_t ids[12];
+          Vec3 pos[12];
+          for (int e = 0; e < 12; ++e) {
+            const auto& d = detail::kCorner[kEdgeCorners[e][0]];
+            if (is_positive(v[kEdgeCorners[e][0]]) == is_positive(v[kEdgeCorners[e][1]])) continue;
+            const long long r = nr[d[1] + 2 * d[2]];
+            const long long ii = i + d[0];
+            const int a = kEdgeAxis[e];
+            const std::vector<std::uint64_t>& bits = a == 0 ? X : a == 1 ? Y : Z;
+            const std::uint64_t word = bits[static_cast<size_t>(r * W + (ii >> 6))];
+            ids[e] = off[static_cast<size_t>((r * 3 + a) * W + (ii >> 6))] +
+                     static_cast<std::uint32_t>(std::popcount(word & ((1ull << (ii & 63)) - 1)));
+            pos[e] = linear_point(g, i + d[0], j + d[1], k + d[2], a, v[kEdgeCorners[e][0]],
+                                  v[kEdgeCorners[e][1]]);
+          }
+          emit_cell(*cc.polys, ids, pos, slab.triangles);
+        }
+      }
+    }
+}
+
+DenseResult extract_dense(const Surface& surface, const Grid& g, const PolygonizeOptions& o,
+                          const Polynomial* poly, int workers, PolygonizeStats& st,
+                          const std::stop_token& stop) {
+  const auto t0 = Clock::now();
+  const long long slabs = (g.cells[2] + kSlabLayers - 1) / kSlabLayers;
+  // At least four slabs per worker: a worker that the system preempts while it holds a slab
+  // then delays the end by a fraction of the work, not by half of it (small grids, where a
+  // slab is a quarter of the grid or more, run on one worker).
+  workers = static_cast<int>(std::clamp<long long>(slabs / 4, 1, workers));
+  std::vector<Slab> out(static_cast<size_t>(slabs));
+  {
+    std::vector<std::unique_ptr<RowSampler>> samplers(static_cast<size_t>(workers));
+    for (auto& s : samplers) s = std::make_unique<RowSampler>(surface.field, g, poly);
+    detail::EvaluatorPool pool(surface.field, workers);
+    std::vector<SlabScratch> scratch(static_cast<size_t>(workers));
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
+    for (long long s = 0; s < slabs; ++s) {
+      if (stop.stop_requested()) continue;
+      const auto w = static_cast<size_t>(detail::worker_index());
+      extract_slab(*samplers[w], pool.local(), scratch[w], g, o, s * kSlabLayers,
+                   out[static_cast<size_t>(s)]);
+    }
+  }
+  if (stop.stop_requested()) return {};
+
+  // First global id of each slab; then slab-local ids become global.
+  std::vector<std::uint64_t> base(static_cast<size_t>(slabs) + 1, 0);
+  for (size_t s = 0; s < out.size(); ++s) {
+    if (out[s].numbered > kMaxVertices) base[s + 1] = kMaxVertices + 1;
+    else base[s + 1] = base[s] + out[s].positions.size();
+  }
+  if (base.back() > kMaxVertices)
+    throw Error("the mesh would have more than 2^32 vertices; lower the resolution");
+  std::vector<size_t> tri_base(out.size() + 1, 0);
+  for (size_t s = 0; s < out.size(); ++s) tri_base[s + 1] = tri_base[s] + out[s].triangles.size();
+  DenseResult res;
+  res.positions.resize(base.back());
+  res.triangles.resize(tri_base.back());
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
+  for (long long s = 0; s < slabs; ++s) {
+    Slab& slab = out[static_cast<size_t>(s)];
+    const auto b = static_cast<std::uint32_t>(base[static_cast<size_t>(s)]);
+    std::copy(slab.positions.begin(), slab.positions.end(),
+              res.positions.begin() + static_cast<long>(base[static_cast<size_t>(s)]));
+    Triangle* dst = &res.triangles[tri_base[static_cast<size_t>(s)]];
+    for (const Triangle& t : slab.triangles) *dst++ = {t[0] + b, t[1] + b, t[2] + b};
+    std::vector<Vec3>().swap(slab.positions);
+    std::vector<Triangle>().swap(slab.triangles);
+  }
+
+  // The slabs ran on all workers: count their sampling and refinement shares of the wall time.
+  double sampling = 0, refinement = 0;
+  for (const Slab& s : out) {
+    st.active_cells += s.active_cells;
+    st.ambiguous_faces += s.ambiguous;
+    st.grid_samples += s.samples;
+    st.nan_samples += s.nan_samples;
+    st.refine_evaluations += s.evaluations;
+    sampling += s.seconds_sampling;
+    refinement += s.seconds_refinement;
+  }
+  st.edge_vertices += static_cast<long long>(res.positions.size());
+  st.seconds_sampling += sampling / workers;
+  st.seconds_refinement += refinement / workers;
+  st.seconds_extraction += seconds_since(t0) - sampling / workers;
+  return res;
+}
+
+// ---------------------------------------------------------------------------------------
+// Sparse path: bricks near the surface; vertices identified by a global edge key.
+
+struct KeyedCrossing {
+  std::uint64_t key;
+  Crossing c;
+};
+
+DenseResult extract_sparse(const Surface& surface, const Grid& g, const PolygonizeOptions& o,
+                           const Polynomial* poly, int workers, PolygonizeStats& st,
+                           const std::stop_token& stop) {
+  DenseResult res;
+  const long long B = o.brick_cells;
+  const std::array<long long, 3> nb = {(g.cells[0] + B - 1) / B, (g.cells[1] + B - 1) / B,
+                                       (g.cells[2] + B - 1) / B};
+  const long long bricks = nb[0] * nb[1] * nb[2];
+  st.bricks += bricks;
+  auto t0 = Clock::now();
+  auto corner_index = [&](int a, long long b) { return std::min(b * B, g.cells[a]); };
+
+  // Coarse test: F at brick corners (a lattice shared by neighbours) and F, ∇F at centres.
+  const std::array<long long, 3> nc = {nb[0] + 1, nb[1] + 1, nb[2] + 1};
+  std::vector<double> corner_value(static_cast<size_t>(nc[0] * nc[1] * nc[2]));
+  std::vector<double> centre_value(static_cast<size_t>(bricks)), centre_slope(centre_value.size());
+  detail::EvaluatorPool pool(surface.field, workers);
+#pragma omp parallel num_threads(workers)
+  {
+    std::vector<double> x, y, z, f, gx, gy, gz;
+    Evaluator& ev = pool.local();
+#pragma omp for schedule(static)
+    for (long long r = 0; r < nc[1] * nc[2]; ++r) {
+      const long long bj = r % nc[1], bk = r / nc[1];
+      const size_t n = static_cast<size_t>(nc[0]);
+      x.resize(n), y.assign(n, g.coord(1, corner_index(1, bj))),
+          z.assign(n, g.coord(2, corner_index(2, bk))), f.resize(n);
+      for (long long bi = 0; bi < nc[0]; ++bi) x[static_cast<size_t>(bi)] = g.coord(0, corner_index(0, bi));
+      ev.values(x, y, z, f);
+      std::copy(f.begin(), f.end(), corner_value.begin() + r * nc[0]);
+    }
+#pragma omp for schedule(static)
+    for (long long r = 0; r < nb[1] * nb[2]; ++r) {
+      const long long bj = r % nb[1], bk = r / nb[1];
+      const size_t n = static_cast<size_t>(nb[0]);
+      x.resize(n), y.resize(n), z.resize(n), f.resize(n), gx.resize(n), gy.resize(n), gz.resize(n);
+      for (long long bi = 0; bi < nb[0]; ++bi) {
+        x[static_cast<size_t>(bi)] = 0.5 * (g.coord(0, corner_index(0, bi)) + g.coord(0, corner_index(0, bi + 1)));
+        y[static_cast<size_t>(bi)] = 0.5 * (g.coord(1, corner_index(1, bj)) + g.coord(1, corner_index(1, bj + 1)));
+        z[static_cast<size_t>(bi)] = 0.5 * (g.coord(2, corner_index(2, bk)) + g.coord(2, corner_index(2, bk + 1)));
+      }
+      ev.values_gradients(x, y, z, f, gx, gy, gz);
+      for (size_t bi = 0; bi < n; ++bi) {
+        centre_value[static_cast<size_t>(r * nb[0]) + bi] = f[bi];
+        centre_slope[static_cast<size_t>(r * nb[0]) + bi] =
+            std::sqrt(gx[bi] * gx[bi] + gy[bi] * gy[bi] + gz[bi] * gz[bi]);
+      }
+    }
+  }
+  st.grid_samples += static_cast<long long>(corner_value.size() + centre_value.size());
+  std::vector<long long> kept;
+  for (long long b = 0; b < bricks; ++b) {
+    const long long bi = b % nb[0], bj = (b / nb[0]) % nb[1], bk = b / (nb[0] * nb[1]);
+    double f[9], fmin = std::abs(centre_value[static_cast<size_t>(b)]);
+    f[8] = centre_value[static_cast<size_t>(b)];
+    for (int c = 0; c < 8; ++c) {
+      const auto& d = detail::kCorner[c];
+      f[c] = corner_value[static_cast<size_t>(((bk + d[2]) * nc[1] + bj + d[1]) * nc[0] + bi + d[0])];
+      fmin = std::min(fmin, std::abs(f[c]));
+    }
+    Vec3 size;
+    for (int a = 0; a < 3; ++a) {
+      const long long bb = a == 0 ? bi : a == 1 ? bj : bk;
+      size[a] = static_cast<double>(corner_index(a, bb + 1) - corner_index(a, bb)) * g.h;
+    }
+    const double slope = centre_slope[static_cast<size_t>(b)];
+    bool mixed = false;
+    for (int c = 1; c < 9; ++c) mixed |= is_positive(f[c]) != is_positive(f[0]);
+    const bool near = fmin <= o.sparse_margin * slope * 0.5 * size.norm();
+    if (mixed || near || !std::isfinite(fmin) || !std::isfinite(slope)) kept.push_back(b);
+  }
+  st.bricks_kept += static_cast<long long>(kept.size());
+  st.seconds_sampling += seconds_since(t0);
+  if (stop.stop_requested()) return {};
+
+  // Per brick: sample its nodes, triangulate its cells with edge keys.
+  const long long nx = g.nx(), ny = g.ny();
+  // Keys sort like the dense path's vertex ids (row, then axis, then x), so both paths number
+  // the vertices alike and the clean-up that follows makes the same choices.
+  auto key_of = [&](long long i, long long j, long long k, int axis) {
+    return static_cast<std::uint64_t>(((k * ny + j) * 3 + axis) * nx + i);
+  };
+  using KeyTriangle = std::array<std::uint64_t, 3>;
+  std::vector<std::vector<KeyTriangle>> tris(kept.size());
+  std::vector<std::vector<KeyedCrossing>> cross(kept.size());
+  long long active_cells = 0, ambiguous = 0, samples = 0, nan_count = 0;
+  double sampling_seconds = 0;
+  auto t1 = Clock::now();
+  {
+    std::vector<std::unique_ptr<RowSampler>> samplers(static_cast<size_t>(workers));
+    for (auto& s : samplers) s = std::make_unique<RowSampler>(surface.field, g, poly);
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 8) \
+    reduction(+ : active_cells, ambiguous, samples, nan_count, sampling_seconds)
+    for (long long q = 0; q < static_cast<long long>(kept.size()); ++q) {
+      if (stop.stop_requested()) continue;
+      const long long b = kept[static_cast<size_t>(q)];
+      const long long bi = b % nb[0], bj = (b / nb[0]) % nb[1], bk = b / (nb[0] * nb[1]);
+      const long long i0 = bi * B, j0 = bj * B, k0 = bk * B;
+      const long long mx = corner_index(0, bi + 1) - i0, my = corner_index(1, bj + 1) - j0,
+                      mz = corner_index(2, bk + 1) - k0;  // cells in this brick
+      const long long sx = mx + 1, sy = my + 1;
+      std::vector<double> v((mx + 1) * (my + 1) * (mz + 1));
+      RowSampler& sampler = *samplers[static_cast<size_t>(detail::worker_index())];
+      const auto ts = Clock::now();
+      for (long long kk = 0; kk <= mz; ++kk)
+        for (long long jj = 0; jj <= my; ++jj)
+          sampler.sample(i0, sx, j0 + jj, k0 + kk, &v[static_cast<size_t>((kk * sy + jj) * sx)]);
+      sampling_seconds += seconds_since(ts);
+      samples += static_cast<long long>(v.size());
+      for (double val : v) nan_count += std::isnan(val) ? 1 : 0;
+      auto& out_t = tris[static_cast<size_t>(q)];
+      auto& out_c = cross[static_cast<size_t>(q)];
+      for (long long kk = 0; kk < mz; ++kk)
+        for (long long jj = 0; jj < my; ++jj)
+          for (long long ii = 0; ii < mx; ++ii) {
+            double cv[8];
+            for (int c = 0; c < 8; ++c) {
+              const auto& d = detail::kCorner[c];
+              cv[c] = v[static_cast<size_t>(((kk + d[2]) * sy + jj + d[1]) * sx + ii + d[0])];
+            }
+            bool any = false, all = true;
+            for (double val : cv) {
+              const bool p = is_positive(val);
+              any |= p, all &= p;
+            }
+            if (!any || all) continue;
+            const CellCase cc = classify_cell(cv);
+            ++active_cells;
+            ambiguous += cc.ambiguous;
+            std::uint64_t key[12];
+            Vec3 pos[12];
+            for (int e = 0; e < 12; ++e) {
+              const int c0 = kEdgeCorners[e][0], c1 = kEdgeCorners[e][1];
+              if (is_positive(cv[c0]) == is_positive(cv[c1])) continue;
+              const auto& d = detail::kCorner[c0];
+              const int a = kEdgeAxis[e];
+              const long long gi = i0 + ii + d[0], gj = j0 + jj + d[1], gk = k0 + kk + d[2];
+              key[e] = key_of(gi, gj, gk, a);
+              pos[e] = linear_point(g, gi, gj, gk, a, cv[c0], cv[c1]);
+              out_c.push_back({key[e], {g.node(gi, gj, gk), a, cv[c0], cv[c1]}});
+            }
+            emit_cell(*cc.polys, key, pos, out_t);
+          }
+      std::sort(out_c.begin(), out_c.end(),
+                [](const KeyedCrossing& l, const KeyedCrossing& r) { return l.key < r.key; });
+      out_c.erase(std::unique(out_c.begin(), out_c.end(),
+                              [](const KeyedCrossing& l, const KeyedCrossing& r) {
+                                return l.key == r.key;
+                              }),
+                  out_c.end());
+    }
+  }
+  if (stop.stop_requested()) return {};
+  st.grid_samples += samples;
+  st.nan_samples += nan_count;
+  // Sampling inside bricks ran on all workers: count its share of the wall time.
+  st.seconds_sampling += sampling_seconds / workers;
+
+  // Global vertex numbering: sorted unique keys.
+  std::vector<KeyedCrossing> all;
+  {
+    size_t total = 0;
+    for (const auto& c : cross) total += c.size();
+    all.reserve(total);
+    for (auto& c : cross) {
+      all.insert(all.end(), c.begin(), c.end());
+      std::vector<KeyedCrossing>().swap(c);
+    }
+  }
+  std::sort(all.begin(), all.end(),
+            [](const KeyedCrossing& l, const KeyedCrossing& r) { return l.key < r.key; });
+  all.erase(std::unique(all.begin(), all.end(),
+                        [](const KeyedCrossing& l, const KeyedCrossing& r) { return l.key == r.key; }),
+            all.end());
+  if (all.size() > kMaxVertices)
+    throw Error(fmt::format("the mesh would have {} vertices, more than 2^32; lower the "
+                            "resolution", all.size()));
+  std::vector<std::uint64_t> keys(all.size());
+  std::vector<Crossing> crossings(all.size());
+  for (size_t n = 0; n < all.size(); ++n) keys[n] = all[n].key, crossings[n] = all[n].c;
+  std::vector<KeyedCrossing>().swap(all);
+
+  auto t_ref = Clock::now();
+  res.positions.resize(crossings.size());
+  place_vertices_parallel(pool, workers, crossings, g.h, o.refine_steps, res.positions.data(),
+                          st.refine_evaluations, stop);
+  st.seconds_refinement += seconds_since(t_ref);
+  if (stop.stop_requested()) return {};
+
+  size_t total = 0;
+  std::vector<size_t> start(tris.size() + 1, 0);
+  for (size_t q = 0; q < tris.size(); ++q) start[q + 1] = start[q] + tris[q].size();
+  total = start.back();
+  res.triangles.resize(total);
+  auto id_of = [&](std::uint64_t key) {
+    return static_cast<std::uint32_t>(std::lower_bound(keys.begin(), keys.end(), key) - keys.begin());
+  };
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 16)
+  for (long long q = 0; q < static_cast<long long>(tris.size()); ++q) {
+    const auto& src = tris[static_cast<size_t>(q)];
+    for (size_t t = 0; t < src.size(); ++t)
+      res.triangles[start[static_cast<size_t>(q)] + t] = {id_of(src[t][0]), id_of(src[t][1]),
+                                                          id_of(src[t][2])};
+  }
+  st.active_cells += active_cells;
+  st.ambiguous_faces += ambiguous;
+  st.edge_vertices += static_cast<long long>(keys.size());
+  st.seconds_extraction += seconds_since(t1) - sampling_seconds / workers;
+  return res;
+}
+
+}  // namespace
+
+GridPlan plan_grid(const Surface& surface, const PolygonizeOptions& options) {
+  const Grid g = make_grid(surface, options);
+  GridPlan plan;
+  plan.cells = g.cells;
+  plan.cell_size = g.h;
+  plan.box.lo = g.lo;
+  plan.box.hi = g.node(g.cells[0], g.cells[1], g.cells[2]);
+  plan.sparse = use_sparse(g, options);
+  const double nodes =
+      static_cast<double>(g.nx()) * static_cast<double>(g.ny()) * static_cast<double>(g.nz());
+  // Per estimated triangle: the mesh itself, its construction, and the improver's state.
+  const double mesh_bytes = 160.0 * estimate_triangles(g);
+  if (plan.sparse) {
+    const double B = options.brick_cells;
+    plan.estimated_bytes = nodes / (B * B * B) * 40.0 + mesh_bytes;
+  } else {
+    // Each worker holds one slab: its node layers plus two, 8 bytes of F and about half a
+    // byte of bit sets and ids per node.
+    const double slab_nodes = static_cast<double>(kSlabLayers + 2) *
+                              static_cast<double>(g.nx()) * static_cast<double>(g.ny());
+    plan.estimated_bytes =
+        detail::worker_count(options.threads) * slab_nodes * (8.0 + 0.5) + mesh_bytes;
+  }
+  return plan;
+}
+
+Mesh polygonize(const Surface& surface, const PolygonizeOptions& options, PolygonizeStats* stats,
+                std::stop_token stop) {
+  const auto t_start = Clock::now();
+  const Grid g = make_grid(surface, options);
+  PolygonizeStats st;
+  st.grid_bounds.lo = g.lo;
+  st.grid_bounds.hi = g.node(g.cells[0], g.cells[1], g.cells[2]);
+  for (int a = 0; a < 3; ++a) st.cells[static_cast<size_t>(a)] = static_cast<int>(g.cells[static_cast<size_t>(a)]);
+  st.cell_size = g.h;
+  st.sparse = use_sparse(g, options);
+  surface.field.require_parameters();
+  const int workers = detail::worker_count(options.threads);
+
+  std::optional<Polynomial> poly;
+  if (options.polynomial_rows && surface.field.is_polynomial()) poly = surface.field.polynomial();
+
+  DenseResult r = st.sparse ? extract_sparse(surface, g, options, poly ? &*poly : nullptr, workers, st, stop)
+                            : extract_dense(surface, g, options, poly ? &*poly : nullptr, workers, st, stop);
+  if (stop.stop_requested()) return {};
+
+  const auto t_clean = Clock::now();
+  Mesh mesh;
+  mesh.positions = std::move(r.positions);
+  mesh.triangles = std::move(r.triangles);
+  mesh.is_boundary.assign(mesh.positions.size(), 0);
+  if (clips(surface, options)) {
+    const detail::ClipCutStats cs =
+        detail::cut_at_clip(mesh, surface, options.clip_snap_fraction * g.h, workers);
+    st.clip_cut_edges = cs.cut_edges;
+    st.clip_snapped = cs.snapped;
+  }
+  if (stop.stop_requested()) return {};
+  st.collapsed_edges = static_cast<long long>(collapse_short_edges(mesh, options.collapse_fraction * g.h));
+  remove_unreferenced_vertices(mesh);
+  detail::flag_open_boundary(mesh);
+  if (options.compute_normals) compute_field_normals(mesh, surface, options.threads);
+  st.seconds_cleanup = seconds_since(t_clean);
+  st.seconds_total = seconds_since(t_start);
+  if (stats) *stats = st;
+  if (stop.stop_requested()) return {};
+  return mesh;
+}
+
+}  // namespace zeroset

@@ -1,0 +1,180 @@
+#include "zeroset/render/settings.h"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+#include <vector>
+
+#include "zeroset/error.h"
+
+namespace zeroset {
+namespace {
+
+using nlohmann::json;
+
+[[noreturn]] void fail(const std::string& origin, const std::string& path, const std::string& why) {
+  throw BadInput(origin + ": " + path + ": " + why);
+}
+
+double number(const json& j, const std::string& origin, const std::string& path, double lo,
+              double hi) {
+  if (!j.is_number()) fail(origin, path, "expected a number");
+  const double v = j.get<double>();
+  if (!std::isfinite(v) || v < lo || v > hi)
+    fail(origin, path, "must lie in [" + json(lo).dump() + ", " + json(hi).dump() + "]");
+  return v;
+}
+
+Vec3 vector3(const json& j, const std::string& origin, const std::string& path) {
+  if (!j.is_array() || j.size() != 3) fail(origin, path, "expected [x, y, z]");
+  Vec3 v;
+  for (int k = 0; k < 3; ++k) {
+    if (!j[static_cast<size_t>(k)].is_number()) fail(origin, path, "expected [x, y, z]");
+    v[k] = j[static_cast<size_t>(k)].get<double>();
+  }
+  if (!v.allFinite()) fail(origin, path, "components must be finite");
+  return v;
+}
+
+Color color(const json& j, const std::string& origin, const std::string& path) {
+  if (j.is_string()) {
+    try {
+      return parse_display_color(j.get<std::string>(), path);
+    } catch (const InvalidArgument&) {
+      fail(origin, path, "expected '#rrggbb' or [r, g, b]");
+    }
+  }
+  if (!j.is_array()) fail(origin, path, "expected '#rrggbb' or [r, g, b]");
+  const Vec3 c = vector3(j, origin, path);
+  if ((c.array() < 0).any() || (c.array() > 1).any())
+    fail(origin, path, "linear colour components must lie in [0, 1]");
+  return c;
+}
+
+void material(const json& j, Material& m, const std::string& origin, const std::string& path) {
+  if (!j.is_object()) fail(origin, path, "expected an object");
+  for (const auto& [key, value] : j.items()) {
+    const std::string p = path + "/" + key;
+    if (key == "diffuse")
+      m.diffuse = color(value, origin, p);
+    else if (key == "ambient")
+      m.ambient = number(value, origin, p, 0, 1);
+    else if (key == "specular")
+      m.specular = number(value, origin, p, 0, 10);
+    else if (key == "shininess")
+      m.shininess = number(value, origin, p, 0, 10000);
+    else
+      fail(origin, p, "unknown key (known: diffuse, ambient, specular, shininess)");
+  }
+}
+
+json color_json(const Color& c) { return {c.x(), c.y(), c.z()}; }
+
+json material_json(const Material& m) {
+  return {{"diffuse", color_json(m.diffuse)},
+          {"ambient", m.ambient},
+          {"specular", m.specular},
+          {"shininess", m.shininess}};
+}
+
+}  // namespace
+
+Color parse_display_color(const std::string& text, const std::string& what) {
+  Color display;
+  if (!text.empty() && text[0] == '#') {
+    unsigned r = 0, g = 0, b = 0;
+    char extra = 0;
+    if (text.size() != 7 || std::sscanf(text.c_str(), "#%2x%2x%2x%c", &r, &g, &b, &extra) != 3)
+      throw InvalidArgument(what, text, "expected #rrggbb, e.g. #ffffff");
+    display = Color(r, g, b) / 255.0;
+  } else {
+    std::vector<double> v;
+    std::stringstream in(text);
+    std::string item;
+    while (std::getline(in, item, ',')) {
+      char* end = nullptr;
+      const double d = std::strtod(item.c_str(), &end);
+      if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(d))
+        throw InvalidArgument(what, text, "'" + item + "' is not a finite number");
+      v.push_back(d);
+    }
+    if (v.size() != 3) throw InvalidArgument(what, text, "expected #rrggbb or r,g,b");
+    display = Color(v[0], v[1], v[2]);
+    if ((display.array() < 0).any() || (display.array() > 1).any())
+      throw InvalidArgument(what, text, "components must lie in [0, 1]");
+  }
+  // Pictures are gamma encoded (Image::set_linear); shading works on linear values.
+  return display.array().pow(2.2).matrix();
+}
+
+void apply_render_settings(const json& render, RenderOptions& o, const std::string& origin) {
+  if (!render.is_object()) fail(origin, "/render", "expected an object");
+  for (const auto& [key, value] : render.items()) {
+    const std::string p = "/render/" + key;
+    if (key == "size") {
+      if (!value.is_array() || value.size() != 2 || !value[0].is_number_integer() ||
+          !value[1].is_number_integer())
+        fail(origin, p, "expected [width, height]");
+      const long long w = value[0].get<long long>(), h = value[1].get<long long>();
+      if (w < 1 || h < 1 || w > 32768 || h > 32768)
+        fail(origin, p, "width and height must lie in [1, 32768]");
+      o.width = static_cast<int>(w);
+      o.height = static_cast<int>(h);
+    } else if (key == "samples") {
+      o.samples = static_cast<int>(number(value, origin, p, 1, 16));
+      if (value.get<double>() != o.samples) fail(origin, p, "expected a whole number");
+    } else if (key == "background") {
+      o.background = color(value, origin, p);
+    } else if (key == "front") {
+      material(value, o.front, origin, p);
+    } else if (key == "back") {
+      material(value, o.back, origin, p);
+    } else if (key == "lights") {
+      if (!value.is_array()) fail(origin, p, "expected an array of lights");
+      std::vector<Light> lights;
+      for (size_t i = 0; i < value.size(); ++i) {
+        const std::string lp = p + "/" + std::to_string(i);
+        const json& l = value[i];
+        if (!l.is_object()) fail(origin, lp, "expected an object");
+        Light light;
+        for (const auto& [lk, lv] : l.items()) {
+          if (lk == "direction") {
+            light.direction = vector3(lv, origin, lp + "/direction");
+            if (!(light.direction.norm() > 0)) fail(origin, lp + "/direction", "must not be zero");
+          } else if (lk == "color") {
+            light.color = color(lv, origin, lp + "/color");
+          } else if (lk == "follows_camera") {
+            if (!lv.is_boolean()) fail(origin, lp + "/follows_camera", "expected true or false");
+            light.follows_camera = lv.get<bool>();
+          } else {
+            fail(origin, lp + "/" + lk, "unknown key (known: direction, color, follows_camera)");
+          }
+        }
+        lights.push_back(light);
+      }
+      o.lights = lights;
+    } else {
+      fail(origin, p, "unknown key (known: size, samples, background, front, back, lights)");
+    }
+  }
+}
+
+json render_settings_to_json(const RenderOptions& o) {
+  json j = {{"size", {o.width, o.height}},
+            {"samples", o.samples},
+            {"background", color_json(o.background)},
+            {"front", material_json(o.front)},
+            {"back", material_json(o.back)}};
+  if (!o.lights.empty()) {
+    json lights = json::array();
+    for (const Light& l : o.lights)
+      lights.push_back({{"direction", {l.direction.x(), l.direction.y(), l.direction.z()}},
+                        {"color", color_json(l.color)},
+                        {"follows_camera", l.follows_camera}});
+    j["lights"] = lights;
+  }
+  return j;
+}
+
+}  // namespace zeroset

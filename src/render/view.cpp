@@ -1,0 +1,58 @@
+#include "zeroset/render/view.h"
+
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "zeroset/error.h"
+
+namespace zeroset {
+
+View View::from_camera(const Camera& camera, double scene_radius, int width, int height) {
+  if (width <= 0 || height <= 0)
+    throw InvalidArgument("image size", std::to_string(width) + "x" + std::to_string(height),
+                          "width and height must be positive");
+  if (!(camera.fov_deg > 0 && camera.fov_deg < 180))
+    throw InvalidArgument("field of view", std::to_string(camera.fov_deg),
+                          "must lie strictly between 0 and 180 degrees");
+  View v;
+  v.width = width;
+  v.height = height;
+  v.target = camera.target;
+  v.eye = camera.eye(scene_radius);
+  v.tan_half_fov = std::tan(0.5 * camera.fov_deg * std::numbers::pi / 180.0);
+  const Vec3 to_target = v.target - v.eye;
+  if (!v.eye.allFinite() || !v.target.allFinite() || !(to_target.norm() > 0))
+    throw InvalidArgument("camera", "eye " + std::to_string(v.eye.x()) + "," +
+                                        std::to_string(v.eye.y()) + "," +
+                                        std::to_string(v.eye.z()),
+                          "the eye must be finite and differ from the target");
+  v.forward = to_target.normalized();
+  // z is up; looking straight up or down, the image's up is the azimuth's direction instead.
+  Vec3 r = v.forward.cross(Vec3::UnitZ());
+  if (r.norm() < 1e-9) {
+    const double az = camera.azimuth_deg * std::numbers::pi / 180.0;
+    r = v.forward.cross(Vec3(-std::cos(az), -std::sin(az), 0));
+  }
+  v.right = r.normalized();
+  v.up = v.right.cross(v.forward).normalized();
+  return v;
+}
+
+Vec3 View::direction(double x, double y) const {
+  const double sx = (2.0 * x / width - 1.0) * tan_half_fov * aspect();
+  const double sy = (1.0 - 2.0 * y / height) * tan_half_fov;
+  return (forward + sx * right + sy * up).normalized();
+}
+
+bool View::project(const Vec3& p, double& x, double& y, double& depth) const {
+  const Vec3 q = p - eye;
+  depth = q.dot(forward);
+  if (!(depth > 0)) return false;
+  const double sx = q.dot(right) / depth, sy = q.dot(up) / depth;
+  x = (sx / (tan_half_fov * aspect()) + 1.0) * 0.5 * width;
+  y = (1.0 - sy / tan_half_fov) * 0.5 * height;
+  return true;
+}
+
+}  // namespace zeroset

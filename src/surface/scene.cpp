@@ -1,0 +1,325 @@
+#include "zeroset/surface/scene.h"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+
+#include "zeroset/error.h"
+#include "zeroset/expr/parse.h"
+#include "zeroset/expr/polynomial.h"
+#include "zeroset/io/atomic_file.h"
+#include "zeroset/surface/catalog.h"
+
+namespace zeroset {
+namespace {
+
+using json = nlohmann::json;
+
+[[noreturn]] void bad(const std::string& origin, const std::string& where, const std::string& what) {
+  throw BadInput(fmt::format("{}: {}: {}", origin, where, what));
+}
+
+double number_at(const json& j, const std::string& origin, const std::string& where) {
+  if (!j.is_number()) bad(origin, where, "expected a number");
+  const double v = j.get<double>();
+  if (!std::isfinite(v)) bad(origin, where, "expected a finite number");
+  return v;
+}
+
+Vec3 vec3_at(const json& j, const std::string& origin, const std::string& where) {
+  if (!j.is_array() || j.size() != 3) bad(origin, where, "expected [x, y, z]");
+  return {number_at(j[0], origin, where + "/0"), number_at(j[1], origin, where + "/1"),
+          number_at(j[2], origin, where + "/2")};
+}
+
+// Default slider range for a parameter the user introduced: around its value.
+ParamSpec default_range(const std::string& name, double value) {
+  const double span = std::max(1.0, std::abs(value));
+  return {name, value, value - span, value + span};
+}
+
+bool is_bare_name(const std::string& s) {
+  if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
+  for (char c : s)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-')) return false;
+  return s != "x" && s != "y" && s != "z";
+}
+
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diag = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] != b[j - 1])});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
+std::string suggestion(const std::string& name) {
+  const CatalogEntry* best = nullptr;
+  size_t best_d = 3;  // suggest only close misspellings
+  for (const auto& e : catalog()) {
+    const size_t d = edit_distance(name, e.name);
+    if (d < best_d) {
+      best_d = d;
+      best = &e;
+    }
+  }
+  return best ? fmt::format(" (did you mean '{}'?)", best->name) : "";
+}
+
+// A clip for a typed equation that comes without one: when F is a polynomial whose
+// highest-degree part H_d keeps one sign on the unit sphere, the surface is bounded, since
+// |F(R u)| ≥ m R^d - Σ_{k<d} |H_k|₁ R^k > 0 for R large (m = min |H_d| on the sphere, |H_k|₁ the
+// sum of the absolute coefficients of degree k). m is estimated on 4,000 directions and halved
+// for safety. Returns an empty clip when no bound is found (an unbounded surface).
+Clip default_clip(const Field& field) {
+  if (!field.is_polynomial() || !field.missing_parameters().empty()) return {};
+  const Polynomial poly = field.polynomial();
+  const int d = poly.degree();
+  if (d < 2 || d % 2) return {};
+  std::vector<double> l1(d, 0.0);
+  std::vector<Monomial> top;
+  for (const Monomial& m : poly.terms()) {
+    if (m.degree() == d)
+      top.push_back(m);
+    else
+      l1[m.degree()] += std::abs(m.c);
+  }
+  const Polynomial lead(top);
+  const int n = 4000;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int i = 0; i < n; ++i) {  // Fibonacci sphere
+    const double zc = 1 - 2 * (i + 0.5) / n, r = std::sqrt(1 - zc * zc);
+    const double ph = i * M_PI * (3 - std::sqrt(5.0));
+    const double v = lead.value(Vec3(r * std::cos(ph), r * std::sin(ph), zc));
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  if (!(lo > 0 || hi < 0)) return {};
+  const double m = 0.5 * std::min(std::abs(lo), std::abs(hi));
+  auto separated = [&](double R) {
+    double rest = 0;
+    for (int k = 0; k < d; ++k) rest += l1[k] * std::pow(R, k);
+    return m * std::pow(R, d) > rest;
+  };
+  double R = 1e-3;
+  while (!separated(R) && R < 1e6) R *= 1.05;
+  if (R >= 1e6) return {};
+  return Clip::sphere(1.1 * R);
+}
+
+}  // namespace
+
+Surface surface_from_equation(const std::string& equation) {
+  Surface s;
+  s.field = compile_field(equation);
+  for (const auto& name : s.field.parameter_names())
+    s.ranges.push_back({name, std::nan(""), 0, 1});
+  return s;
+}
+
+namespace {
+
+// Makes `ranges` follow the field's parameters and current values.
+void sync_ranges(Surface& s) {
+  std::vector<ParamSpec> out;
+  const auto& names = s.field.parameter_names();
+  const auto& values = s.field.parameter_values();
+  for (size_t i = 0; i < names.size(); ++i) {
+    ParamSpec spec = default_range(names[i], std::isfinite(values[i]) ? values[i] : 0.0);
+    for (const auto& r : s.ranges)
+      if (r.name == names[i] && r.min < r.max) {
+        spec.min = r.min;
+        spec.max = r.max;
+      }
+    spec.value = values[i];
+    out.push_back(spec);
+  }
+  s.ranges = std::move(out);
+}
+
+void apply_overrides(Scene& scene, const SurfaceOverrides& o) {
+  Surface& s = scene.surface;
+  for (const auto& [name, value] : o.params) {
+    if (s.field.parameter_index(name) < 0) {
+      std::string have;
+      for (const auto& n : s.field.parameter_names()) have += (have.empty() ? "" : ", ") + n;
+      throw InvalidArgument(fmt::format(
+          "--param {}: the surface has no parameter '{}'{}", name, name,
+          have.empty() ? " (it has none)" : fmt::format(" (it has: {})", have)));
+    }
+    s.field.set_parameter(name, value);
+  }
+  if (!o.clip_specs.empty()) {
+    Clip c;
+    for (const auto& spec : o.clip_specs) c.add(spec);
+    s.clip = c;
+  }
+  sync_ranges(s);
+}
+
+}  // namespace
+
+Scene resolve_scene(const std::string& spec, const SurfaceOverrides& overrides) {
+  Scene scene;
+  if (const CatalogEntry* e = find_catalog_entry(spec)) {
+    scene.surface = make_surface(*e);
+  } else if (file_extension(spec) == "json" && spec.find('\n') == std::string::npos) {
+    scene = read_scene(spec);
+  } else {
+    if (is_bare_name(spec)) {
+      // A lone word is meant as a catalog name; as an equation it would be a constant.
+      throw BadInput(fmt::format("'{}' is not a catalog surface{}; `zeroset list` shows them all", spec,
+                                 suggestion(spec)));
+    }
+    ParseResult r = parse_field(spec);
+    if (!r.ok()) throw BadInput("cannot read the equation:\n" + r.format());
+    scene.surface.field = *r.field;
+    scene.surface.ranges.clear();
+    apply_overrides(scene, overrides);
+    scene.surface.field.require_parameters();
+    if (scene.surface.clip.is_empty_spec()) scene.surface.clip = default_clip(scene.surface.field);
+    return scene;
+  }
+  apply_overrides(scene, overrides);
+  scene.surface.field.require_parameters();
+  return scene;
+}
+
+json scene_to_json(const Scene& scene) {
+  const Surface& s = scene.surface;
+  json j = scene.settings.is_object() ? scene.settings : json::object();
+  j["zeroset_scene"] = 1;
+  if (!s.name.empty()) j["name"] = s.name;
+  j["equation"] = s.field.source();
+  json params = json::object();
+  for (const auto& r : s.ranges) {
+    json p = {{"min", r.min}, {"max", r.max}};
+    const int idx = s.field.parameter_index(r.name);
+    const double v = idx >= 0 ? s.field.parameter_values()[idx] : r.value;
+    if (std::isfinite(v)) p["value"] = v;
+    params[r.name] = p;
+  }
+  j["parameters"] = params;
+  j["clip"] = s.clip.to_specs();
+  const Camera& c = s.camera;
+  j["camera"] = {{"azimuth_deg", c.azimuth_deg},
+                 {"elevation_deg", c.elevation_deg},
+                 {"distance", c.distance},
+                 {"fov_deg", c.fov_deg},
+                 {"target", {c.target.x(), c.target.y(), c.target.z()}}};
+  return j;
+}
+
+Scene scene_from_json(const json& j, const std::string& origin) {
+  if (!j.is_object()) bad(origin, "/", "a scene file is a JSON object");
+  Scene scene;
+  Surface& s = scene.surface;
+  const CatalogEntry* entry = nullptr;
+  if (j.contains("name")) {
+    if (!j["name"].is_string()) bad(origin, "/name", "expected a string");
+    entry = find_catalog_entry(j["name"].get<std::string>());
+  }
+  if (j.contains("equation")) {
+    if (!j["equation"].is_string()) bad(origin, "/equation", "expected a string");
+    const std::string eq = j["equation"].get<std::string>();
+    if (entry && eq == entry->equation) {
+      s = make_surface(*entry);
+    } else {
+      ParseResult r = parse_field(eq);
+      if (!r.ok()) bad(origin, "/equation", "cannot read the equation:\n" + r.format());
+      s.field = *r.field;
+      if (j.contains("name") && j["name"].is_string()) s.name = j["name"].get<std::string>();
+    }
+  } else if (entry) {
+    s = make_surface(*entry);
+  } else {
+    bad(origin, "/", "needs \"equation\" (or the \"name\" of a catalog surface)");
+  }
+  if (j.contains("parameters")) {
+    const json& ps = j["parameters"];
+    if (!ps.is_object()) bad(origin, "/parameters", "expected an object");
+    for (const auto& [name, p] : ps.items()) {
+      const std::string where = "/parameters/" + name;
+      if (s.field.parameter_index(name) < 0)
+        bad(origin, where, "the equation has no parameter '" + name + "'");
+      ParamSpec spec{name, std::nan(""), 0, 1};
+      if (p.is_number()) {
+        spec.value = number_at(p, origin, where);
+        spec = default_range(name, spec.value);
+      } else if (p.is_object()) {
+        if (p.contains("value")) spec.value = number_at(p["value"], origin, where + "/value");
+        if (p.contains("min")) spec.min = number_at(p["min"], origin, where + "/min");
+        if (p.contains("max")) spec.max = number_at(p["max"], origin, where + "/max");
+        if (!(spec.min < spec.max)) bad(origin, where, "needs min < max");
+      } else {
+        bad(origin, where, "expected a number or {\"value\", \"min\", \"max\"}");
+      }
+      if (std::isfinite(spec.value)) s.field.set_parameter(name, spec.value);
+      std::erase_if(s.ranges, [&](const ParamSpec& r) { return r.name == name; });
+      s.ranges.push_back(spec);
+    }
+  }
+  if (j.contains("clip")) {
+    const json& cj = j["clip"];
+    if (!cj.is_array()) bad(origin, "/clip", "expected a list of clip specs like \"sphere:3\"");
+    Clip c;
+    for (size_t i = 0; i < cj.size(); ++i) {
+      if (!cj[i].is_string()) bad(origin, fmt::format("/clip/{}", i), "expected a string");
+      try {
+        c.add(cj[i].get<std::string>());
+      } catch (const BadInput& e) {
+        bad(origin, fmt::format("/clip/{}", i), e.what());
+      }
+    }
+    s.clip = c;
+  }
+  if (j.contains("camera")) {
+    const json& c = j["camera"];
+    if (!c.is_object()) bad(origin, "/camera", "expected an object");
+    auto num = [&](const char* key, double& out) {
+      if (c.contains(key)) out = number_at(c[key], origin, std::string("/camera/") + key);
+    };
+    num("azimuth_deg", s.camera.azimuth_deg);
+    num("elevation_deg", s.camera.elevation_deg);
+    num("distance", s.camera.distance);
+    num("fov_deg", s.camera.fov_deg);
+    if (!(s.camera.fov_deg > 0 && s.camera.fov_deg < 180))
+      bad(origin, "/camera/fov_deg", "must lie between 0 and 180 degrees");
+    if (c.contains("target")) s.camera.target = vec3_at(c["target"], origin, "/camera/target");
+  }
+  sync_ranges(s);
+  for (const auto& [key, value] : j.items())
+    if (key != "zeroset_scene" && key != "name" && key != "equation" && key != "parameters" &&
+        key != "clip" && key != "camera")
+      scene.settings[key] = value;
+  return scene;
+}
+
+Scene read_scene(const std::string& path) {
+  const std::string text = read_text_file(path);
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw BadInput(fmt::format("{}: not valid JSON: {}", path, e.what()));
+  }
+  return scene_from_json(j, path);
+}
+
+void write_scene(const Scene& scene, const std::string& path) {
+  const std::string text = scene_to_json(scene).dump(2) + "\n";
+  write_file_atomically(path, [&](std::ostream& out) { out << text; });
+}
+
+}  // namespace zeroset

@@ -1,0 +1,45 @@
+#include "zeroset/surface/surface.h"
+
+#include <cmath>
+
+#include "zeroset/error.h"
+
+namespace zeroset {
+
+Vec3 Camera::eye(double scene_radius) const {
+  const double az = azimuth_deg * M_PI / 180, el = elevation_deg * M_PI / 180;
+  const Vec3 dir(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+  double dist = distance;
+  if (dist <= 0) {
+    // Fit a ball of the scene radius into the vertical field of view, with a small margin.
+    const double half = 0.5 * fov_deg * M_PI / 180;
+    dist = 1.08 * scene_radius / std::sin(half);
+  }
+  return target + dist * dir;
+}
+
+std::vector<Vec3> Surface::singular_points() const {
+  if (!singular_points_fn) return {};
+  std::vector<Vec3> out;
+  for (const Vec3& p : singular_points_fn(field))
+    if (clip.is_empty_spec() || clip.contains(p, 1e-9)) out.push_back(p);
+  return out;
+}
+
+Box3 Surface::bounds() const {
+  if (!clip.is_bounded())
+    throw BadInput("surface '" + label() +
+                   "' has no bounded clip volume; add one, e.g. --clip sphere:2 or --clip box:2");
+  return clip.bounds();
+}
+
+double Surface::scene_radius() const {
+  const Box3 b = bounds();
+  double r = 0.5 * b.diagonal();
+  for (const auto& s : clip.spheres) r = std::min(r, (s.center - b.center()).norm() + s.radius);
+  return r;
+}
+
+std::string Surface::label() const { return name.empty() ? field.source() : name; }
+
+}  // namespace zeroset

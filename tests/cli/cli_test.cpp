@@ -1,0 +1,104 @@
+// The `zeroset` command line as a user meets it: outputs, exit codes, error messages.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <regex>
+
+#include "support/run_command.h"
+
+namespace zeroset {
+namespace {
+
+using test::run_command;
+
+std::string zs(const std::string& args) { return std::string(ZEROSET_BINARY) + " " + args; }
+
+std::string temp_dir() {
+  auto d = std::filesystem::temp_directory_path() / "zeroset_cli_test";
+  std::filesystem::create_directories(d);
+  return d.string();
+}
+
+TEST(Cli, ListShowsEveryCatalogSurfaceOnOneLineEach) {
+  const auto r = run_command(zs("list"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  for (const char* name : {"kummer", "cone", "planes", "roman", "barth6", "cayley"})
+    EXPECT_NE(r.output.find(name), std::string::npos) << name;
+}
+
+TEST(Cli, HelpTeachesWithExamples) {
+  const auto r = run_command(zs("--help"));
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.output.find("Examples"), std::string::npos);
+  EXPECT_NE(r.output.find("Exit codes"), std::string::npos);
+}
+
+TEST(Cli, EvalAtAKummerNodeGivesZeroValueAndGradient) {
+  const auto r =
+      run_command(zs("eval kummer --param mu=1.5 --at 1.0606601718,-0.3535533906,-0.5 --json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.output, m, std::regex("\"value\": ([-0-9.eE+]+)"))) << r.output;
+  EXPECT_LE(std::abs(std::stod(m[1])), 1e-8);
+  ASSERT_TRUE(std::regex_search(
+      r.output, m,
+      std::regex("\"gradient\": \\[\\s*([-0-9.eE+]+),\\s*([-0-9.eE+]+),\\s*([-0-9.eE+]+)")))
+      << r.output;
+  for (int k = 1; k <= 3; ++k) EXPECT_LE(std::abs(std::stod(m[k])), 1e-8) << r.output;
+}
+
+TEST(Cli, EvalPrintsValueGradientAndHessian) {
+  const auto r = run_command(zs("eval \"x^2 + y^2 - z^2\" --at 1,2,3"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("F         -4"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("Hessian"), std::string::npos) << r.output;
+}
+
+TEST(Cli, InfoListsSingularPoints) {
+  const auto r = run_command(zs("info kummer --param mu=1.5"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("16 known"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("degree:     4"), std::string::npos) << r.output;
+}
+
+TEST(Cli, MalformedEquationExitsTwoWithColumnAndCaret) {
+  const auto r = run_command(zs("info \"x^2 + \""));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("column"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find('^'), std::string::npos) << r.output;
+}
+
+TEST(Cli, MissingParametersAreAllNamed) {
+  const auto r = run_command(zs("eval \"a*x + b*y + c\" --at 0,0,0"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  for (const char* p : {"a", "b", "c"})
+    EXPECT_NE(r.output.find(std::string(" ") + p), std::string::npos) << r.output;
+}
+
+TEST(Cli, BadInputsExitTwoWithAMessage) {
+  for (const char* args :
+       {"eval kummer --at 1,2", "eval kummer --at 1,2,nan", "eval kummer --param mu=abc --at 0,0,0",
+        "eval kummer --param nu=1 --at 0,0,0", "info kummer --clip sphere:-1", "info kumer",
+        "info no_such_file.json", "eval sphere", "frobnicate", "info \"sin(x\""}) {
+    const auto r = run_command(zs(args));
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+    EXPECT_FALSE(r.output.empty()) << args;
+    EXPECT_EQ(r.output.find("terminate"), std::string::npos) << args << r.output;
+  }
+}
+
+TEST(Cli, InfoReadsASceneFile) {
+  const std::string path = temp_dir() + "/scene.json";
+  {
+    FILE* f = std::fopen(path.c_str(), "w");
+    std::fputs(R"({"equation": "x^2 + y^2 - a", "parameters": {"a": 2}, "clip": ["sphere:2"]})", f);
+    std::fclose(f);
+  }
+  const auto r = run_command(zs("info " + path));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("a = 2"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace zeroset

@@ -1,0 +1,105 @@
+// `zeroset sample`: outputs, animation, and bad input (exit code 2, no partial files).
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "support/run_command.h"
+#include "zeroset/floaters/ply.h"
+
+namespace zeroset {
+namespace {
+
+namespace fs = std::filesystem;
+
+class SampleCommand : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("zeroset_sample_" + std::string(
+                                    ::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  static test::CommandResult run(const std::string& args) {
+    return test::run_command(std::string(ZEROSET_BINARY) + " " + args);
+  }
+  bool empty_dir() const { return fs::is_empty(dir_); }
+
+  fs::path dir_;
+};
+
+TEST_F(SampleCommand, WritesPointsPictureAndStatistics) {
+  const auto r = run("sample sphere --max-count 300 --seed 3 -o " + path("s.ply") + " --png " +
+                     path("s.png") + " --size 120x100 --stats " + path("s.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const PointSet ps = read_points_ply(path("s.ply"));
+  EXPECT_GT(ps.positions.size(), 50u);
+  EXPECT_EQ(ps.normals.size(), ps.positions.size());
+  EXPECT_EQ(ps.radii.size(), ps.positions.size());
+  EXPECT_TRUE(fs::file_size(path("s.png")) > 0);
+  std::ifstream in(path("s.json"));
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["metrics"]["count"].get<std::size_t>(), ps.positions.size());
+  EXPECT_LT(j["metrics"]["residual"]["median"].get<double>(), 1e-6);
+  EXPECT_TRUE(j["converged_at_step"].is_number());
+  EXPECT_GT(j["updates_per_second"].get<double>(), 0);
+  EXPECT_EQ(j["options"]["radius_adapt"], "mixed");
+}
+
+TEST_F(SampleCommand, AnimationReportsTheWorstResidual) {
+  const auto r = run("sample kummer --max-count 300 --animate mu=1.02:1.3 --steps 100 --stats " +
+                     path("a.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(path("a.json"));
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_LE(j["animation"]["median_residual_worst"].get<double>(), 1e-3);
+  EXPECT_DOUBLE_EQ(j["parameters"]["mu"].get<double>(), 1.3);
+}
+
+TEST_F(SampleCommand, ExtensionsCanBeSwitchedOff) {
+  const auto r = run("sample planes --max-count 200 --steps 20 --no-cos-weight --no-snap "
+                     "--no-clip-projection --plain-repulsion --grading 0 --radius-adapt wh "
+                     "--ascii -o " + path("p.ply") + " --stats " + path("p.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(path("p.json"));
+  const auto o = nlohmann::json::parse(in)["options"];
+  EXPECT_FALSE(o["cos_weight"].get<bool>());
+  EXPECT_FALSE(o["snap_to_nodes"].get<bool>());
+  EXPECT_FALSE(o["clip_projection"].get<bool>());
+  EXPECT_FALSE(o["scaled_repulsion"].get<bool>());
+  EXPECT_EQ(o["radius_adapt"], "wh");
+}
+
+TEST_F(SampleCommand, BadInputExitsWithTwoAndWritesNothing) {
+  const std::string out = " -o " + path("x.ply") + " --png " + path("x.png");
+  // Each case with a piece of the message that must name the problem.
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"sample kummer --radius -1" + out, "--radius"},
+      {"sample kummer --radius nan" + out, "--radius"},
+      {"sample kummer --max-count 0" + out, "--max-count"},
+      {"sample kummer --radius-adapt fast" + out, "--radius-adapt"},
+      {"sample kummer --steps 5 --until-converged" + out, "--until-converged"},
+      {"sample kummer --animate mu=1:2" + out, "--steps"},
+      {"sample kummer --animate nu=1:2 --steps 5" + out, "nu"},
+      {"sample kummer --animate mu=1 --steps 5" + out, "--animate"},
+      {"sample kummer --camera 0,100" + out, "elevation"},
+      {"sample kummer -o " + path("x.txt"), ".ply"},
+      {"sample kummer --png " + path("x.jpg"), ".png"},
+      {"sample kummer", "nothing to write"},
+      {"sample \"x^2 +\"" + out, "column 5"},
+      {"sample \"x*y - 1\"" + out, "clip"},
+      {"sample kummer -o " + path("no/such/dir/x.ply"), "no/such/dir"},
+  };
+  for (const auto& [args, expected] : cases) {
+    const auto r = run(args);
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find(expected), std::string::npos) << args << "\n" << r.output;
+    EXPECT_TRUE(empty_dir()) << args;
+  }
+}
+
+}  // namespace
+}  // namespace zeroset

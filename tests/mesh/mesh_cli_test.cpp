@@ -1,0 +1,66 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "support/run_command.h"
+#include "zeroset/mesh/adjacency.h"
+#include "zeroset/mesh/mesh_io.h"
+
+namespace zeroset {
+namespace {
+
+namespace fs = std::filesystem;
+
+class MeshCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("zeroset_mesh_cli_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  test::CommandResult run(const std::string& args) const {
+    return test::run_command(std::string(ZEROSET_BINARY) + " --quiet mesh " + args);
+  }
+  fs::path dir_;
+};
+
+TEST_F(MeshCli, WritesMeshAndStats) {
+  const auto r = run("sphere --resolution 16 -o " + path("s.ply") + " --stats " + path("s.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Mesh m = read_mesh(path("s.ply"));
+  EXPECT_TRUE(mesh_topology(m).is_watertight());
+  std::ifstream in(path("s.json"));
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["quality_after"]["triangles"].get<size_t>(), m.triangle_count());
+  EXPECT_TRUE(j.contains("quality_before"));
+  EXPECT_TRUE(j["topology_after"]["watertight"].get<bool>());
+}
+
+TEST_F(MeshCli, BadInputExitsWithTwoAndWritesNothing) {
+  for (const std::string& args :
+       {std::string("sphere --resolution 0 -o ") + path("a.obj"),
+        std::string("sphere --resolution 30000 -o ") + path("a.obj"),
+        std::string("sphere -o ") + path("a.xyz"), std::string("sphere -o ") + path("nodir/a.obj"),
+        std::string("sphere --improve sometimes -o ") + path("a.obj"),
+        std::string("sphere --boundary loose -o ") + path("a.obj")}) {
+    const auto r = run(args);
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find("error"), std::string::npos) << r.output;
+  }
+  EXPECT_FALSE(fs::exists(path("a.obj")));
+  EXPECT_FALSE(fs::exists(path("a.xyz")));
+}
+
+TEST_F(MeshCli, AbsurdResolutionIsRefusedWithTheMemoryItNeeds) {
+  const auto r = run("kummer --resolution 30000 -o " + path("k.obj"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("GB"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("k.obj")));
+}
+
+}  // namespace
+}  // namespace zeroset

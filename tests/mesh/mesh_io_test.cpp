@@ -1,0 +1,79 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "mesh_test_support.h"
+#include "zeroset/error.h"
+#include "zeroset/mesh/mesh_io.h"
+#include "zeroset/mesh/polygonize.h"
+
+namespace zeroset {
+namespace {
+
+namespace fs = std::filesystem;
+
+class MeshIo : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("zeroset_mesh_io_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  fs::path dir_;
+};
+
+TEST_F(MeshIo, RoundTripsEveryFormat) {
+  const Surface s = test::catalog_surface("torus");
+  const Mesh m = polygonize(s, {.cells = 24});
+  ASSERT_FALSE(m.empty());
+  for (const std::string& ext : mesh_file_extensions()) {
+    const std::string p = path("torus." + ext);
+    write_mesh(m, p);
+    const Mesh r = read_mesh(p);
+    EXPECT_EQ(r.triangle_count(), m.triangle_count()) << ext;
+    EXPECT_EQ(r.vertex_count(), m.vertex_count()) << ext;
+    ASSERT_EQ(r.triangles.size(), m.triangles.size());
+    if (ext != "stl") {  // STL renumbers its vertices
+      EXPECT_EQ(r.triangles.front(), m.triangles.front()) << ext;
+      for (size_t v = 0; v < m.positions.size(); v += 97)
+        EXPECT_LT((r.positions[v] - m.positions[v]).norm(), 1e-6) << ext;
+      EXPECT_EQ(r.normals.size(), m.normals.size()) << ext;
+    }
+  }
+  EXPECT_EQ(read_mesh(path("torus.ply")).is_boundary, m.is_boundary);
+}
+
+TEST_F(MeshIo, RejectsUnknownExtensionListingKnownOnes) {
+  Mesh m;
+  try {
+    write_mesh(m, path("mesh.xyz"));
+    FAIL();
+  } catch (const InvalidArgument& e) {
+    const std::string what = e.what();
+    for (const char* ext : {".obj", ".ply", ".stl", ".glb"}) EXPECT_NE(what.find(ext), std::string::npos);
+  }
+  EXPECT_FALSE(fs::exists(path("mesh.xyz")));
+  EXPECT_THROW(check_mesh_path(path("noext")), InvalidArgument);
+}
+
+TEST_F(MeshIo, RejectsUnwritablePathWithoutPartialFile) {
+  const Mesh m = polygonize(test::catalog_surface("sphere"), {.cells = 8});
+  const std::string bad = path("missing/dir/mesh.obj");
+  EXPECT_THROW(write_mesh(m, bad), IoError);
+  EXPECT_THROW(check_mesh_path(bad), IoError);
+  EXPECT_FALSE(fs::exists(bad));
+}
+
+TEST_F(MeshIo, ReadingABrokenFileIsAnIoError) {
+  std::ofstream(path("broken.ply")) << "ply\nformat ascii 1.0\nend_header\n";
+  EXPECT_THROW(read_mesh(path("broken.ply")), IoError);
+  std::ofstream(path("short.stl")) << "solid";
+  EXPECT_THROW(read_mesh(path("short.stl")), IoError);
+  std::ofstream(path("bad.obj")) << "v 0 0 0\nf 1 2 3\n";
+  EXPECT_THROW(read_mesh(path("bad.obj")), IoError);
+}
+
+}  // namespace
+}  // namespace zeroset

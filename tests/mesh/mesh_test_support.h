@@ -1,0 +1,27 @@
+#pragma once
+// Surfaces for the mesh tests.
+#include <string>
+
+#include "zeroset/surface/catalog.h"
+#include "zeroset/surface/scene.h"
+
+namespace zeroset::test {
+
+inline Surface catalog_surface(const std::string& name) {
+  return make_surface(*find_catalog_entry(name));
+}
+
+inline Surface kummer(double mu, double clip_radius = 3) {
+  Surface s = catalog_surface("kummer");
+  s.field.set_parameter("mu", mu);
+  s.clip = Clip::sphere(clip_radius);
+  return s;
+}
+
+inline Surface equation(const std::string& text, const Clip& clip) {
+  Surface s = surface_from_equation(text);
+  s.clip = clip;
+  return s;
+}
+
+}  // namespace zeroset::test

@@ -1,0 +1,337 @@
+#include "zeroset/render/raycast.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "zeroset/error.h"
+#include "zeroset/expr/polynomial.h"
+#include "zeroset/surface/catalog.h"
+#include "zeroset/surface/scene.h"
+
+namespace zeroset {
+namespace {
+
+using Real = long double;
+
+/// The slow, independent reference: F restricted to the ray in long double, expanded about
+/// the middle of the clipped segment (no cancellation from a far eye), sampled densely;
+/// the first sign change is bisected. Rays on which |F| has a local minimum that comes
+/// near zero (relative to the size of F's terms there) without a sign change before the
+/// first root are near-tangent: the answer is ill-conditioned in double precision, for the
+/// reference as much as for the ray caster, so the caller skips them.
+struct Reference {
+  enum class Kind { kMiss, kHit, kAmbiguous };
+  Kind kind = Kind::kMiss;
+  double t = 0;
+};
+
+class ReferenceCaster {
+ public:
+  explicit ReferenceCaster(const Polynomial& p) : terms_(p.terms()), degree_(p.degree()) {}
+
+  Reference first_hit(const Vec3& o, const Vec3& d, double t0, double t1) {
+    const Real tm = 0.5L * (Real(t0) + Real(t1)), h = 0.5L * (Real(t1) - Real(t0));
+    expand(o, d, tm);
+    constexpr int kSamples = 2048;
+    Real prev = eval(-h);
+    Real prev_s = -h;
+    Real prev_prev_abs = -1;
+    for (int i = 1; i <= kSamples; ++i) {
+      const Real s = -h + 2 * h * i / kSamples;
+      const Real v = eval(s);
+      if (prev == 0) return {Reference::Kind::kHit, double(tm + prev_s)};
+      if ((v > 0) != (prev > 0) && v != 0) {
+        Real a = prev_s, b = s, fa = prev;
+        for (int k = 0; k < 200 && b - a > 1e-16L * (1 + std::abs(tm)); ++k) {
+          const Real m = 0.5L * (a + b), fm = eval(m);
+          if ((fm > 0) == (fa > 0)) {
+            a = m;
+            fa = fm;
+          } else {
+            b = m;
+          }
+        }
+        return {Reference::Kind::kHit, double(tm + 0.5L * (a + b))};
+      }
+      // A local minimum of |f| at the previous sample: how close does it come to zero?
+      if (prev_prev_abs >= 0 && std::abs(prev) <= prev_prev_abs && std::abs(prev) <= std::abs(v) &&
+          near_zero_minimum(prev_s - 2 * h / kSamples, s, o, d, tm))
+        return {Reference::Kind::kAmbiguous, 0};
+      prev_prev_abs = std::abs(prev);
+      prev = v;
+      prev_s = s;
+    }
+    return {};
+  }
+
+ private:
+  /// Coefficients of F(o + (tm + s) d) in s, by multiplying out each term in long double.
+  void expand(const Vec3& o, const Vec3& d, Real tm) {
+    coeffs_.assign(static_cast<size_t>(degree_ + 1), 0);
+    abs_coeffs_.assign(coeffs_.size(), 0);
+    Real base[3], dir[3];
+    for (int k = 0; k < 3; ++k) {
+      base[k] = Real(o[k]) + tm * Real(d[k]);
+      dir[k] = d[k];
+    }
+    std::vector<Real> prod, tmp;
+    for (const Monomial& m : terms_) {
+      prod.assign(1, Real(m.c));
+      const int e[3] = {m.i, m.j, m.k};
+      for (int axis = 0; axis < 3; ++axis)
+        for (int n = 0; n < e[axis]; ++n) {
+          tmp.assign(prod.size() + 1, 0);
+          for (size_t q = 0; q < prod.size(); ++q) {
+            tmp[q] += prod[q] * base[axis];
+            tmp[q + 1] += prod[q] * dir[axis];
+          }
+          prod.swap(tmp);
+        }
+      for (size_t q = 0; q < prod.size(); ++q) {
+        coeffs_[q] += prod[q];
+        abs_coeffs_[q] += std::abs(prod[q]);
+      }
+    }
+  }
+  Real eval(Real s) const {
+    Real v = 0;
+    for (size_t k = coeffs_.size(); k-- > 0;) v = v * s + coeffs_[k];
+    return v;
+  }
+  Real eval_abs(Real s) const {
+    Real v = 0;
+    for (size_t k = abs_coeffs_.size(); k-- > 0;) v = v * std::abs(s) + abs_coeffs_[k];
+    return v;
+  }
+  /// Golden-section search of |f| on [a, b]; true when its minimum is below 1e-6 of the
+  /// magnitude of F's terms there.
+  bool near_zero_minimum(Real a, Real b, const Vec3&, const Vec3&, Real) const {
+    const Real g = (std::sqrt(5.0L) - 1) / 2;
+    Real x1 = b - g * (b - a), x2 = a + g * (b - a);
+    Real f1 = std::abs(eval(x1)), f2 = std::abs(eval(x2));
+    for (int k = 0; k < 80; ++k) {
+      if (f1 < f2) {
+        b = x2;
+        x2 = x1;
+        f2 = f1;
+        x1 = b - g * (b - a);
+        f1 = std::abs(eval(x1));
+      } else {
+        a = x1;
+        x1 = x2;
+        f1 = f2;
+        x2 = a + g * (b - a);
+        f2 = std::abs(eval(x2));
+      }
+    }
+    const Real x = 0.5L * (a + b);
+    return std::abs(eval(x)) < 1e-6L * eval_abs(x);
+  }
+
+  std::vector<Monomial> terms_;
+  int degree_;
+  std::vector<Real> coeffs_, abs_coeffs_;
+};
+
+class CatalogRays : public testing::TestWithParam<const char*> {};
+
+TEST_P(CatalogRays, FirstHitAgreesWithDenseReference) {
+  const CatalogEntry* entry = find_catalog_entry(GetParam());
+  ASSERT_NE(entry, nullptr);
+  const Surface surface = make_surface(*entry);
+  ASSERT_TRUE(surface.field.is_polynomial());
+  ReferenceCaster reference(surface.field.polynomial());
+  const Box3 box = surface.bounds();
+  const double radius = surface.scene_radius();
+
+  std::mt19937 rng(20240611);
+  std::uniform_real_distribution<double> u(-1, 1);
+  auto random_unit = [&] {
+    Vec3 v;
+    do v = Vec3(u(rng), u(rng), u(rng));
+    while (v.squaredNorm() > 1 || v.squaredNorm() < 1e-6);
+    return v.normalized();
+  };
+  int hits = 0, ambiguous = 0, total = 0;
+  constexpr int kEyes = 20, kRaysPerEye = 500;
+  for (int e = 0; e < kEyes; ++e) {
+    // Eyes outside the scene at camera-like distances, and a few inside the clip volume.
+    const Vec3 eye = e % 5 == 4 ? Vec3(box.center() + 0.3 * radius * random_unit())
+                                : Vec3(box.center() + radius * (2.5 + 2 * std::abs(u(rng))) *
+                                                          random_unit());
+    SurfaceRayCaster caster(surface, eye);
+    ASSERT_TRUE(caster.is_exact());
+    for (int r = 0; r < kRaysPerEye; ++r) {
+      const Vec3 aim(box.lo.x() + (box.hi.x() - box.lo.x()) * 0.5 * (u(rng) + 1),
+                     box.lo.y() + (box.hi.y() - box.lo.y()) * 0.5 * (u(rng) + 1),
+                     box.lo.z() + (box.hi.z() - box.lo.z()) * 0.5 * (u(rng) + 1));
+      const Vec3 dir = (aim - eye).normalized();
+      ++total;
+      double t0 = 0, t1 = 0;
+      const std::optional<double> got = caster.first_hit(dir);
+      if (!surface.clip.ray_interval(eye, dir, 0, t0, t1)) {
+        EXPECT_FALSE(got);
+        continue;
+      }
+      const Reference ref = reference.first_hit(eye, dir, t0, t1);
+      if (ref.kind == Reference::Kind::kAmbiguous) {
+        ++ambiguous;
+        continue;
+      }
+      if (ref.kind == Reference::Kind::kMiss) {
+        EXPECT_FALSE(got) << "spurious hit at t = " << *got << ", eye " << eye.transpose()
+                          << ", dir " << dir.transpose();
+        continue;
+      }
+      ++hits;
+      ASSERT_TRUE(got) << "missed hit at t = " << ref.t << ", eye " << eye.transpose()
+                       << ", dir " << dir.transpose();
+      EXPECT_NEAR(*got, ref.t, 1e-7) << "eye " << eye.transpose() << ", dir " << dir.transpose();
+    }
+  }
+  EXPECT_EQ(total, kEyes * kRaysPerEye);
+  // Near-tangent rays are rare; a large share would mean the reference is broken.
+  EXPECT_LT(ambiguous, total / 50) << ambiguous << " ambiguous rays of " << total;
+  EXPECT_GT(hits, total / 20) << "too few rays hit the surface to test anything";
+  RecordProperty("hits", hits);
+  RecordProperty("ambiguous", ambiguous);
+}
+
+INSTANTIATE_TEST_SUITE_P(Catalog, CatalogRays,
+                         testing::Values("kummer", "cone", "planes", "sphere", "torus", "roman",
+                                         "cayley", "clebsch", "barth6", "whitney", "dingdong"));
+
+Surface equation_surface(const std::string& equation, double clip_radius) {
+  Surface s = surface_from_equation(equation);
+  s.clip = Clip::sphere(clip_radius);
+  return s;
+}
+
+TEST(Raycast, HitsDoubleSphere) {
+  const Surface s = equation_surface("(x^2 + y^2 + z^2 - 1)^2", 2);
+  SurfaceRayCaster caster(s, Vec3(0, 0, 5));
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-0.9, 0.9);
+  for (int i = 0; i < 200; ++i) {
+    // Aim at a point of the unit disk in the plane z = 0: the ray enters the sphere there.
+    const Vec3 aim(u(rng), u(rng), 0);
+    if (aim.norm() > 0.95) continue;
+    const Vec3 dir = (aim - Vec3(0, 0, 5)).normalized();
+    SurfaceHit hit;
+    ASSERT_TRUE(caster.intersect(dir, hit)) << "aim " << aim.transpose();
+    // |o + t d|² = 1: t = -(o·d) - sqrt((o·d)² - |o|² + 1).
+    const double b = Vec3(0, 0, 5).dot(dir);
+    const double expected = -b - std::sqrt(b * b - 24);
+    EXPECT_NEAR(hit.t, expected, 1e-6);
+    EXPECT_GT(hit.normal.dot(hit.point.normalized()), 0.999) << "normal must be radial";
+  }
+}
+
+TEST(Raycast, HitsSphereAlongTangentRay) {
+  const Surface s = equation_surface("x^2 + y^2 + z^2 - 1", 2);
+  SurfaceRayCaster caster(s, Vec3(-5, 0, 1));
+  SurfaceHit hit;
+  ASSERT_TRUE(caster.intersect(Vec3(1, 0, 0), hit));
+  EXPECT_NEAR(hit.t, 5.0, 1e-6);
+  EXPECT_NEAR(hit.normal.z(), 1.0, 1e-6);
+  // Just above the tangent point the ray misses.
+  SurfaceRayCaster above(s, Vec3(-5, 0, 1 + 1e-6));
+  EXPECT_FALSE(above.first_hit(Vec3(1, 0, 0)));
+}
+
+TEST(Raycast, HitsDoubleSphereAlongTangentRay) {
+  const Surface s = equation_surface("(x^2 + y^2 + z^2 - 1)^2", 2);
+  SurfaceRayCaster caster(s, Vec3(-5, 0.6, 0.8));
+  const std::optional<double> t = caster.first_hit(Vec3(1, 0, 0));
+  ASSERT_TRUE(t);
+  EXPECT_NEAR(*t, 5.0, 1e-4);  // a quadruple root: accurate to the fourth root of rounding
+}
+
+TEST(Raycast, ReportsWhichSideTheEyeIsOn) {
+  const Surface s = equation_surface("x^2 + y^2 + z^2 - 1", 2);
+  SurfaceHit hit;
+  SurfaceRayCaster outside(s, Vec3(0, 0, 3));
+  ASSERT_TRUE(outside.intersect(Vec3(0, 0, -1), hit));
+  EXPECT_TRUE(hit.front);  // F > 0 outside: ∇F points towards the eye
+  EXPECT_NEAR(hit.t, 2.0, 1e-12);
+  SurfaceRayCaster inside(s, Vec3(0, 0, 0.2));
+  ASSERT_TRUE(inside.intersect(Vec3(0, 0, -1), hit));
+  EXPECT_FALSE(hit.front);
+  EXPECT_NEAR(hit.t, 1.2, 1e-12);
+  EXPECT_NEAR(hit.normal.z(), 1.0, 1e-9) << "the normal faces the eye";
+}
+
+TEST(Raycast, HitsConeTipWithFallbackNormal) {
+  const Surface s = equation_surface("x^2 + y^2 - z^2", 1);
+  SurfaceRayCaster caster(s, Vec3(0, -3, 0));
+  SurfaceHit hit;
+  // Along the y axis the ray meets the cone only at its tip, where ∇F = 0.
+  ASSERT_TRUE(caster.intersect(Vec3(0, 1, 0), hit));
+  EXPECT_NEAR(hit.t, 3.0, 1e-6);
+  EXPECT_TRUE(hit.normal.allFinite());
+}
+
+TEST(Raycast, RejectsSurfaceWithoutBoundedClip) {
+  const Surface s = surface_from_equation("x^2 + y^2 - z^2");
+  EXPECT_THROW(SurfaceRayCaster(s, Vec3(0, 0, 5)), BadInput);
+}
+
+TEST(Raycast, IntervalPathAgreesWithExactPath) {
+  for (const char* name : {"kummer", "barth6", "torus"}) {
+    const Surface surface = make_surface(*find_catalog_entry(name));
+    const Vec3 eye = surface.camera.eye(surface.scene_radius());
+    SurfaceRayCaster exact(surface, eye);
+    RaycastOptions forced;
+    forced.force_interval = true;
+    SurfaceRayCaster interval(surface, eye, forced);
+    ASSERT_FALSE(interval.is_exact());
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-1, 1);
+    int agree = 0, both = 0, n = 300;
+    for (int i = 0; i < n; ++i) {
+      const Vec3 dir =
+          (surface.camera.target + 0.8 * surface.scene_radius() * Vec3(u(rng), u(rng), u(rng)) -
+           eye)
+              .normalized();
+      const auto a = exact.first_hit(dir), b = interval.first_hit(dir);
+      both += a.has_value() && b.has_value();
+      agree += a.has_value() == b.has_value() && (!a || std::abs(*a - *b) < 1e-7);
+    }
+    EXPECT_GT(both, n / 5) << name;
+    // The interval path may drop two roots closer than its leaf width; nothing else differs.
+    EXPECT_GE(agree, n * 98 / 100) << name;
+  }
+}
+
+TEST(Raycast, CastsNonPolynomialSurfaceWithIntervals) {
+  // A sphere written with a square root, and a gyroid-like trigonometric surface.
+  const Surface s = equation_surface("sqrt(x^2 + y^2 + z^2) - 1", 2);
+  SurfaceRayCaster caster(s, Vec3(0.3, 0.2, 5));
+  ASSERT_FALSE(caster.is_exact());
+  SurfaceHit hit;
+  ASSERT_TRUE(caster.intersect(Vec3(0, 0, -1), hit));
+  EXPECT_NEAR(hit.t, 5 - std::sqrt(1 - 0.13), 1e-9);
+  EXPECT_TRUE(hit.front);
+
+  const Surface g =
+      equation_surface("sin(3*x)*cos(3*y) + sin(3*y)*cos(3*z) + sin(3*z)*cos(3*x)", 2);
+  SurfaceRayCaster gyroid(g, Vec3(4, 3, 2));
+  Evaluator ev(g.field);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int hits = 0;
+  for (int i = 0; i < 100; ++i) {
+    const Vec3 dir = (Vec3(u(rng), u(rng), u(rng)) - Vec3(4, 3, 2)).normalized();
+    if (gyroid.intersect(dir, hit)) {
+      ++hits;
+      EXPECT_LT(std::abs(ev.value(hit.point)), 1e-9);
+    }
+  }
+  EXPECT_GT(hits, 50);
+}
+
+}  // namespace
+}  // namespace zeroset

@@ -1,0 +1,134 @@
+#include "zeroset/surface/scene.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "zeroset/error.h"
+
+namespace zeroset {
+namespace {
+
+std::string temp_path(const std::string& name) {
+  return (std::filesystem::temp_directory_path() / ("zeroset_scene_test_" + name)).string();
+}
+
+TEST(Scene, ResolvesCatalogNamesWithDefaults) {
+  const Surface s = resolve_surface("kummer");
+  EXPECT_EQ(s.name, "kummer");
+  EXPECT_DOUBLE_EQ(s.field.parameter_values()[0], 1.5);
+  EXPECT_EQ(s.singular_points().size(), 16u);
+}
+
+TEST(Scene, AppliesParameterAndClipOverrides) {
+  const Surface s = resolve_surface("kummer", {.params = {{"mu", 2.0}}, .clip_specs = {"sphere:2.5"}});
+  EXPECT_DOUBLE_EQ(s.field.parameter_values()[0], 2.0);
+  ASSERT_EQ(s.clip.spheres.size(), 1u);
+  EXPECT_DOUBLE_EQ(s.clip.spheres[0].radius, 2.5);
+}
+
+TEST(Scene, ResolvesEquationsAndNamesEveryMissingParameter) {
+  EXPECT_NO_THROW(resolve_surface("x^2 + y^2 = z^2"));
+  try {
+    resolve_surface("a*x^2 + b*y^2 - mu");
+    ADD_FAILURE();
+  } catch (const InvalidArgument& e) {
+    const std::string m = e.what();
+    for (const char* name : {"a", "b", "mu"}) EXPECT_NE(m.find(name), std::string::npos) << m;
+  }
+}
+
+TEST(Scene, UnknownParameterOverrideSaysWhichExist) {
+  try {
+    resolve_surface("kummer", {.params = {{"nu", 2.0}}});
+    ADD_FAILURE();
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("mu"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Scene, ReportsAMisspelledCatalogName) {
+  try {
+    resolve_surface("kumer");
+    ADD_FAILURE();
+  } catch (const BadInput& e) {
+    EXPECT_NE(std::string(e.what()).find("did you mean 'kummer'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Scene, RoundTripsThroughAFile) {
+  Scene scene = resolve_scene("torus", {.params = {{"r", 0.3}}});
+  scene.surface.camera.azimuth_deg = 12;
+  scene.settings["render"] = {{"samples", 3}};
+  const std::string path = temp_path("roundtrip.json");
+  write_scene(scene, path);
+  const Scene back = resolve_scene(path);
+  EXPECT_EQ(back.surface.field.source(), scene.surface.field.source());
+  EXPECT_DOUBLE_EQ(back.surface.field.parameter_values()[scene.surface.field.parameter_index("r")], 0.3);
+  EXPECT_DOUBLE_EQ(back.surface.camera.azimuth_deg, 12);
+  EXPECT_EQ(back.settings["render"]["samples"], 3);
+  EXPECT_EQ(back.surface.clip.spheres.size(), 1u);
+  std::filesystem::remove(path);
+}
+
+TEST(Scene, CatalogSceneKeepsItsSingularPoints) {
+  const std::string path = temp_path("kummer.json");
+  write_scene(resolve_scene("kummer"), path);
+  EXPECT_EQ(resolve_surface(path).singular_points().size(), 16u);
+  std::filesystem::remove(path);
+}
+
+TEST(Scene, BadFilesSayWhatAndWhere) {
+  const std::string path = temp_path("bad.json");
+  auto expect_error = [&](const std::string& text, const std::string& where) {
+    std::ofstream(path) << text;
+    try {
+      resolve_surface(path);
+      ADD_FAILURE() << text;
+    } catch (const BadInput& e) {
+      EXPECT_NE(std::string(e.what()).find(where), std::string::npos) << e.what();
+    }
+  };
+  expect_error("{ not json", "not valid JSON");
+  expect_error(R"({"equation": 3})", "/equation");
+  expect_error(R"({"equation": "x^2 +"})", "/equation");
+  expect_error(R"({"equation": "x - a", "parameters": {"a": "big"}})", "/parameters/a");
+  expect_error(R"({"equation": "x - a", "parameters": {"b": 1}})", "/parameters/b");
+  expect_error(R"({"equation": "x", "clip": ["sphere:-2"]})", "/clip/0");
+  expect_error(R"({"equation": "x", "camera": {"fov_deg": 400}})", "/camera/fov_deg");
+  expect_error(R"([1, 2])", "JSON object");
+  std::filesystem::remove(path);
+  try {
+    resolve_surface(temp_path("missing.json"));
+    ADD_FAILURE();
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("missing.json"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace zeroset
+
+namespace zeroset {
+namespace {
+
+TEST(Scene, BoundedEquationsGetADefaultClipThatHoldsTheSurface) {
+  const Surface s = resolve_surface("x^2 + y^2 + z^2 - 4");
+  ASSERT_EQ(s.clip.spheres.size(), 1u);
+  EXPECT_GE(s.clip.spheres[0].radius, 2.0);
+  EXPECT_LE(s.clip.spheres[0].radius, 4.0);
+  const Surface t = resolve_surface("(x^2+y^2+z^2+0.8)^2 - 4*(x^2+y^2)");  // a torus
+  ASSERT_EQ(t.clip.spheres.size(), 1u);
+  EXPECT_GE(t.clip.spheres[0].radius, 1 + std::sqrt(0.2));  // outer equator of the tube
+}
+
+TEST(Scene, UnboundedEquationsGetNoDefaultClip) {
+  EXPECT_TRUE(resolve_surface("x^2 + y^2 - z^2").clip.is_empty_spec());
+  EXPECT_TRUE(resolve_surface("x*y*z - 1").clip.is_empty_spec());
+  EXPECT_TRUE(resolve_surface("sin(x) + y").clip.is_empty_spec());
+  EXPECT_THROW((void)resolve_surface("x^2 + y^2 - z^2").bounds(), BadInput);
+}
+
+}  // namespace
+}  // namespace zeroset

@@ -1,0 +1,170 @@
+// `zeroset view` in a real window: a virtual X server (xvfb-run) with Mesa's software OpenGL,
+// driven by scripts; the screenshots are checked for what a user would see.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "render/image_masks.h"
+#include "support/run_command.h"
+#include "zeroset/io/image.h"
+
+namespace zeroset {
+namespace {
+
+using test::run_command;
+
+// The viewer's default background (linear RGB), see viewer_state.cpp.
+const Color kBackground(0.74, 0.76, 0.80);
+
+bool has_xvfb() { return std::system("command -v xvfb-run > /dev/null 2>&1") == 0; }
+
+std::string temp_dir() {
+  const auto d = std::filesystem::temp_directory_path() / "zeroset_viewer_window_test";
+  std::filesystem::create_directories(d);
+  return d.string();
+}
+
+std::string write_script(const std::string& name, const std::string& text) {
+  const std::string path = temp_dir() + "/" + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+// `zeroset view ARGS` in a virtual 24-bit screen with software OpenGL.
+test::CommandResult view(const std::string& args) {
+  return run_command(
+      "LIBGL_ALWAYS_SOFTWARE=1 xvfb-run -a -s '-screen 0 1280x1024x24' " +
+      std::string(ZEROSET_BINARY) + " view " + args);
+}
+
+// What fraction of the pixels in columns [x0, x1) show the surface, its front (orange) and
+// its back (blue).
+struct Census {
+  double surface = 0, front = 0, back = 0;
+};
+
+Census census(const Image& img, int x0 = 0, int x1 = -1) {
+  if (x1 < 0) x1 = img.width;
+  const std::vector<bool> mask = test::surface_mask(img, kBackground);
+  Census c;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = x0; x < x1; ++x) {
+      if (!mask[static_cast<size_t>(y) * img.width + x]) continue;
+      const std::uint8_t* p = img.pixel(x, y);
+      c.surface += 1;
+      c.front += p[0] > p[2] + 40;
+      c.back += p[2] > p[0] + 25;
+    }
+  const double n = static_cast<double>(img.height) * (x1 - x0);
+  return {c.surface / n, c.front / n, c.back / n};
+}
+
+double changed_fraction(const Image& a, const Image& b, int x0 = 0) {
+  if (a.width != b.width || a.height != b.height) return 1;
+  long changed = 0;
+  for (int y = 0; y < a.height; ++y)
+    for (int x = x0; x < a.width; ++x) {
+      const std::uint8_t* p = a.pixel(x, y);
+      const std::uint8_t* q = b.pixel(x, y);
+      changed += std::abs(p[0] - q[0]) + std::abs(p[1] - q[1]) + std::abs(p[2] - q[2]) > 30;
+    }
+  return static_cast<double>(changed) / (static_cast<double>(a.height) * (a.width - x0));
+}
+
+// Opens Kummer's surface in `mode`, lets the mode finish its work (`settle`), saves a
+// screenshot, changes mu and saves another; checks both.
+void check_mode(const std::string& mode, const std::string& setup, const std::string& settle) {
+  if (!has_xvfb()) GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb)";
+  const std::string dir = temp_dir();
+  const std::string a = dir + "/" + mode + "-a.png", b = dir + "/" + mode + "-b.png";
+  std::filesystem::remove(a);
+  std::filesystem::remove(b);
+  const std::string script = write_script(
+      mode + ".txt", "mode " + mode + "\n" + setup + settle + "screenshot " + a +
+                         "\nparam mu 2.2\n" + settle + "screenshot " + b + "\n");
+  const auto r = view("kummer --no-ui --size 400x400 --script " + script);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Image ia = read_image(a), ib = read_image(b);
+  ASSERT_EQ(ia.width, 400);
+  ASSERT_EQ(ia.height, 400);
+  for (const Image* img : {&ia, &ib}) {
+    const Census c = census(*img);
+    EXPECT_GT(c.surface, 0.15) << mode;
+    EXPECT_LT(c.surface, 0.9) << mode;
+    EXPECT_GT(c.front, 0.03) << mode << ": the orange front side shows";
+    EXPECT_GT(c.back, 0.01) << mode << ": the blue back side shows";
+  }
+  EXPECT_GT(changed_fraction(ia, ib), 0.05) << mode << ": mu = 2.2 looks different";
+}
+
+TEST(ViewerWindow, RayTracedKummerShowsBothSidesAndFollowsMu) { check_mode("raytrace", "", "wait\n"); }
+
+TEST(ViewerWindow, MeshOfKummerShowsBothSidesAndFollowsMu) {
+  check_mode("mesh", "mesh cells=40 max_steps=10\n", "wait\n");
+}
+
+TEST(ViewerWindow, FloatersOnKummerShowBothSidesAndFollowMu) {
+  check_mode("floaters", "floaters max_count=3000 seed=2\n", "steps 150\n");
+}
+
+TEST(ViewerWindow, MalformedEquationShowsTheErrorAndTheViewerKeepsRunning) {
+  if (!has_xvfb()) GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb)";
+  const std::string dir = temp_dir();
+  const std::string bad = dir + "/bad-equation.png", good = dir + "/good-equation.png";
+  const std::string script = write_script(
+      "typing.txt",
+      "wait\n"
+      "equation x^2 + y^2 +\n"
+      "expect-error expected\n"
+      "frames 3\n"
+      "screenshot " + bad + "\n"
+      "equation x^2 + y^2 - z^2\n"
+      "wait\n"
+      "screenshot " + good + "\n");
+  const auto r = view("kummer --size 800x500 --script " + script);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("failed as expected"), std::string::npos) << r.output;
+  const Image ib = read_image(bad), ig = read_image(good);
+  // The panel (left 360 pixels) shows the diagnostics in red; the view still shows Kummer.
+  auto red_pixels = [](const Image& img) {
+    long n = 0;
+    for (int y = 0; y < img.height; ++y)
+      for (int x = 0; x < 360; ++x) {
+        const std::uint8_t* p = img.pixel(x, y);
+        n += p[0] > 170 && p[1] < 130 && p[2] < 130;
+      }
+    return n;
+  };
+  EXPECT_GT(red_pixels(ib), 100) << "the error is shown";
+  EXPECT_LT(red_pixels(ig), 10) << "and gone after a good equation";
+  EXPECT_GT(census(ib, 360).surface, 0.15) << "the last good surface stays on screen";
+  EXPECT_GT(census(ig, 360).surface, 0.05) << "the cone is drawn";
+  EXPECT_GT(changed_fraction(ib, ig, 360), 0.1) << "the cone replaced Kummer's surface";
+}
+
+TEST(ViewerWindow, MalformedScriptIsBadInputBeforeAWindowOpens) {
+  const std::string script = write_script("bad-script.txt", "mode mesh\nparam mu\n");
+  const auto r = run_command(std::string(ZEROSET_BINARY) + " view kummer --script " + script);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("bad-script.txt:2"), std::string::npos) << r.output;
+}
+
+TEST(ViewerWindow, UnwritableScreenshotIsBadInputBeforeAWindowOpens) {
+  const auto r = run_command(std::string(ZEROSET_BINARY) +
+                             " view kummer --screenshot /nonexistent/dir/shot.png");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("/nonexistent/dir"), std::string::npos) << r.output;
+}
+
+TEST(ViewerWindow, WithoutADisplayItSaysHowToRunHeadless) {
+  const auto r = run_command("env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(ZEROSET_BINARY) +
+                             " view kummer --frames 1");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("xvfb-run"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace zeroset
