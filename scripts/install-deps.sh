@@ -4,7 +4,7 @@
 set -euo pipefail
 
 build=(cmake g++ make pkg-config clang libclang-rt-14-dev
-       libeigen3-dev libcli11-dev libfmt-dev nlohmann-json3-dev libstb-dev libomp-dev
+       zlib1g-dev libeigen3-dev libcli11-dev libfmt-dev nlohmann-json3-dev libstb-dev libomp-dev
        libgtest-dev libgmock-dev libbenchmark-dev
        libglfw3-dev libepoxy-dev libimgui-dev
        xvfb xauth libgl1-mesa-dri povray)

@@ -133,7 +133,8 @@ Camera framing(Camera c, const Surface& surface, std::span<const Vec3> points) {
     b.lo = b.lo.cwiseMin(p);
     b.hi = b.hi.cwiseMax(p);
   }
-  const double radius = std::max(0.5 * b.diagonal(), 1e-9 * surface.scene_radius());
+  double radius = 1e-9 * surface.scene_radius();
+  for (const Vec3& p : points) radius = std::max(radius, (p - b.center()).norm());
   c.target = b.center();
   c.distance = 1.08 * radius / std::sin(0.5 * c.fov_deg * M_PI / 180);
   return c;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -287,6 +288,9 @@ GlView::GlView() {
 }
 
 GlView::~GlView() {
+  glDeleteFramebuffers(1, &scene_fbo_);
+  const GLuint renderbuffers[] = {scene_color_, scene_depth_};
+  glDeleteRenderbuffers(2, renderbuffers);
   glDeleteTextures(1, &image_texture_);
   const GLuint arrays[] = {floater_vao_, mesh_vao_, image_vao_};
   glDeleteVertexArrays(3, arrays);
@@ -295,16 +299,80 @@ GlView::~GlView() {
   for (const Program* p : {&disks_, &points_, &mesh_, &image_}) glDeleteProgram(p->id);
 }
 
+std::vector<double> GlView::scene_key(const ViewerState& state, int width, int height) const {
+  // Everything the picture depends on. The frames are compared by address; the GL view holds
+  // the uploaded ones, so an address cannot be reused while it is in the key.
+  std::vector<double> key = {static_cast<double>(state.mode()), static_cast<double>(width),
+                             static_cast<double>(height)};
+  const void* frame = state.mode() == Mode::kRaytrace  ? static_cast<const void*>(state.preview().get())
+                      : state.mode() == Mode::kFloaters ? static_cast<const void*>(state.floaters().get())
+                                                        : static_cast<const void*>(state.mesh().get());
+  key.push_back(static_cast<double>(reinterpret_cast<std::uintptr_t>(frame)));
+  const Camera& c = state.camera();
+  key.insert(key.end(), {c.azimuth_deg, c.elevation_deg, c.distance, c.fov_deg, c.target.x(),
+                         c.target.y(), c.target.z(), state.surface().scene_radius()});
+  const DisplaySettings& d = state.display();
+  key.insert(key.end(), {static_cast<double>(d.draw_points), d.disk_scale, d.point_size_px,
+                         static_cast<double>(d.wireframe)});
+  const RenderOptions& look = state.look();
+  for (const Material* m : {&look.front, &look.back})
+    key.insert(key.end(), {m->diffuse.x(), m->diffuse.y(), m->diffuse.z(), m->ambient,
+                           m->specular, m->shininess});
+  key.insert(key.end(), {look.background.x(), look.background.y(), look.background.z()});
+  for (const Light& l : look.lights)
+    key.insert(key.end(), {l.direction.x(), l.direction.y(), l.direction.z(), l.color.x(),
+                           l.color.y(), l.color.z(), static_cast<double>(l.follows_camera)});
+  return key;
+}
+
 void GlView::draw(const ViewerState& state, int x, int y, int width, int height) {
+  if (width < 1 || height < 1) return;
+  // The scene is drawn into an offscreen buffer only when it changed; other frames (the
+  // panel reacting to the mouse) copy it, which with software OpenGL costs far less than
+  // drawing ten thousand disks again.
+  std::vector<double> key = scene_key(state, width, height);
+  if (key != scene_key_) {
+    if (width != scene_w_ || height != scene_h_) resize_scene_buffer(width, height);
+    glBindFramebuffer(GL_FRAMEBUFFER, scene_fbo_);
+    draw_scene(state, width, height);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    scene_key_ = std::move(key);
+  }
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, scene_fbo_);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
+  glBlitFramebuffer(0, 0, width, height, x, y, x + width, y + height, GL_COLOR_BUFFER_BIT,
+                    GL_NEAREST);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+void GlView::resize_scene_buffer(int width, int height) {
+  if (scene_fbo_ == 0) {
+    glGenFramebuffers(1, &scene_fbo_);
+    glGenRenderbuffers(1, &scene_color_);
+    glGenRenderbuffers(1, &scene_depth_);
+  }
+  glBindRenderbuffer(GL_RENDERBUFFER, scene_color_);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, width, height);
+  glBindRenderbuffer(GL_RENDERBUFFER, scene_depth_);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, width, height);
+  glBindRenderbuffer(GL_RENDERBUFFER, 0);
+  glBindFramebuffer(GL_FRAMEBUFFER, scene_fbo_);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, scene_color_);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, scene_depth_);
+  const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  if (status != GL_FRAMEBUFFER_COMPLETE)
+    throw Error(fmt::format("OpenGL: the offscreen buffer of {}x{} is incomplete (status {:#x})",
+                            width, height, status));
+  scene_w_ = width;
+  scene_h_ = height;
+}
+
+void GlView::draw_scene(const ViewerState& state, int width, int height) {
   const Color& bg = state.look().background;
-  glViewport(x, y, width, height);
-  glEnable(GL_SCISSOR_TEST);
-  glScissor(x, y, width, height);
+  glViewport(0, 0, width, height);
   glClearColor(encode_gamma(bg.x()), encode_gamma(bg.y()), encode_gamma(bg.z()), 1.0f);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  glDisable(GL_SCISSOR_TEST);
-  if (width < 1 || height < 1) return;
-
   if (state.mode() == Mode::kRaytrace) {
     draw_preview(state);
     return;
@@ -318,7 +386,7 @@ void GlView::draw(const ViewerState& state, int x, int y, int width, int height)
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   if (state.mode() == Mode::kFloaters)
-    draw_floaters(state, view_m, proj_m, Eigen::Vector4f(x, y, width, height));
+    draw_floaters(state, view_m, proj_m, Eigen::Vector4f(0, 0, width, height));
   else
     draw_mesh(state, view_m, proj_m);
   glDisable(GL_DEPTH_TEST);

@@ -6,6 +6,7 @@
 #include <epoxy/gl.h>
 
 #include <memory>
+#include <vector>
 
 #include "viewer_state.h"
 
@@ -22,8 +23,9 @@ class GlView {
   GlView(const GlView&) = delete;
   GlView& operator=(const GlView&) = delete;
 
-  /// Draws the state's mode into the framebuffer rectangle (x, y, width, height) (pixels,
-  /// origin bottom-left), after clearing it with the background.
+  /// Draws the state's mode into the rectangle (x, y, width, height) of the default
+  /// framebuffer (pixels, origin bottom-left). The scene is drawn offscreen when it changed
+  /// and copied into place. Throws Error when the offscreen buffer cannot be made.
   void draw(const ViewerState& state, int x, int y, int width, int height);
 
  private:
@@ -35,6 +37,9 @@ class GlView {
     GLint image = -1;
   };
 
+  std::vector<double> scene_key(const ViewerState& state, int width, int height) const;
+  void resize_scene_buffer(int width, int height);
+  void draw_scene(const ViewerState& state, int width, int height);
   void draw_preview(const ViewerState& state);
   void draw_floaters(const ViewerState& state, const Eigen::Matrix4f& view,
                      const Eigen::Matrix4f& proj, const Eigen::Vector4f& viewport);
@@ -58,6 +63,10 @@ class GlView {
 
   GLuint image_vao_ = 0, image_texture_ = 0;
   std::shared_ptr<const PreviewFrame> uploaded_preview_;
+
+  GLuint scene_fbo_ = 0, scene_color_ = 0, scene_depth_ = 0;  // the scene, drawn offscreen
+  int scene_w_ = 0, scene_h_ = 0;
+  std::vector<double> scene_key_;  // what the offscreen picture shows
 };
 
 }  // namespace zeroset::viewer

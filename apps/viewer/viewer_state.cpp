@@ -116,6 +116,26 @@ Color setting_color(const json& j, const std::string& origin, const std::string&
 
 json color_json(const Color& c) { return json::array({c.x(), c.y(), c.z()}); }
 
+// One range per parameter, in the field's order (sliders and the animation index them so),
+// each containing the parameter's value.
+void match_ranges_to_field(Surface& s) {
+  std::vector<ParamSpec> ranges;
+  const auto& names = s.field.parameter_names();
+  const auto& values = s.field.parameter_values();
+  for (size_t i = 0; i < names.size(); ++i) {
+    auto it = std::find_if(s.ranges.begin(), s.ranges.end(),
+                           [&](const ParamSpec& r) { return r.name == names[i]; });
+    ParamSpec r = it != s.ranges.end() && it->min < it->max
+                      ? *it
+                      : ParamSpec{names[i], values[i], values[i] - 1, values[i] + 1};
+    r.value = values[i];
+    r.min = std::min(r.min, r.value);
+    r.max = std::max(r.max, r.value);
+    ranges.push_back(r);
+  }
+  s.ranges = std::move(ranges);
+}
+
 // Measures the simulation rate over windows of about half a second.
 class RateMeter {
  public:
@@ -182,6 +202,7 @@ ViewerState::ViewerState(Scene scene, std::optional<Mode> mode, int threads,
 ViewerState::~ViewerState() = default;
 
 void ViewerState::open_scene(Scene scene, const std::string& origin) {
+  scene.surface.field.require_parameters();
   // Settings first: a malformed scene must leave the current state untouched.
   const Animation animation = animation_;
   const FloaterOptions floater_options = floater_options_;
@@ -202,6 +223,7 @@ void ViewerState::open_scene(Scene scene, const std::string& origin) {
   }
   extra_settings_ = scene.settings.is_object() ? scene.settings : json::object();
   surface_ = std::move(scene.surface);
+  match_ranges_to_field(surface_);
   ensure_bounded_clip();
   surface_.camera = with_explicit_distance(surface_.camera, surface_.scene_radius());
   home_camera_ = surface_.camera;
@@ -307,9 +329,7 @@ bool ViewerState::select_catalog(std::string_view name) {
 
 bool ViewerState::load_scene(const std::string& path) {
   return guard("load", [&] {
-    Scene scene = read_scene(path);
-    scene.surface.field.require_parameters();
-    open_scene(std::move(scene), path);
+    open_scene(read_scene(path), path);
     set_status(fmt::format("loaded {}", path));
   });
 }
@@ -401,6 +421,10 @@ bool ViewerState::play(std::string_view parameter) {
       throw InvalidArgument(fmt::format("the surface has no parameter '{}'", name));
     animation_.parameter = name;
     animation_.is_playing = true;
+    // Without loop a finished animation stopped at an end: play it back the other way.
+    const ParamSpec& r = surface_.ranges[surface_.field.parameter_index(name)];
+    if ((animation_.direction > 0 && r.value >= r.max) || (animation_.direction < 0 && r.value <= r.min))
+      animation_.direction = -animation_.direction;
   });
 }
 
@@ -764,8 +788,11 @@ bool ViewerState::save_pov(const std::string& path) {
 bool ViewerState::update(double now_s) {
   const double dt = last_update_s_ < 0 ? 0 : std::clamp(now_s - last_update_s_, 0.0, 0.1);
   last_update_s_ = now_s;
-  bool is_new = animation_.is_playing;  // the parameter moves (or the animation just ended)
+  // A moving parameter shows through the results it leads to (new pictures, floaters that
+  // follow it); only the end of an animation is news in itself.
+  const bool was_playing = animation_.is_playing;
   advance_animation(dt);
+  bool is_new = was_playing != animation_.is_playing;
   floater_control_->is_animating = animation_.is_playing;
   is_new |= collect_results(now_s);
   if (auto error = worker_.take_error()) {

@@ -129,6 +129,7 @@ class ViewerState {
   /// malformed. An unbounded clip is replaced by a sphere (with a status line saying so).
   /// `threads` for the background work, 0: all cores for the ray caster and marching cubes,
   /// half of them for the floater simulation. `origin` names the scene in messages (its file).
+  /// Throws InvalidArgument when a parameter has no value.
   ViewerState(Scene scene, std::optional<Mode> mode, int threads = 0,
               const std::string& origin = "scene");
   ~ViewerState();

@@ -557,10 +557,10 @@ struct FloaterSystem::Impl {
     const std::size_t n = size();
     double largest = 0;
     for (double s : sigma) largest = std::max(largest, s);
-    hash.build(pos, box, 1.5 * largest);
+    hash.build(pos, box, 3 * largest);
     if (step_count % kResortInterval == 0) {
       permute_state(hash.order());
-      hash.build(pos, box, 1.5 * largest);
+      hash.build(pos, box, 3 * largest);
     }
     for (auto* v : {&px, &py, &pz, &ps, &pcut, &pm, &nx, &ny, &nz}) v->resize(n);
     pid.resize(n);

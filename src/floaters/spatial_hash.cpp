@@ -43,30 +43,33 @@ void SpatialHash::build(std::span<const Vec3> points, const Box3& box, double ce
   keys_.resize(points.size());
   order_.resize(points.size());
   start_.assign(buckets + 1, 0);
-  std::vector<std::uint64_t> key_in(points.size());
-  std::vector<std::uint32_t> bucket_in(points.size());
+  key_in_.resize(points.size());
+  bucket_in_.resize(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
     const auto c = cell_of(points[i]);
-    key_in[i] = pack(c[0], c[1], c[2]);
-    bucket_in[i] = static_cast<std::uint32_t>(bucket_index(key_in[i]));
-    ++start_[bucket_in[i] + 1];
+    key_in_[i] = pack(c[0], c[1], c[2]);
+    bucket_in_[i] = static_cast<std::uint32_t>(bucket_index(key_in_[i]));
+    ++start_[bucket_in_[i] + 1];
   }
   for (std::size_t b = 0; b < buckets; ++b) start_[b + 1] += start_[b];
-  std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
+  // Place with start_[b] as bucket b's cursor; it ends at the start of bucket b + 1, so one
+  // shift restores the starts.
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const std::uint32_t slot = fill[bucket_in[i]]++;
+    const std::uint32_t slot = start_[bucket_in_[i]]++;
     order_[slot] = static_cast<std::uint32_t>(i);
-    keys_[slot] = key_in[i];
+    keys_[slot] = key_in_[i];
   }
+  std::copy_backward(start_.begin(), start_.end() - 1, start_.end());
+  start_[0] = 0;
   // A hashed bucket may mix cells: order its slots by key (stably, so equal cells keep input
-  // order) to make every cell one run of slots.
-  runs_.clear();
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> mixed;
-  for (std::size_t b = 0; b < buckets; ++b) {
-    const std::uint32_t first = start_[b], last = start_[b + 1];
-    if (first == last) continue;
-    if (!dense_ && std::any_of(keys_.begin() + first, keys_.begin() + last,
-                               [&](std::uint64_t k) { return k != keys_[first]; })) {
+  // order) to make every cell one run of slots. A dense grid has one cell per bucket already.
+  if (!dense_) {
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> mixed;
+    for (std::size_t b = 0; b < buckets; ++b) {
+      const std::uint32_t first = start_[b], last = start_[b + 1];
+      if (last - first < 2 || std::all_of(keys_.begin() + first, keys_.begin() + last,
+                                          [&](std::uint64_t k) { return k == keys_[first]; }))
+        continue;
       mixed.clear();
       for (std::uint32_t s = first; s < last; ++s) mixed.emplace_back(keys_[s], order_[s]);
       std::stable_sort(mixed.begin(), mixed.end(),
@@ -76,12 +79,14 @@ void SpatialHash::build(std::span<const Vec3> points, const Box3& box, double ce
         order_[s] = mixed[s - first].second;
       }
     }
-    for (std::uint32_t s = first; s < last;) {
-      std::uint32_t e = s + 1;
-      while (e < last && keys_[e] == keys_[s]) ++e;
-      runs_.push_back({keys_[s], s, e});
-      s = e;
-    }
+  }
+  runs_.clear();
+  const auto slots = static_cast<std::uint32_t>(keys_.size());
+  for (std::uint32_t s = 0; s < slots;) {
+    std::uint32_t e = s + 1;
+    while (e < slots && keys_[e] == keys_[s]) ++e;
+    runs_.push_back({keys_[s], s, e});
+    s = e;
   }
 }
 
@@ -117,14 +122,14 @@ std::uint64_t SpatialHash::bucket_index(std::uint64_t key) const {
 int SpatialHash::block_ranges(std::uint64_t key,
                               std::span<std::pair<std::uint32_t, std::uint32_t>> out) const {
   const auto [x, y, z] = unpack(key);
-  const std::int64_t x0 = std::max<std::int64_t>(0, x - 2);
-  const std::int64_t x1 = std::min(dims_[0] - 1, x + 2);
+  const std::int64_t x0 = std::max<std::int64_t>(0, x - 1);
+  const std::int64_t x1 = std::min(dims_[0] - 1, x + 1);
   int count = 0;
   auto add = [&](std::pair<std::uint32_t, std::uint32_t> r) {
     if (r.first < r.second) out[count++] = r;
   };
-  for (std::int64_t cz = std::max<std::int64_t>(0, z - 2); cz <= std::min(dims_[2] - 1, z + 2); ++cz)
-    for (std::int64_t cy = std::max<std::int64_t>(0, y - 2); cy <= std::min(dims_[1] - 1, y + 2);
+  for (std::int64_t cz = std::max<std::int64_t>(0, z - 1); cz <= std::min(dims_[2] - 1, z + 1); ++cz)
+    for (std::int64_t cy = std::max<std::int64_t>(0, y - 1); cy <= std::min(dims_[1] - 1, y + 1);
          ++cy) {
       if (dense_) {
         // A row of cells is a run of consecutive buckets, hence of consecutive slots.

@@ -36,7 +36,7 @@ class SpatialHash {
   std::span<const Run> runs() const { return runs_; }
 
   /// Most slot ranges block_ranges() writes.
-  static constexpr int kMaxBlockRanges = 125;
+  static constexpr int kMaxBlockRanges = 27;
   /// Slot ranges holding the points of the 3×3×3 cells around cell `key`: one range per row
   /// of three cells in a dense grid (their buckets are consecutive), one per cell in a hashed
   /// one. Returns how many were written to `out` (kMaxBlockRanges long); empty ranges are
@@ -87,6 +87,8 @@ class SpatialHash {
   std::vector<std::uint32_t> order_;  // slot -> input index
   std::vector<std::uint64_t> keys_;   // slot -> cell key
   std::vector<Run> runs_;
+  std::vector<std::uint64_t> key_in_;     // build() scratch, kept to avoid reallocation
+  std::vector<std::uint32_t> bucket_in_;
 };
 
 }  // namespace zeroset::detail

@@ -3,6 +3,27 @@
 #include <algorithm>
 #include <cmath>
 
+#include <zlib.h>
+
+#include <cstdlib>
+
+namespace {
+// stb's own deflate is slow and compresses poorly; zlib at a fast level is several times
+// quicker for the same or smaller files. stb frees the result with free().
+unsigned char* zlib_compress(unsigned char* data, int size, int* out_size, int /*quality*/) {
+  uLongf bound = compressBound(static_cast<uLong>(size));
+  auto* out = static_cast<unsigned char*>(std::malloc(bound));
+  if (!out) return nullptr;
+  if (compress2(out, &bound, data, static_cast<uLong>(size), 1) != Z_OK) {
+    std::free(out);
+    return nullptr;
+  }
+  *out_size = static_cast<int>(bound);
+  return out;
+}
+}  // namespace
+
+#define STBIW_ZLIB_COMPRESS zlib_compress
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #define STB_IMAGE_IMPLEMENTATION
 #define STBI_ONLY_PNG
@@ -24,6 +45,7 @@ void Image::set_linear(int x, int y, const Color& c) {
 
 void write_png(const Image& image, const std::string& path) {
   if (image.width <= 0 || image.height <= 0) throw IoError(path, "image is empty");
+  stbi_write_force_png_filter = 2;  // "up" filter: nearly as small as adaptive, much faster
   write_file_atomically(path, [&](std::ostream& out) {
     auto sink = [](void* ctx, void* data, int size) {
       static_cast<std::ostream*>(ctx)->write(static_cast<const char*>(data), size);

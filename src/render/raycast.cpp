@@ -78,17 +78,15 @@ void restrict_fixed(const double* c, const double* d, double* coeffs) {
   }(std::make_index_sequence<D + 1>{});
 }
 
-/// g[a] = Σ_m c[a][m] p^m over the monomials of degree ≤ D (the partial derivatives of a
-/// polynomial of degree D + 1), unrolled.
-template <int D>
-void gradient_fixed(const std::array<std::vector<double>, 3>& c, const double* p, double* g) {
-  constexpr int kCount = FixedMonomials<D>::kCount;
-  double mono[kCount];
-  monomials_fixed<D>(p, mono);
+/// A sparse partial derivative: (monomial position, coefficient) of its nonzero terms.
+using SparseTerms = std::vector<std::pair<int, double>>;
+
+/// g[a] = Σ c · mono[position] over the terms of partial derivative a.
+inline void sparse_gradient(const std::array<SparseTerms, 3>& terms, const double* mono,
+                            double* g) {
   for (int a = 0; a < 3; ++a) {
-    const double* ca = c[static_cast<size_t>(a)].data();
     double sum = 0;
-    for (int m = 0; m < kCount; ++m) sum += ca[m] * mono[m];
+    for (const auto& [m, c] : terms[static_cast<size_t>(a)]) sum += c * mono[m];
     g[a] = sum;
   }
 }
@@ -193,11 +191,11 @@ struct SurfaceRayCaster::Impl {
   // Polynomial path. ∂F/∂x, ∂F/∂y, ∂F/∂z from F's own terms (well conditioned near the
   // surface, unlike the translated form), dense over the monomials of degree < degree.
   MonomialTable derivative_monomials{0};
-  std::array<std::vector<double>, 3> derivative;
+  std::array<SparseTerms, 3> derivative;  // positions in derivative_monomials
   std::vector<double> gradient_bound;  // [k]: Σ |coefficient| over degree k of all three
   MonomialTable monomials{0};
   std::vector<double> translated;  // G(p) = F(eye + p): coefficient of each monomial
-  std::vector<double> powers;      // scratch: the monomials of the current direction
+  std::vector<double> powers;      // scratch: monomials of a direction or of a hit point
   RootFinder finder;
   std::array<double, kN> coeffs{};
   // bounds[k]·max|d_i|^k ≥ |G_k(d)| for every direction d, and ≥ the rounding error scale
@@ -222,10 +220,11 @@ struct SurfaceRayCaster::Impl {
       degree = std::max(poly.degree(), 0);
       const Polynomial g = poly.translated(eye);
       derivative_monomials = MonomialTable(std::max(degree - 1, 0));
-      for (auto& d : derivative) d.assign(derivative_monomials.size(), 0.0);
+      gradient_bound.assign(static_cast<size_t>(derivative_monomials.D + 1), 0.0);
+      // Polynomial's terms are unique, so each derivative gets each monomial at most once.
       auto add_derivative = [&](int axis, int i, int j, int k, double c) {
-        derivative[static_cast<size_t>(axis)]
-                  [static_cast<size_t>(derivative_monomials.at(i, j, k))] += c;
+        derivative[static_cast<size_t>(axis)].emplace_back(derivative_monomials.at(i, j, k), c);
+        gradient_bound[static_cast<size_t>(i + j + k)] += std::abs(c);
       };
       std::vector<Monomial> abs_terms;
       for (const Monomial& m : poly.terms()) {
@@ -234,11 +233,6 @@ struct SurfaceRayCaster::Impl {
         if (m.j > 0) add_derivative(1, m.i, m.j - 1, m.k, m.j * m.c);
         if (m.k > 0) add_derivative(2, m.i, m.j, m.k - 1, m.k * m.c);
       }
-      gradient_bound.assign(derivative_monomials.D + 1, 0.0);
-      for (const auto& d : derivative)
-        for (int k = 0, m = 0; k <= derivative_monomials.D; ++k)
-          for (; m < static_cast<int>(derivative_monomials.degree_end[static_cast<size_t>(k)]); ++m)
-            gradient_bound[static_cast<size_t>(k)] += std::abs(d[static_cast<size_t>(m)]);
       const Polynomial gb = Polynomial(abs_terms).translated(eye.cwiseAbs());
       monomials = MonomialTable(degree);
       translated.assign(monomials.size(), 0.0);
@@ -354,25 +348,9 @@ struct SurfaceRayCaster::Impl {
   /// ∇F at p from F's own terms (well conditioned near the surface, unlike the translated
   /// form). Returns a bound on the magnitude of its terms: Σ_k gradient_bound[k] max|p_i|^k.
   double gradient(const Vec3& p, Vec3& g) {
-    const double x[3] = {p.x(), p.y(), p.z()};
-    switch (degree) {
-      case 2: gradient_fixed<1>(derivative, x, g.data()); break;
-      case 3: gradient_fixed<2>(derivative, x, g.data()); break;
-      case 4: gradient_fixed<3>(derivative, x, g.data()); break;
-      case 5: gradient_fixed<4>(derivative, x, g.data()); break;
-      case 6: gradient_fixed<5>(derivative, x, g.data()); break;
-      default: {
-        double* mono = powers.data();
-        derivative_monomials.evaluate(p, mono);
-        const size_t n = derivative_monomials.size();
-        for (int a = 0; a < 3; ++a) {
-          const double* c = derivative[static_cast<size_t>(a)].data();
-          double sum = 0;
-          for (size_t m = 0; m < n; ++m) sum += c[m] * mono[m];
-          g[a] = sum;
-        }
-      }
-    }
+    double* mono = powers.data();
+    derivative_monomials.evaluate(p, mono);
+    sparse_gradient(derivative, mono, g.data());
     return evaluate_polynomial(gradient_bound, p.cwiseAbs().maxCoeff());
   }
 

@@ -132,7 +132,7 @@ std::vector<CatalogEntry> build_catalog() {
       "(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + y^2)",
       "Major radius R around the z axis, tube radius r; smooth and closed for r < R.",
       {{"R", 1.0, 0.2, 2.0}, {"r", 0.4, 0.05, 1.0}},
-      Clip::sphere(3.2),
+      Clip::sphere(1.6),
       cam(30, 35),
       {},
   });

@@ -58,7 +58,7 @@ class ReferenceCaster {
       }
       // A local minimum of |f| at the previous sample: how close does it come to zero?
       if (prev_prev_abs >= 0 && std::abs(prev) <= prev_prev_abs && std::abs(prev) <= std::abs(v) &&
-          near_zero_minimum(prev_s - 2 * h / kSamples, s, o, d, tm))
+          near_zero_minimum(prev_s - 2 * h / kSamples, s))
         return {Reference::Kind::kAmbiguous, 0};
       prev_prev_abs = std::abs(prev);
       prev = v;
@@ -108,7 +108,7 @@ class ReferenceCaster {
   }
   /// Golden-section search of |f| on [a, b]; true when its minimum is below 1e-6 of the
   /// magnitude of F's terms there.
-  bool near_zero_minimum(Real a, Real b, const Vec3&, const Vec3&, Real) const {
+  bool near_zero_minimum(Real a, Real b) const {
     const Real g = (std::sqrt(5.0L) - 1) / 2;
     Real x1 = b - g * (b - a), x2 = a + g * (b - a);
     Real f1 = std::abs(eval(x1)), f2 = std::abs(eval(x2));

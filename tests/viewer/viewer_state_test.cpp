@@ -182,6 +182,10 @@ TEST(ViewerState, AnimationWithoutLoopStopsAtTheEnd) {
   for (int i = 1; i <= 100; ++i) state.update(0.05 * i);
   EXPECT_FALSE(state.animation().is_playing);
   EXPECT_EQ(state.surface().field.parameter_values()[0], 2.0);
+  // Playing again runs back.
+  ASSERT_TRUE(state.play());
+  state.update(5.05);
+  EXPECT_LT(state.surface().field.parameter_values()[0], 2.0);
 }
 
 TEST(ViewerState, RayTracedPreviewRefinesToFullResolution) {
@@ -303,6 +307,30 @@ TEST(ViewerState, SavingWithTheWrongExtensionWritesNothing) {
   EXPECT_FALSE(std::filesystem::exists(path));
   EXPECT_FALSE(state.save_floaters(temp_path("f.ply"))) << "no floaters yet";
   EXPECT_FALSE(state.save_mesh(temp_path("m.ply"))) << "no mesh yet";
+}
+
+TEST(ViewerState, RangesFollowTheFieldWhateverTheSceneSays) {
+  Scene scene;
+  scene.surface = surface_from_equation("a*x + b*y - z");
+  scene.surface.field.set_parameter("a", 1.0);
+  scene.surface.field.set_parameter("b", 7.0);
+  scene.surface.ranges = {{"b", 0.0, 0.0, 1.0}};  // out of order, incomplete, value outside
+  scene.surface.clip = Clip::sphere(1);
+  ViewerState state(scene, Mode::kRaytrace);
+  const auto& r = state.surface().ranges;
+  ASSERT_EQ(r.size(), 2u);
+  EXPECT_EQ(r[0].name, "a");
+  EXPECT_EQ(r[1].name, "b");
+  EXPECT_EQ(r[1].value, 7.0);
+  EXPECT_EQ(r[1].max, 7.0);
+  EXPECT_TRUE(state.set_parameter("b", 0.5));
+}
+
+TEST(ViewerState, AParameterWithoutValueIsBadInput) {
+  Scene scene;
+  scene.surface = surface_from_equation("x^2 + y^2 - k");
+  scene.surface.clip = Clip::sphere(1);
+  EXPECT_THROW(ViewerState(scene, Mode::kRaytrace), BadInput);
 }
 
 TEST(ViewerState, UnboundedClipIsReplacedByASphere) {

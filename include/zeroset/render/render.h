@@ -38,8 +38,8 @@ struct RenderOptions {
   std::vector<Light> lights;      ///< empty: a three-light rig that follows the camera
   Material front;                 ///< the side ∇F points to
   Material back{.diffuse = Color(0.06, 0.12, 0.35)};  ///< the other side, darker (paper's figures)
-  Color background = Color(1, 1, 1);
-  int threads = 0;                ///< 0: all cores
+  Color background = Color(1, 1, 1);  ///< linear RGB (pictures are gamma encoded, 2.2)
+  int threads = 0;                ///< 0: all cores; the picture does not depend on it
   /// Called now and then with the fraction done (from one thread at a time).
   std::function<void(double)> progress;
 };
@@ -55,20 +55,28 @@ struct RenderStats {
 };
 
 /// Ray casts the surface inside its clip. Polynomials: exact restriction to the ray and robust
-/// root isolation; other expressions: interval arithmetic along the ray. Throws BadInput when
-/// the surface has no bounded clip or the size is not positive. Returns an empty image when
-/// stopped through `stop`.
+/// root isolation; other expressions: interval arithmetic along the ray (raycast.h). Throws
+/// BadInput when the surface has no bounded clip, a parameter has no value or the size or
+/// samples are out of range. Returns an empty image when stopped through `stop`. Cost: a few
+/// tenths of a microsecond per ray for degree 4 to 6 on one core (an 800×800 picture of the
+/// Kummer surface takes about 0.1 s); tiles run on `threads` workers.
 Image render_surface(const Surface& surface, const RenderOptions& options,
                      RenderStats* stats = nullptr, std::stop_token stop = {});
 
 /// Draws a point set as shaded disks (oriented by `normals`, radius per point), as in the
-/// paper's figures 3–5. The surface gives the camera and the scene size.
+/// paper's figures 3–5; a disk seen from the side its normal points away from gets the back
+/// material. The surface gives the camera and the scene size. Empty `normals`: disks face the
+/// camera; empty `radii`: one radius that roughly covers a surface of the scene's size.
+/// Throws InvalidArgument when a non-empty span's size differs from positions'. Cost follows
+/// the disks' screen area (100,000 disks at 800×800: a few tenths of a second).
 Image render_points(const Surface& surface, std::span<const Vec3> positions,
                     std::span<const Vec3> normals, std::span<const double> radii,
                     const RenderOptions& options);
 
 /// Draws a triangle mesh, smooth-shaded with front and back materials; `wireframe` overlays
-/// the edges.
+/// the edges (about one pixel wide). Vertex normals: the mesh's, else ∇F at the vertex, else
+/// (where ∇F vanishes) the adjacent faces' normals. Throws InvalidArgument for a vertex index
+/// out of range.
 Image render_mesh(const Surface& surface, const Mesh& mesh, const RenderOptions& options,
                   bool wireframe = false);
 
