@@ -38,11 +38,12 @@ def run(binary, threads, repeat, min_time):
         subprocess.run([str(binary), f"--benchmark_repetitions={repeat}",
                         f"--benchmark_min_time={min_time}", "--benchmark_report_aggregates_only=true",
                         f"--benchmark_out={out.name}", "--benchmark_out_format=json"],
-                       env=env, check=True, stdout=subprocess.DEVNULL)
+                       env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         data = json.load(open(out.name))
     results = {}
     for b in data["benchmarks"]:
-        if b.get("aggregate_name") != "median":
+        # One repetition reports plain runs; several report aggregates, of which the median.
+        if b.get("run_type") == "aggregate" and b.get("aggregate_name") != "median":
             continue
         mode, size = b["run_name"].split("/")[:2]
         results[(mode, int(size))] = {

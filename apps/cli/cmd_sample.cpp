@@ -52,7 +52,8 @@ struct SampleArgs {
   CLI::Option* steps_opt = nullptr;
 };
 
-// Settings from a scene file's "floaters" object; command-line flags given explicitly win.
+// Settings from a scene file's "floaters" object (keys named as the FloaterOptions fields);
+// command-line flags given explicitly win.
 FloaterOptions options_from(const SampleArgs& a, const Scene& scene) {
   FloaterOptions o;
   if (scene.settings.contains("floaters")) {
@@ -62,7 +63,7 @@ FloaterOptions options_from(const SampleArgs& a, const Scene& scene) {
       try {
         j.at(key).get_to(field);
       } catch (const nlohmann::json::exception&) {
-        throw BadInput(fmt::format("scene: floaters.{} has the wrong type", key));
+        throw BadInput(fmt::format("'{}': /floaters/{} has the wrong type", a.surface.spec, key));
       }
     };
     get("radius", o.radius);
@@ -74,9 +75,9 @@ FloaterOptions options_from(const SampleArgs& a, const Scene& scene) {
     get("snap_to_nodes", o.snap_to_nodes);
     get("scaled_repulsion", o.scaled_repulsion);
     get("radius_grading", o.radius_grading);
-    if (j.contains("radius_adapt") && j["radius_adapt"].is_string())
-      o.radius_adapt = parse_radius_adapt(j["radius_adapt"].get<std::string>(),
-                                          "scene floaters.radius_adapt");
+    std::string adapt(to_string(o.radius_adapt));
+    get("radius_adapt", adapt);
+    o.radius_adapt = parse_radius_adapt(adapt, "'" + a.surface.spec + "': /floaters/radius_adapt");
   }
   if (a.radius_opt->count()) o.radius = a.radius;
   if (a.max_count_opt->count()) o.max_count = a.max_count;

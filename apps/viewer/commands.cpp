@@ -28,7 +28,7 @@ const std::vector<CommandInfo>& command_table() {
       {"speed", 1, 1, "speed RANGES_PER_SECOND", "animation speed (0.1: one sweep in 10 s)"},
       {"floaters", 1, -1, "floaters KEY=VALUE... | floaters reset",
        "max_count, radius (σ̂, 0 auto), cos_weight, radius_adapt (wh|curvature|singular|mixed), "
-       "clip_projection, seed"},
+       "clip_projection, snap_to_nodes, seed"},
       {"mesh", 1, -1, "mesh KEY=VALUE...", "cells, improve (on|off), max_steps"},
       {"draw", 1, 1, "draw disks|points", "how floaters are drawn"},
       {"disk-scale", 1, 1, "disk-scale S", "disk radius as a multiple of the floater radius"},

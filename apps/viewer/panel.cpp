@@ -160,6 +160,9 @@ void floaters_settings(ViewerState& state) {
   changed |= ImGui::Checkbox("Cosine weighting", &o.cos_weight);
   help_marker("Weight repulsion by |cos| of the angle between normals, so sheets crossing at a "
               "self-intersection pass through each other (paper 3.3).");
+  changed |= ImGui::Checkbox("Snap to nodes", &o.snap_to_nodes);
+  help_marker("A floater that comes near a node (an isolated singular point) moves onto it and "
+              "stays there, following it while parameters move.");
   changed |= ImGui::Checkbox("Clip projection", &o.clip_projection);
   help_marker("Floaters leaving the clip volume are projected back onto its boundary "
               "(paper 3.2); off: they are removed.");

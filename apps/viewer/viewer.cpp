@@ -9,6 +9,8 @@
 #include <fmt/core.h>
 #include <imgui.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -182,6 +184,24 @@ class Host : public ScriptHost {
   bool quiet_;
 };
 
+// The typical time a frame takes to draw: the median of the last few, so that a slow first
+// frame (software OpenGL compiles its shaders then) or a hiccup does not count.
+class DrawTimes {
+ public:
+  double add(double seconds) {
+    recent_[next_++ % recent_.size()] = seconds;
+    const size_t n = std::min(next_, recent_.size());
+    std::array<double, kCount> sorted = recent_;
+    std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.begin() + n);
+    return sorted[n / 2];
+  }
+
+ private:
+  static constexpr size_t kCount = 15;
+  std::array<double, kCount> recent_{};
+  size_t next_ = 0;
+};
+
 // Mouse and keys for the 3D view, when ImGui does not want them.
 class Input {
  public:
@@ -280,12 +300,13 @@ int run_viewer(const ViewerOptions& options) {
   long long frames_drawn = 0;
   const double start_s = now_seconds();
 
-  // Frames are drawn when something changed (input, new results, the animation) or a script
-  // needs them, at most kMaxFramesPerSecond a second: with software OpenGL every frame drawn
-  // is CPU time the simulation and the ray caster do not get.
+  // Frames are drawn when something changed (input, new results, the end of an animation) or
+  // a script needs them, at most kMaxFramesPerSecond a second: with software OpenGL every frame
+  // drawn is CPU time the simulation and the ray caster do not get. No exception leaves the
+  // loop: actions are guarded inside ViewerState, and input and drawing here.
   int frames_after_input = kFramesAfterInput;
   double last_draw_s = -1;
-  double draw_seconds = 0;  // smoothed wall time of drawing a frame (swap included)
+  DrawTimes draw_times;
   while (!glfwWindowShouldClose(window.get())) {
     const double frame_start = now_seconds();
     glfwPollEvents();
@@ -314,14 +335,14 @@ int run_viewer(const ViewerOptions& options) {
     ImGui_ImplOpenGL3_NewFrame();
     ImGui_ImplGlfw_NewFrame();
     ImGui::NewFrame();
-    input.handle(state, panel, show_ui, window.get());
+    state.guard("input", [&] { input.handle(state, panel, show_ui, window.get()); });
     if (show_ui) draw_panel(state, panel, static_cast<float>(win_h));
     ImGui::Render();
 
     glViewport(0, 0, fb_w, fb_h);
     glClearColor(0.1f, 0.1f, 0.12f, 1.0f);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    gl_view.draw(state, panel_px, 0, view_w, fb_h);
+    state.guard("draw", [&] { gl_view.draw(state, panel_px, 0, view_w, fb_h); });
     if (show_ui) ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
     ++frames_drawn;
     last_draw_s = frame_start;
@@ -361,7 +382,7 @@ int run_viewer(const ViewerOptions& options) {
     // The swap waits for software OpenGL to finish the frame: it is part of the drawing's
     // cost (screenshots and script commands in between are not).
     took += now_seconds() - swap_start;
-    draw_seconds = draw_seconds == 0 ? took : 0.9 * draw_seconds + 0.1 * took;
+    const double draw_seconds = draw_times.add(took);
     state.frame_drawn(frame_start, draw_seconds);
     state.set_live_frame_interval(draw_seconds / kMaxDrawShare);
 

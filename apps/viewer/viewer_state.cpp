@@ -624,9 +624,17 @@ void ViewerState::apply_settings(const json& settings, const std::string& origin
         bad_setting(origin, "/floaters/seed", "expected a whole number ≥ 0");
       o.seed = static_cast<std::uint64_t>(s);
     }
-    if (f.contains("cos_weight")) o.cos_weight = setting_bool(f["cos_weight"], origin, "/floaters/cos_weight");
-    if (f.contains("clip_projection"))
-      o.clip_projection = setting_bool(f["clip_projection"], origin, "/floaters/clip_projection");
+    auto flag = [&](const char* key, bool& field) {
+      if (f.contains(key)) field = setting_bool(f[key], origin, std::string("/floaters/") + key);
+    };
+    flag("cos_weight", o.cos_weight);
+    flag("clip_projection", o.clip_projection);
+    flag("snap_to_nodes", o.snap_to_nodes);
+    flag("scaled_repulsion", o.scaled_repulsion);
+    if (f.contains("radius_grading")) {
+      o.radius_grading = setting_number(f["radius_grading"], origin, "/floaters/radius_grading");
+      if (o.radius_grading < 0) bad_setting(origin, "/floaters/radius_grading", "must be ≥ 0");
+    }
     if (f.contains("radius_adapt")) {
       try {
         o.radius_adapt = parse_radius_adapt(
@@ -712,6 +720,9 @@ json ViewerState::settings() const {
   f["seed"] = floater_options_.seed;
   f["cos_weight"] = floater_options_.cos_weight;
   f["clip_projection"] = floater_options_.clip_projection;
+  f["snap_to_nodes"] = floater_options_.snap_to_nodes;
+  f["scaled_repulsion"] = floater_options_.scaled_repulsion;
+  f["radius_grading"] = floater_options_.radius_grading;
   f["radius_adapt"] = std::string(zeroset::to_string(floater_options_.radius_adapt));
   json& m = s["mesh"];
   if (!m.is_object()) m = json::object();
@@ -1149,12 +1160,14 @@ void ViewerState::command_unguarded(const CommandLine& c) {
         o.cos_weight = parse_on_off(value, key);
       else if (key == "clip_projection")
         o.clip_projection = parse_on_off(value, key);
+      else if (key == "snap_to_nodes")
+        o.snap_to_nodes = parse_on_off(value, key);
       else if (key == "radius_adapt")
         o.radius_adapt = parse_radius_adapt(value, key);
       else
         throw InvalidArgument(fmt::format(
             "floaters: unknown key '{}' (max_count, radius, seed, cos_weight, clip_projection, "
-            "radius_adapt)", key));
+            "snap_to_nodes, radius_adapt)", key));
     }
     require(set_floater_options(o));
   } else if (n == "mesh") {

@@ -121,7 +121,8 @@ struct ViewerStats {
 /// only communicate through mailboxes and a control block. Every action goes through guard():
 /// an exception becomes an error status line and the action returns false, so no exception
 /// crosses the frame loop; on failure the previous state stays (in particular the last good
-/// surface stays on screen).
+/// surface stays on screen). A job's error comes back with the next update() as an error
+/// status line, and the last good picture stays.
 class ViewerState {
  public:
   /// Opens `scene` in `mode` (nullopt: the scene's saved mode, else ray tracing). Applies the
@@ -146,8 +147,9 @@ class ViewerState {
 
   // ---- surface -------------------------------------------------------------------------------
   /// Parses `text`; on error the diagnostics (with caret) go to equation_error() and the
-  /// current surface stays (equation_text() is `text` either way). Parameters keep their values and ranges by name; new ones start
-  /// at 1 with range [0, 2]. The clip and camera stay.
+  /// current surface stays (equation_text() is `text` either way). Parameters keep their
+  /// values and ranges by name; new ones start at 1 with range [0, 2]. The clip and camera
+  /// stay.
   bool set_equation(const std::string& text);
   /// Switches to a catalog surface with its defaults and camera.
   bool select_catalog(std::string_view name);
@@ -210,7 +212,7 @@ class ViewerState {
 
   // ---- files ---------------------------------------------------------------------------------
   bool save_scene(const std::string& path);
-  /// The current mesh (mesh mode) as PLY, OBJ or STL.
+  /// The current mesh (mesh mode) as PLY, OBJ, STL or glb, by the file's extension.
   bool save_mesh(const std::string& path);
   /// The current floaters as PLY with normals and radii.
   bool save_floaters(const std::string& path);
@@ -227,8 +229,8 @@ class ViewerState {
   // ---- frames --------------------------------------------------------------------------------
   /// Often (at least once per frame) on the UI thread: advances the animation to wall time
   /// `now_s` (seconds), restarts the mode's job when something it depends on changed, and
-  /// collects results (live ones at most 30 times a second). Returns true when there is
-  /// something new to draw.
+  /// collects results (live ones at most once per live frame interval). Returns true when
+  /// there is something new to draw.
   bool update(double now_s);
   /// Tells the state a frame was drawn at `now_s` and took `seconds` (smoothed), for stats().
   void frame_drawn(double now_s, double seconds);

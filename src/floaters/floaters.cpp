@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
-#include <deque>
 #include <cmath>
+#include <deque>
 #include <limits>
 #include <numbers>
 #include <optional>
@@ -37,9 +37,6 @@ constexpr std::size_t kChunk = 256;
 constexpr std::size_t kParallelMin = 4096;
 // Storage is re-sorted by spatial cell this often, so neighbours stay close in memory.
 constexpr std::size_t kResortInterval = 16;
-// Cells are as large as the largest reach 3σ, so a floater's neighbours lie in the 3×3×3 cells
-// around its own. (Cells thinner along x, the rows' direction, would hold fewer candidates;
-// measured on the Kummer scene, the longer rows and larger grid cost as much as they save.)
 // A floater still far from F = 0 after this many steps is a stray (it never settles).
 constexpr std::uint32_t kStrayAge = 200;
 // Snapping to nodes: a floater whose Newton step towards ∇F = 0 is shorter than this fraction
@@ -59,6 +56,7 @@ constexpr double kMaxStepScene = 0.1;
 // σ̂ chosen from the area assumes each floater covers about this many σ̂² at equilibrium
 // (hexagonal spacing between 1.25σ̂ and 1.78σ̂).
 constexpr double kAreaPerFloater = 2.0;
+// A given σ̂ is kept at least this fraction of the scene radius (below, squares underflow).
 constexpr double kMinNominal = 1e-9;
 
 int resolve_threads(int requested) {
@@ -437,6 +435,8 @@ struct FloaterSystem::Impl {
           case RadiusAdapt::kMixed: f = alpha[k] / 3 + 2 * beta[k] / 3; break;
           case RadiusAdapt::kWitkinHeckbert: break;
         }
+        // Averaged with the previous estimate: α_i comes from random perimeter points, and a
+        // σ_max^i that jumps from update to update triggers fissions and deaths for nothing.
         mu[b + k] = 0.5 * (mu[b + k] + std::clamp(f, opt.min_radius_factor, 1.0));
       }
     });
@@ -557,6 +557,9 @@ struct FloaterSystem::Impl {
     const std::size_t n = size();
     double largest = 0;
     for (double s : sigma) largest = std::max(largest, s);
+    // Cells as large as the largest reach 3σ: a floater's neighbours lie in the 3×3×3 cells
+    // around its own. (Smaller cells hold fewer candidates; measured on the Kummer scene, the
+    // extra ranges and the larger grid cost as much as they save.)
     hash.build(pos, box, 3 * largest);
     if (step_count % kResortInterval == 0) {
       permute_state(hash.order());
@@ -565,7 +568,9 @@ struct FloaterSystem::Impl {
     for (auto* v : {&px, &py, &pz, &ps, &pcut, &pm, &nx, &ny, &nz}) v->resize(n);
     pid.resize(n);
     const auto order = hash.order();
-    for (std::size_t s = 0; s < n; ++s) {
+#pragma omp parallel for schedule(static) num_threads(threads) if (n >= kParallelMin)
+    for (std::int64_t signed_slot = 0; signed_slot < static_cast<std::int64_t>(n); ++signed_slot) {
+      const auto s = static_cast<std::size_t>(signed_slot);
       const std::uint32_t i = order[s];
       px[s] = pos[i].x();
       py[s] = pos[i].y();
@@ -660,7 +665,7 @@ struct FloaterSystem::Impl {
       const double sj = ps[t], sj2 = sj * sj, cut_j = pcut[t];
       double d2 = r2[t];
       double dx = xi - px[t], dy = yi - py[t], dz = zi - pz[t];
-      if (grading > 0) limit = std::min(limit, pm[t] + grading * std::sqrt(d2));
+      if (grading > 0 && pm[t] < limit) limit = std::min(limit, pm[t] + grading * std::sqrt(d2));
       if (d2 < 1e-18 * si2) {
         // Coincident floaters feel no force along r = 0; separate them along a direction
         // both derive from their ids, with opposite signs.
@@ -684,11 +689,12 @@ struct FloaterSystem::Impl {
         if (!scaled) coef += eij;
       }
       if (scaled) {
-        const double sm = 0.5 * (si + sj), sm2 = sm * sm;
-        if (d2 < 9 * sm2)
-          coef += 2 * (si / sm) * alpha * w * std::exp(-d2 / (2 * sm2)) * (1 - d2 / (9 * sm2));
+        // One division: x = |r|²/σ_ij² with σ_ij = (σ_i + σ_j)/2.
+        const double inv_sm = 2 / (si + sj), x = d2 * inv_sm * inv_sm;
+        if (x < 9) coef += 2 * si * inv_sm * alpha * w * std::exp(-0.5 * x) * (1 - x / 9);
       } else if (d2 < cut_j) {
-        coef += (si2 / sj2) * alpha * w * std::exp(-d2 / (2 * sj2)) * (1 - d2 / cut_j);
+        const double x = d2 / sj2;
+        coef += (si2 / sj2) * alpha * w * std::exp(-0.5 * x) * (1 - x / 9);
       }
       vx += coef * dx;
       vy += coef * dy;
@@ -726,7 +732,7 @@ struct FloaterSystem::Impl {
     const double dt = opt.dt, e_hat = desired_energy();
     const double max_scene_step = kMaxStepScene * scene_radius;
     const double lo = kMinRadius * sigma_hat, hi = kMaxRadius * sigma_max();
-#pragma omp parallel for schedule(static) num_threads(threads) if (n >= kParallelMin)
+#pragma omp parallel for schedule(dynamic, 1024) num_threads(threads) if (n >= kParallelMin)
     for (std::int64_t signed_i = 0; signed_i < static_cast<std::int64_t>(n); ++signed_i) {
       const auto i = static_cast<std::size_t>(signed_i);
       const double s = sigma[i];
@@ -943,6 +949,21 @@ struct FloaterSystem::Impl {
     st.max_residual = *std::max_element(r.begin(), r.end());
   }
 
+  // The floaters stay where they are, but nothing else of the old surface carries over: ages
+  // (for stray detection), fission radii, nodes held, and the convergence history.
+  void restart_on_new_surface() {
+    for (std::size_t i = 0; i < size(); ++i) {
+      pos[i] = surface.clip.project(pos[i]);
+      sigma[i] = sigma_hat;
+      age[i] = 0;
+      pinned[i] = 0;
+      mu[i] = 1;
+      smax[i] = sigma_max();
+    }
+    recent.clear();
+    evaluate_all();
+  }
+
   void reset() {
     resize_state(0);
     next_id = 0;
@@ -1011,8 +1032,7 @@ std::span<const double> FloaterSystem::parameters() const {
 
 void FloaterSystem::set_surface(const Surface& surface) {
   impl_->adopt_surface(surface);
-  for (Vec3& p : impl_->pos) p = impl_->surface.clip.project(p);
-  impl_->evaluate_all();
+  impl_->restart_on_new_surface();
 }
 
 const Surface& FloaterSystem::surface() const { return impl_->surface; }

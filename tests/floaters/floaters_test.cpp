@@ -195,6 +195,18 @@ TEST(FloaterSystem, LoweringTheCapRemovesFloaters) {
   for (int k = 0; k < 50; ++k) EXPECT_LE(sys.step().count, 100u);
 }
 
+TEST(FloaterSystem, FollowsANewSurface) {
+  FloaterSystem sys(catalog_surface("kummer", {{"mu", 1.5}}), {.max_count = 800, .seed = 4});
+  for (int k = 0; k < 50; ++k) sys.step();
+  const Surface torus = catalog_surface("torus");
+  sys.set_surface(torus);
+  EXPECT_EQ(sys.parameters().size(), 2u);
+  settle(sys, 600);
+  expect_finite(sys);
+  EXPECT_GT(sys.size(), 100u);
+  EXPECT_LT(measure_samples(torus, sys.positions(), {.covering = false}).residual_max, 1e-4);
+}
+
 TEST(FloaterSystem, FloatersStayInsideTheClip) {
   const Surface kummer = catalog_surface("kummer", {{"mu", 1.5}});
   for (bool project : {true, false}) {

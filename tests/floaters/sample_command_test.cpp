@@ -73,6 +73,23 @@ TEST_F(SampleCommand, ExtensionsCanBeSwitchedOff) {
   EXPECT_EQ(o["radius_adapt"], "wh");
 }
 
+TEST_F(SampleCommand, ReadsFloaterSettingsFromASceneFile) {
+  {
+    std::ofstream out(path("scene.json"));
+    out << R"({"zeroset_scene": 1, "name": "kummer", "parameters": {"mu": {"value": 2.0}},
+               "floaters": {"max_count": 400, "seed": 5, "radius_adapt": "wh"}})";
+  }
+  const auto r = run("sample " + path("scene.json") + " --steps 5 --seed 6 --stats " +
+                     path("s.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(path("s.json"));
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["options"]["max_count"], 400);
+  EXPECT_EQ(j["options"]["radius_adapt"], "wh");
+  EXPECT_EQ(j["options"]["seed"], 6);  // the flag wins
+  EXPECT_DOUBLE_EQ(j["parameters"]["mu"].get<double>(), 2.0);
+}
+
 TEST_F(SampleCommand, BadInputExitsWithTwoAndWritesNothing) {
   const std::string out = " -o " + path("x.ply") + " --png " + path("x.png");
   // Each case with a piece of the message that must name the problem.
@@ -93,6 +110,14 @@ TEST_F(SampleCommand, BadInputExitsWithTwoAndWritesNothing) {
       {"sample \"x*y - 1\"" + out, "clip"},
       {"sample kummer -o " + path("no/such/dir/x.ply"), "no/such/dir"},
   };
+  {
+    std::ofstream out(path("bad.json"));
+    out << R"({"name": "kummer", "floaters": {"max_count": "many"}})";
+  }
+  const auto bad_scene = run("sample " + path("bad.json") + out);
+  EXPECT_EQ(bad_scene.exit_code, 2);
+  EXPECT_NE(bad_scene.output.find("/floaters/max_count"), std::string::npos) << bad_scene.output;
+  fs::remove(path("bad.json"));
   for (const auto& [args, expected] : cases) {
     const auto r = run(args);
     EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;

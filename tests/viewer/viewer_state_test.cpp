@@ -261,7 +261,7 @@ TEST(ViewerState, SceneRoundTripKeepsSurfaceCameraAndSettings) {
   ASSERT_TRUE(a.command("camera 40 25 11"));
   ASSERT_TRUE(a.command("clip sphere:2.5"));
   ASSERT_TRUE(a.command("mode floaters"));
-  ASSERT_TRUE(a.command("floaters max_count=1234 cos_weight=off radius_adapt=curvature"));
+  ASSERT_TRUE(a.command("floaters max_count=1234 cos_weight=off radius_adapt=curvature snap_to_nodes=off"));
   ASSERT_TRUE(a.command("mesh cells=77"));
   ASSERT_TRUE(a.command("speed 0.3"));
   ASSERT_TRUE(a.command("draw points"));
@@ -281,6 +281,7 @@ TEST(ViewerState, SceneRoundTripKeepsSurfaceCameraAndSettings) {
   EXPECT_EQ(b.floater_options().max_count, 1234u);
   EXPECT_FALSE(b.floater_options().cos_weight);
   EXPECT_EQ(b.floater_options().radius_adapt, RadiusAdapt::kCurvature);
+  EXPECT_FALSE(b.floater_options().snap_to_nodes);
   EXPECT_EQ(b.mesh_settings().cells, 77);
   EXPECT_EQ(b.animation().speed, 0.3);
   EXPECT_TRUE(b.display().draw_points);

@@ -132,7 +132,7 @@ struct StepStats {
   /// with ∇F = 0 and F ≠ 0 counts as the largest double). 0 when there are no floaters.
   double median_residual = 0;
   double max_residual = 0;
-  double rms_speed = 0;  ///< RMS of |ṗ_i|/σ_i over the floaters that moved this step
+  double rms_speed = 0;  ///< RMS over the floaters of |ṗ_i|/σ_i (radii per time unit)
   std::size_t near_equilibrium = 0;  ///< floaters with |ṗ_i| < γσ_i
   /// Over the last `converge_window` steps: population events at most converge_churn per
   /// floater per step, the count within 1% of its value a window ago, and the mean rms_speed
@@ -170,9 +170,9 @@ class FloaterSystem {
   void set_parameter(std::string_view name, double value);
   std::span<const double> parameters() const;
 
-  /// Replaces the surface (a new equation or clip), keeping the floaters; they settle on the
-  /// new surface. The nominal radius is recomputed when options().radius is 0. Throws as the
-  /// constructor does.
+  /// Replaces the surface (a new equation or clip), keeping the floaters' positions (projected
+  /// into the new clip, radii reset to σ̂); they settle on the new surface. The nominal radius
+  /// is recomputed when options().radius is 0. Throws as the constructor does.
   void set_surface(const Surface& surface);
   const Surface& surface() const;
 

@@ -1,0 +1,91 @@
+// The ImGui panel without a window: random clicks and drags all over it, in every mode, must
+// leave the viewer working (no ImGui assertion, no exception, a consistent state).
+#include <gtest/gtest.h>
+#include <imgui.h>
+
+#include <filesystem>
+#include <random>
+
+#include "panel.h"
+#include "zeroset/surface/catalog.h"
+
+namespace zeroset::viewer {
+namespace {
+
+class Gui {
+ public:
+  Gui() {
+    ImGui::CreateContext();
+    ImGuiIO& io = ImGui::GetIO();
+    io.IniFilename = nullptr;
+    io.DisplaySize = ImVec2(1000, 800);
+    unsigned char* pixels = nullptr;
+    int w = 0, h = 0;
+    io.Fonts->GetTexDataAsRGBA32(&pixels, &w, &h);  // builds the font atlas
+  }
+  ~Gui() { ImGui::DestroyContext(); }
+
+  // One frame with the mouse at (x, y), the left button down or up.
+  void frame(ViewerState& state, PanelState& panel, float x, float y, bool down) {
+    ImGuiIO& io = ImGui::GetIO();
+    io.DeltaTime = 1.0f / 60;
+    io.MousePos = ImVec2(x, y);
+    io.MouseDown[0] = down;
+    ImGui::NewFrame();
+    draw_panel(state, panel, io.DisplaySize.y);
+    ImGui::Render();
+    time_ += 1.0 / 60;
+    state.update(time_);
+  }
+
+  void click(ViewerState& state, PanelState& panel, float x, float y) {
+    frame(state, panel, x, y, false);
+    frame(state, panel, x, y, true);
+    frame(state, panel, x, y, false);
+  }
+
+  void drag(ViewerState& state, PanelState& panel, float x0, float y0, float x1, float y1) {
+    frame(state, panel, x0, y0, false);
+    for (int k = 0; k <= 4; ++k)
+      frame(state, panel, x0 + (x1 - x0) * k / 4, y0 + (y1 - y0) * k / 4, true);
+    frame(state, panel, x1, y1, false);
+  }
+
+ private:
+  double time_ = 0;
+};
+
+TEST(Panel, RandomClicksAndDragsInEveryModeKeepTheViewerWorking) {
+  const auto dir = std::filesystem::temp_directory_path() / "zeroset_panel_test";
+  std::filesystem::create_directories(dir);
+  ViewerState state(Scene{make_surface(*find_catalog_entry("kummer")), {}}, Mode::kRaytrace, 2);
+  PanelState panel;
+  panel.scene_path = (dir / "scene.json").string();
+  panel.screenshot_path = (dir / "shot.png").string();
+  panel.mesh_path = (dir / "mesh.ply").string();
+  panel.floaters_path = (dir / "floaters.ply").string();
+  panel.pov_path = (dir / "scene.pov").string();
+  Gui gui;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> x(0, kPanelWidth), y(0, 800), step(-60, 60);
+  for (const Mode mode : {Mode::kRaytrace, Mode::kFloaters, Mode::kMesh}) {
+    state.set_mode(mode);
+    for (int i = 0; i < 1500; ++i) {
+      const float x0 = x(rng), y0 = y(rng);
+      if (i % 4 == 0) {
+        // A drag: moves sliders, scrolls.
+        ASSERT_NO_THROW(gui.drag(state, panel, x0, y0, x0 + step(rng), y0 + step(rng)));
+      } else {
+        ASSERT_NO_THROW(gui.click(state, panel, x0, y0));
+      }
+      // Whatever was clicked, the surface stays usable.
+      ASSERT_TRUE(state.surface().clip.is_bounded());
+      ASSERT_EQ(state.surface().ranges.size(), state.surface().field.parameter_names().size());
+    }
+  }
+  EXPECT_NO_THROW(state.view());
+  EXPECT_TRUE(state.command("catalog kummer"));
+}
+
+}  // namespace
+}  // namespace zeroset::viewer
