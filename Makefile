@@ -27,7 +27,8 @@ test-asan: deps
 	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DZEROSET_SANITIZE=ON \
 	      -DZEROSET_BUILD_BENCH=OFF $(CMAKE_FLAGS)
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
-	cd $(ASAN_BUILD) && ZEROSET_SANITIZED=1 ctest --output-on-failure -j $(JOBS) --timeout 1200
+	cd $(ASAN_BUILD) && LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 \
+	      ctest --output-on-failure -j $(JOBS) --timeout 1200
 
 # Runs the parser fuzz target (libFuzzer, clang) for FUZZ_SECONDS.
 FUZZ_SECONDS ?= 60
