@@ -59,10 +59,18 @@ void BM_KummerStepWitkinHeckbert(benchmark::State& state) {
   run(state, RadiusAdapt::kWitkinHeckbert);
 }
 
-BENCHMARK(BM_KummerStep)->Arg(500)->Arg(10'000)->Arg(100'000)->Unit(benchmark::kMillisecond)
+BENCHMARK(BM_KummerStep)
+    ->Arg(500)
+    ->Arg(10'000)
+    ->Arg(100'000)
+    ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
-BENCHMARK(BM_KummerStepWitkinHeckbert)->Arg(500)->Arg(10'000)->Arg(100'000)
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_KummerStepWitkinHeckbert)
+    ->Arg(500)
+    ->Arg(10'000)
+    ->Arg(100'000)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 

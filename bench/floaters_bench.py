@@ -2,12 +2,12 @@
 """Floaters on the paper's Kummer scene: steps and particle updates per second.
 
 Runs the Google Benchmark program `floaters_bench` (built with the project) on 1 and 2
-threads: each system is seeded and settled once (untimed), then step() is timed at about 500,
-10,000 and 100,000 floaters, with the paper's heuristics (curvature and singularity
-estimators, cosine weighting, node snapping) and with the original Witkin-Heckbert radius
-rule. A particle update is one floater advanced by one step. The 1997 figure beside it: 500
-floaters at 5 Hz on a 133 MHz SGI Indy, about 2,500 updates per second. Writes section
-"floaters" of docs/benchmarks.md.
+threads (OMP_NUM_THREADS, with OMP_WAIT_POLICY=passive): each system is seeded and settled
+once (untimed), then step() is timed at about 500, 10,000 and 100,000 floaters, with the
+paper's heuristics (curvature and singularity estimators, cosine weighting, node snapping)
+and with the original Witkin-Heckbert radius rule. A particle update is one floater advanced
+by one step. The 1997 figure beside it: 500 floaters at 5 Hz on a 133 MHz SGI Indy, about
+2,500 updates per second. Writes section "floaters" of docs/benchmarks.md.
 
 Usage: /usr/bin/python3 bench/floaters_bench.py BUILD_DIR [--repeat N] [--min-time S]
 """
@@ -21,7 +21,10 @@ import tempfile
 
 HERE = pathlib.Path(__file__).resolve().parent
 INDY_UPDATES = 2500.0  # 500 floaters at 5 Hz (Rösch, Ruhl & Saupe 1997, §3.4)
-MODES = {"BM_KummerStep": "paper's heuristics", "BM_KummerStepWitkinHeckbert": "Witkin-Heckbert"}
+MODES = {
+    "BM_KummerStep": "paper's heuristics",
+    "BM_KummerStepWitkinHeckbert": "Witkin-Heckbert",
+}
 
 
 def find_binary(build):
@@ -34,11 +37,14 @@ def find_binary(build):
 def run(binary, threads, repeat, min_time):
     """Median step time (ms), floaters and updates/s per (mode, requested size)."""
     with tempfile.NamedTemporaryFile(suffix=".json") as out:
-        env = dict(os.environ, OMP_NUM_THREADS=str(threads))
-        subprocess.run([str(binary), f"--benchmark_repetitions={repeat}",
-                        f"--benchmark_min_time={min_time}", "--benchmark_report_aggregates_only=true",
-                        f"--benchmark_out={out.name}", "--benchmark_out_format=json"],
-                       env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        # Passive waiting: on a machine shared with other work, OpenMP threads that spin at the
+        # end of each parallel region take the core from the thread still working.
+        env = dict(os.environ, OMP_NUM_THREADS=str(threads), OMP_WAIT_POLICY="passive")
+        cmd = [str(binary), f"--benchmark_repetitions={repeat}",
+               f"--benchmark_min_time={min_time}", "--benchmark_report_aggregates_only=true",
+               f"--benchmark_out={out.name}", "--benchmark_out_format=json"]
+        subprocess.run(cmd, env=env, check=True, stdout=subprocess.DEVNULL,
+                       stderr=subprocess.DEVNULL)
         data = json.load(open(out.name))
     results = {}
     for b in data["benchmarks"]:
@@ -56,7 +62,8 @@ def run(binary, threads, repeat, min_time):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("build", type=pathlib.Path)
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--min-time", type=float, default=1.0)
@@ -70,10 +77,12 @@ def main():
         "",
         f"Command: `/usr/bin/python3 bench/floaters_bench.py BUILD_DIR --repeat {args.repeat}` "
         f"(`floaters_bench`, medians of {args.repeat} runs; load average {load:.1f} when the run "
-        "started, on a machine shared with other work). Each system is seeded and settled "
+        "started, on a machine shared with other work; `OMP_WAIT_POLICY=passive`, without which "
+        "two threads under load are several times slower). Each system is seeded and settled "
         "first; then only `step()` is timed. An update is one floater advanced by one step.",
         "",
-        "| floaters | radius rule | threads | ms per step | steps/s | updates/s | vs 1997 (2,500/s) |",
+        "| floaters | radius rule | threads | ms per step | steps/s | updates/s "
+        "| vs 1997 (2,500/s) |",
         "|---|---|---|---|---|---|---|",
     ]
     for mode, label in MODES.items():
@@ -83,10 +92,11 @@ def main():
                 if r is None:
                     continue
                 lines.append(
-                    f"| {r['floaters']:,.0f} | {label} | {threads} | {r['ms']:.2f} | {r['steps']:,.0f} "
-                    f"| {r['updates'] / 1e6:.2f} M | {r['updates'] / INDY_UPDATES:,.0f}× |")
-    big = max(runs[2][("BM_KummerStep", 100000)]["updates"], runs[1][("BM_KummerStep", 100000)]["updates"])
-    small = max(runs[2][("BM_KummerStep", 500)]["steps"], runs[1][("BM_KummerStep", 500)]["steps"])
+                    f"| {r['floaters']:,.0f} | {label} | {threads} | {r['ms']:.2f} "
+                    f"| {r['steps']:,.0f} | {r['updates'] / 1e6:.2f} M "
+                    f"| {r['updates'] / INDY_UPDATES:,.0f}× |")
+    big = max(runs[t][("BM_KummerStep", 100000)]["updates"] for t in runs)
+    small = max(runs[t][("BM_KummerStep", 500)]["steps"] for t in runs)
     lines += [
         "",
         f"Goals: at least 5 M updates/s at 100,000 floaters (measured: {big / 1e6:.2f} M, "

@@ -88,7 +88,8 @@ FloaterOptions options_from(const SampleArgs& a, const Scene& scene) {
   if (a.no_snap) o.snap_to_nodes = false;
   if (a.plain_repulsion) o.scaled_repulsion = false;
   if (a.grading >= 0) o.radius_grading = a.grading;
-  if (!a.radius_adapt.empty()) o.radius_adapt = parse_radius_adapt(a.radius_adapt, "--radius-adapt");
+  if (!a.radius_adapt.empty())
+    o.radius_adapt = parse_radius_adapt(a.radius_adapt, "--radius-adapt");
   o.threads = global_flags().threads;
   return o;
 }
@@ -182,7 +183,8 @@ nlohmann::json options_json(const FloaterOptions& o, double sigma_hat) {
 
 void run_sample(const SampleArgs& a) {
   if (a.output.empty() && a.png.empty() && a.stats.empty())
-    throw InvalidArgument("nothing to write: give -o FILE.ply, --png FILE.png or --stats FILE.json");
+    throw InvalidArgument(
+        "nothing to write: give -o FILE.ply, --png FILE.png or --stats FILE.json");
   if (!a.output.empty() && file_extension(a.output) != "ply")
     throw InvalidArgument("-o", a.output, "the point set is written as PLY: use a .ply name");
   if (!a.png.empty() && file_extension(a.png) != "png")
@@ -200,7 +202,8 @@ void run_sample(const SampleArgs& a) {
   if (!a.animate.empty()) {
     anim = parse_range(a.animate, "--animate");
     if (a.steps == 0)
-      throw InvalidArgument("--animate", a.animate, "give the number of animated steps with --steps N");
+      throw InvalidArgument("--animate", a.animate,
+                            "give the number of animated steps with --steps N");
   }
   for (const auto& path : {a.output, a.png, a.stats})
     if (!path.empty()) check_writable(path);
@@ -249,8 +252,9 @@ void run_sample(const SampleArgs& a) {
     double worst_median = 0, worst_max = 0;
     std::size_t min_count = sys.size(), max_count = sys.size();
     for (std::size_t k = 1; k <= a.steps; ++k) {
-      q[static_cast<std::size_t>(anim_index)] =
-          anim->from + (anim->to - anim->from) * static_cast<double>(k) / static_cast<double>(a.steps);
+      q[static_cast<std::size_t>(anim_index)] = anim->from + (anim->to - anim->from) *
+                                                                 static_cast<double>(k) /
+                                                                 static_cast<double>(a.steps);
       const StepStats st = run(sys.step(q));
       worst_median = std::max(worst_median, st.median_residual);
       worst_max = std::max(worst_max, st.max_residual);
@@ -258,10 +262,14 @@ void run_sample(const SampleArgs& a) {
       max_count = std::max(max_count, st.count);
       progress.update(static_cast<double>(k) / static_cast<double>(a.steps));
     }
-    stats["animation"] = {{"parameter", anim->name},      {"from", anim->from},
-                          {"to", anim->to},               {"steps", a.steps},
-                          {"settle_steps", settled},      {"median_residual_worst", worst_median},
-                          {"max_residual_worst", worst_max}, {"count_min", min_count},
+    stats["animation"] = {{"parameter", anim->name},
+                          {"from", anim->from},
+                          {"to", anim->to},
+                          {"steps", a.steps},
+                          {"settle_steps", settled},
+                          {"median_residual_worst", worst_median},
+                          {"max_residual_worst", worst_max},
+                          {"count_min", min_count},
                           {"count_max", max_count}};
   }
   progress.finish();
@@ -321,8 +329,9 @@ void register_sample_command(CLI::App& app) {
       "disks, and quality figures.\n\n"
       "Examples:\n"
       "  zeroset sample kummer --param mu=1.5 -o kummer.ply --png kummer.png\n"
-      "  zeroset sample cone --png cone.png --stats cone.json\n"
-      "  zeroset sample planes --no-cos-weight --png gap.png      # the paper's figure 4(d)\n"
+      "  zeroset sample cone --camera 30,55 --png cone.png --stats cone.json  # figure 3(b)\n"
+      "  zeroset sample planes --no-cos-weight --radius-adapt wh --plain-repulsion \\\n"
+      "      --png gap.png                  # the original method: figure 4(d)\n"
       "  zeroset sample kummer --radius-adapt wh --max-count 500 --steps 400 -o wh.ply\n"
       "  zeroset sample kummer --animate mu=1.02:2.44 --steps 500 --stats anim.json\n"
       "  zeroset sample \"x^2 + y^2 = z^2\" --clip sphere:1 --radius 0.05 -o cone.ply");
@@ -332,9 +341,8 @@ void register_sample_command(CLI::App& app) {
                                   "about 1.5 sigma^). Default: from the surface's area so that "
                                   "about max-count/3 floaters would cover it uniformly")
                       ->type_name("LENGTH");
-  a->max_count_opt =
-      cmd->add_option("--max-count", a->max_count, "Population cap (default 2000)")
-          ->check(CLI::Range(std::size_t{1}, std::size_t{100'000'000}));
+  a->max_count_opt = cmd->add_option("--max-count", a->max_count, "Population cap (default 2000)")
+                         ->check(CLI::Range(std::size_t{1}, std::size_t{100'000'000}));
   a->seed_count_opt = cmd->add_option("--seed-count", a->seed_count,
                                       "Random floaters inserted at the start (default 200)");
   a->steps_opt = cmd->add_option("--steps", a->steps,
@@ -343,7 +351,8 @@ void register_sample_command(CLI::App& app) {
                               "Stop when the system has settled (the default), at most "
                               "--max-steps steps");
   until->excludes(a->steps_opt);
-  cmd->add_option("--max-steps", a->max_steps, "Step limit for --until-converged")->capture_default_str();
+  cmd->add_option("--max-steps", a->max_steps, "Step limit for --until-converged")
+      ->capture_default_str();
   a->seed_opt = cmd->add_option("--seed", a->seed, "Random seed (same seed, same floaters)");
   cmd->add_flag("--no-cos-weight", a->no_cos_weight,
                 "Plain repulsion: no |cos| weighting between sheets (paper figure 4(d))");
@@ -367,7 +376,8 @@ void register_sample_command(CLI::App& app) {
                   "start value; needs --steps)")
       ->type_name("NAME=FROM:TO");
   cmd->add_option("--settle-steps", a->settle_steps,
-                  "With --animate: at most this many steps to settle first")->capture_default_str();
+                  "With --animate: at most this many steps to settle first")
+      ->capture_default_str();
   cmd->add_option("-o,--output", a->output, "Floaters as PLY (binary little-endian)")
       ->type_name("FILE.ply");
   cmd->add_flag("--ascii", a->ascii, "Write the PLY as ASCII");
@@ -382,12 +392,14 @@ void register_sample_command(CLI::App& app) {
                   "without a distance the picture is framed on the floaters")
       ->type_name("AZ,EL[,D]");
   cmd->add_option("--size", a->size, "Picture size")->capture_default_str()->type_name("WxH");
-  cmd->add_option("--disk-scale", a->disk_scale, "Disk radius in the picture per floater radius")->capture_default_str();
+  cmd->add_option("--disk-scale", a->disk_scale, "Disk radius in the picture per floater radius")
+      ->capture_default_str();
   cmd->add_option("--band", a->band,
                   "Half width of the band around the singular set for the density figure "
                   "(default sigma^/2)");
   cmd->add_option("--reference", a->reference,
-                  "Reference points on the surface for the covering radius")->capture_default_str()
+                  "Reference points on the surface for the covering radius")
+      ->capture_default_str()
       ->check(CLI::Range(std::size_t{100}, std::size_t{10'000'000}));
   cmd->callback([a] { run_sample(*a); });
 }

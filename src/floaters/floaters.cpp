@@ -3,7 +3,6 @@
 #include <fmt/core.h>
 
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -21,6 +20,9 @@
 
 #ifdef _OPENMP
 #include <omp.h>
+#endif
+#ifdef __SSE2__
+#include <emmintrin.h>
 #endif
 
 namespace zeroset {
@@ -122,10 +124,9 @@ void validate(const FloaterOptions& o) {
         o.max_step_fraction, "must be positive");
   check(finite(o.equilibrium_speed) && o.equilibrium_speed >= 0, "equilibrium_speed",
         o.equilibrium_speed, "must not be negative");
-  check(finite(o.fission_energy_factor) && o.fission_energy_factor >= 0,
-        "fission_energy_factor", o.fission_energy_factor, "must not be negative");
-  check(finite(o.death_radius_factor) && o.death_radius_factor >= 0 &&
-            o.death_radius_factor < 1,
+  check(finite(o.fission_energy_factor) && o.fission_energy_factor >= 0, "fission_energy_factor",
+        o.fission_energy_factor, "must not be negative");
+  check(finite(o.death_radius_factor) && o.death_radius_factor >= 0 && o.death_radius_factor < 1,
         "death_radius_factor", o.death_radius_factor, "must be in [0, 1)");
   check(finite(o.max_radius_factor) && o.max_radius_factor >= 1, "max_radius_factor",
         o.max_radius_factor, "must be at least 1");
@@ -159,10 +160,14 @@ RadiusAdapt parse_radius_adapt(std::string_view text, std::string_view flag) {
 
 std::string_view to_string(RadiusAdapt mode) {
   switch (mode) {
-    case RadiusAdapt::kWitkinHeckbert: return "wh";
-    case RadiusAdapt::kCurvature: return "curvature";
-    case RadiusAdapt::kSingular: return "singular";
-    case RadiusAdapt::kMixed: return "mixed";
+    case RadiusAdapt::kWitkinHeckbert:
+      return "wh";
+    case RadiusAdapt::kCurvature:
+      return "curvature";
+    case RadiusAdapt::kSingular:
+      return "singular";
+    case RadiusAdapt::kMixed:
+      return "mixed";
   }
   return "mixed";
 }
@@ -430,10 +435,17 @@ struct FloaterSystem::Impl {
       for (std::size_t k = 0; k < m; ++k) {
         double f = 1;
         switch (mode) {
-          case RadiusAdapt::kCurvature: f = alpha[k]; break;
-          case RadiusAdapt::kSingular: f = beta[k]; break;
-          case RadiusAdapt::kMixed: f = alpha[k] / 3 + 2 * beta[k] / 3; break;
-          case RadiusAdapt::kWitkinHeckbert: break;
+          case RadiusAdapt::kCurvature:
+            f = alpha[k];
+            break;
+          case RadiusAdapt::kSingular:
+            f = beta[k];
+            break;
+          case RadiusAdapt::kMixed:
+            f = alpha[k] / 3 + 2 * beta[k] / 3;
+            break;
+          case RadiusAdapt::kWitkinHeckbert:
+            break;
         }
         // Averaged with the previous estimate: α_i comes from random perimeter points, and a
         // σ_max^i that jumps from update to update triggers fissions and deaths for nothing.
@@ -452,8 +464,7 @@ struct FloaterSystem::Impl {
       const FieldSample fs = ev.sample(q, true, false);
       const detail::Corrector c = detail::newton_corrector(fs.gradient, fs.hessian);
       if (!c.reaches || !(c.smallest > kNondegenerate * c.largest)) return std::nullopt;
-      if (c.step.squaredNorm() == 0 ||
-          c.step.norm() <= 1e-14 * (q.norm() + scene_radius)) {
+      if (c.step.squaredNorm() == 0 || c.step.norm() <= 1e-14 * (q.norm() + scene_radius)) {
         const double change = c.largest * reach * reach;
         if (!(std::abs(fs.value) <= 1e-8 * change)) return std::nullopt;  // off the surface
         return q;
@@ -647,12 +658,29 @@ struct FloaterSystem::Impl {
     std::size_t m = 0;
     const double *x = px.data(), *y = py.data(), *z = pz.data(), *cut = pcut.data();
     for (int r = 0; r < c.count; ++r) {
-      const std::uint32_t first = c.ranges[r].first, last = c.ranges[r].second;
-      for (std::uint32_t t = first; t < last; ++t) {
+      std::uint32_t t = c.ranges[r].first;
+      const std::uint32_t last = c.ranges[r].second;
+#ifdef __SSE2__
+      // Two candidates at a time; the comparison mask says which of them to list.
+      const __m128d vx = _mm_set1_pd(xi), vy = _mm_set1_pd(yi), vz = _mm_set1_pd(zi);
+      const __m128d vcut = _mm_set1_pd(cut_i);
+      for (; t + 2 <= last; t += 2) {
+        const __m128d dx = _mm_sub_pd(vx, _mm_loadu_pd(x + t));
+        const __m128d dy = _mm_sub_pd(vy, _mm_loadu_pd(y + t));
+        const __m128d dz = _mm_sub_pd(vz, _mm_loadu_pd(z + t));
+        const __m128d d2 =
+            _mm_add_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy)), _mm_mul_pd(dz, dz));
+        _mm_storeu_pd(r2 + t, d2);
+        const int mask = _mm_movemask_pd(_mm_cmplt_pd(d2, _mm_max_pd(vcut, _mm_loadu_pd(cut + t))));
+        near[m] = t;
+        m += static_cast<std::size_t>(mask & 1);
+        near[m] = t + 1;
+        m += static_cast<std::size_t>(mask >> 1);
+      }
+#endif
+      for (; t < last; ++t) {
         const double dx = xi - x[t], dy = yi - y[t], dz = zi - z[t];
         r2[t] = dx * dx + dy * dy + dz * dz;
-      }
-      for (std::uint32_t t = first; t < last; ++t) {
         near[m] = t;
         m += static_cast<std::size_t>(r2[t] < std::max(cut_i, cut[t]));
       }
@@ -736,7 +764,8 @@ struct FloaterSystem::Impl {
     for (std::int64_t signed_i = 0; signed_i < static_cast<std::int64_t>(n); ++signed_i) {
       const auto i = static_cast<std::size_t>(signed_i);
       const double s = sigma[i];
-      const double rate = -opt.radius_rate * (energy[i] - e_hat) / (denergy[i] + opt.radius_damping);
+      const double rate =
+          -opt.radius_rate * (energy[i] - e_hat) / (denergy[i] + opt.radius_damping);
       new_sigma[i] = std::clamp(std::clamp(s + dt * rate, 0.5 * s, 2 * s), lo, hi);
       if (pinned[i]) {
         new_pos[i] = pos[i];
@@ -809,9 +838,10 @@ struct FloaterSystem::Impl {
       const double s = sigma[i];
       const bool near_eq = speed[i] < opt.equilibrium_speed * s;
       const double residual = residual_of(value[i], gnorm[i]);
-      const bool stray = !std::isfinite(value[i]) ||
-                         (!pinned[i] && (s <= lo || outside[i] ||
-                                         (residual > sigma_hat && (near_eq || age[i] > kStrayAge))));
+      const bool stray =
+          !std::isfinite(value[i]) ||
+          (!pinned[i] &&
+           (s <= lo || outside[i] || (residual > sigma_hat && (near_eq || age[i] > kStrayAge))));
       if (stray) {
         keep[i] = 0;
         --live;
@@ -821,9 +851,9 @@ struct FloaterSystem::Impl {
       if (!near_eq) continue;
       const double local_max = smax[i];
       const double local_nominal = std::min(sigma_hat, local_max);
-      const bool fission = live < opt.max_count &&
-                           (s > local_max ||
-                            (energy[i] > opt.fission_energy_factor * e_hat && s > local_nominal));
+      const bool fission =
+          live < opt.max_count &&
+          (s > local_max || (energy[i] > opt.fission_energy_factor * e_hat && s > local_nominal));
       if (fission && split(i)) {
         ++live;
         ++fate.births;

@@ -71,8 +71,9 @@ ReferenceSampling reference_sampling(const Surface& surface, const ReferenceOpti
   const Box3 box = surface.bounds();
   const double radius = surface.scene_radius();
   const double shell = options.shell > 0 ? options.shell : radius / 200;
-  const std::size_t budget =
-      options.max_candidates > 0 ? options.max_candidates : 400 * std::max<std::size_t>(options.count, 1);
+  const std::size_t budget = options.max_candidates > 0
+                                 ? options.max_candidates
+                                 : 400 * std::max<std::size_t>(options.count, 1);
   const double tolerance = 1e-9 * radius;
   std::vector<Evaluator> evs = make_evaluators(surface);
   std::size_t in_shell = 0;
@@ -83,7 +84,7 @@ ReferenceSampling reference_sampling(const Surface& surface, const ReferenceOpti
     const auto chunks = static_cast<std::int64_t>((m + kChunk - 1) / kChunk);
     std::vector<std::vector<Vec3>> found(static_cast<std::size_t>(chunks));
     std::vector<std::size_t> shell_hits(static_cast<std::size_t>(chunks), 0);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(static_cast<int>(evs.size()))
+#pragma omp parallel for schedule(dynamic, 1) num_threads(static_cast <int>(evs.size()))
     for (std::int64_t c = 0; c < chunks; ++c) {
       Evaluator& ev = evs[thread_index()];
       const std::size_t b = static_cast<std::size_t>(c) * kChunk;
@@ -155,7 +156,8 @@ SampleMetrics measure_samples(const Surface& surface, std::span<const Vec3> samp
   if (n == 0) box = surface.bounds();
   const double extent = std::max(box.size().maxCoeff(), 1e-12);
   detail::SpatialHash grid;
-  grid.build(samples, box, 1.5 * extent / std::sqrt(static_cast<double>(std::max<std::size_t>(n, 1))));
+  grid.build(samples, box,
+             1.5 * extent / std::sqrt(static_cast<double>(std::max<std::size_t>(n, 1))));
   std::vector<double> nn(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
     const auto [j, d] = grid.nearest(samples[i], samples, static_cast<std::int64_t>(i));
@@ -201,7 +203,8 @@ SampleMetrics measure_samples(const Surface& surface, std::span<const Vec3> samp
     for (const Vec3& s : singular) {
       SingularCoverage c;
       c.point = s;
-      const auto near = grid.k_nearest(s, samples, static_cast<std::size_t>(std::max(1, options.local_neighbours)));
+      const auto near = grid.k_nearest(
+          s, samples, static_cast<std::size_t>(std::max(1, options.local_neighbours)));
       c.distance = (samples[near.front()] - s).norm();
       double sum = 0;
       for (std::uint32_t j : near) sum += nn[j];

@@ -26,21 +26,19 @@ void put_float_le(std::ostream& out, double v) {
 
 struct Property {
   std::string name;
-  int size = 0;       // bytes in binary files
+  int size = 0;  // bytes in binary files
   bool is_float = false;
   bool is_signed = false;
 };
 
 int type_size(const std::string& type, bool& is_float, bool& is_signed) {
   static const std::map<std::string, std::tuple<int, bool, bool>> kTypes = {
-      {"char", {1, false, true}},    {"int8", {1, false, true}},
-      {"uchar", {1, false, false}},  {"uint8", {1, false, false}},
-      {"short", {2, false, true}},   {"int16", {2, false, true}},
-      {"ushort", {2, false, false}}, {"uint16", {2, false, false}},
-      {"int", {4, false, true}},     {"int32", {4, false, true}},
-      {"uint", {4, false, false}},   {"uint32", {4, false, false}},
-      {"float", {4, true, true}},    {"float32", {4, true, true}},
-      {"double", {8, true, true}},   {"float64", {8, true, true}}};
+      {"char", {1, false, true}},    {"int8", {1, false, true}},    {"uchar", {1, false, false}},
+      {"uint8", {1, false, false}},  {"short", {2, false, true}},   {"int16", {2, false, true}},
+      {"ushort", {2, false, false}}, {"uint16", {2, false, false}}, {"int", {4, false, true}},
+      {"int32", {4, false, true}},   {"uint", {4, false, false}},   {"uint32", {4, false, false}},
+      {"float", {4, true, true}},    {"float32", {4, true, true}},  {"double", {8, true, true}},
+      {"float64", {8, true, true}}};
   const auto it = kTypes.find(type);
   if (it == kTypes.end()) return 0;
   is_float = std::get<1>(it->second);
@@ -65,11 +63,11 @@ void write_points_ply(const std::string& path, std::span<const Vec3> positions,
                       std::span<const Vec3> normals, std::span<const double> radii,
                       PlyFormat format) {
   if (!normals.empty() && normals.size() != positions.size())
-    throw InvalidArgument(fmt::format("write_points_ply: {} normals for {} points",
-                                      normals.size(), positions.size()));
-  if (!radii.empty() && radii.size() != positions.size())
-    throw InvalidArgument(fmt::format("write_points_ply: {} radii for {} points", radii.size(),
+    throw InvalidArgument(fmt::format("write_points_ply: {} normals for {} points", normals.size(),
                                       positions.size()));
+  if (!radii.empty() && radii.size() != positions.size())
+    throw InvalidArgument(
+        fmt::format("write_points_ply: {} radii for {} points", radii.size(), positions.size()));
   const bool binary = format == PlyFormat::kBinaryLittleEndian;
   write_file_atomically(path, [&](std::ostream& out) {
     out << "ply\nformat " << (binary ? "binary_little_endian" : "ascii") << " 1.0\n"
@@ -89,7 +87,8 @@ void write_points_ply(const std::string& path, std::span<const Vec3> positions,
       }
       // %.9g round-trips a float exactly.
       out << fmt::format("{:.9g} {:.9g} {:.9g}", static_cast<float>(positions[i].x()),
-                         static_cast<float>(positions[i].y()), static_cast<float>(positions[i].z()));
+                         static_cast<float>(positions[i].y()),
+                         static_cast<float>(positions[i].z()));
       if (!normals.empty())
         out << fmt::format(" {:.9g} {:.9g} {:.9g}", static_cast<float>(normals[i].x()),
                            static_cast<float>(normals[i].y()), static_cast<float>(normals[i].z()));

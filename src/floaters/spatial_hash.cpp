@@ -1,11 +1,10 @@
-#include "spatial_hash_detail.h"
-
 #include <algorithm>
 #include <bit>
 #include <cmath>
 #include <limits>
 
 #include "rng_detail.h"
+#include "spatial_hash_detail.h"
 
 namespace zeroset::detail {
 namespace {
@@ -24,7 +23,8 @@ void SpatialHash::build(std::span<const Vec3> points, const Box3& box, double ce
   inv_cell_ = 1 / cell_;
   std::int64_t cells = 1;
   for (int k = 0; k < 3; ++k) {
-    dims_[k] = std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(extent[k] * inv_cell_)));
+    dims_[k] =
+        std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(extent[k] * inv_cell_)));
     cells = cells > std::numeric_limits<std::int64_t>::max() / dims_[k]
                 ? std::numeric_limits<std::int64_t>::max()
                 : cells * dims_[k];
@@ -128,7 +128,8 @@ int SpatialHash::block_ranges(std::uint64_t key,
   auto add = [&](std::pair<std::uint32_t, std::uint32_t> r) {
     if (r.first < r.second) out[count++] = r;
   };
-  for (std::int64_t cz = std::max<std::int64_t>(0, z - 1); cz <= std::min(dims_[2] - 1, z + 1); ++cz)
+  for (std::int64_t cz = std::max<std::int64_t>(0, z - 1); cz <= std::min(dims_[2] - 1, z + 1);
+       ++cz)
     for (std::int64_t cy = std::max<std::int64_t>(0, y - 1); cy <= std::min(dims_[1] - 1, y + 1);
          ++cy) {
       if (dense_) {
@@ -185,8 +186,8 @@ std::pair<std::int64_t, double> SpatialHash::nearest(const Vec3& p, std::span<co
     }
   };
   // Every point in ring r is at least r - 1 cell edges away from p, so once the best distance
-  // is below that the search is complete. Far-apart sparse points would make rings expensive: after a
-  // few empty rings fall back to a linear scan.
+  // is below that the search is complete. Far-apart sparse points would make rings expensive: after
+  // a few empty rings fall back to a linear scan.
   const std::int64_t max_ring = std::max({dims_[0], dims_[1], dims_[2]});
   for (std::int64_t ring = 0; ring <= max_ring; ++ring) {
     if (best >= 0 && std::sqrt(best_d2) <= static_cast<double>(ring - 1) * cell_) break;

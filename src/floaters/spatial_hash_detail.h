@@ -21,8 +21,6 @@ class SpatialHash {
   /// cells, and when it is not a positive finite number. Stable: equal cells keep input order.
   void build(std::span<const Vec3> points, const Box3& box, double cell);
 
-  double cell() const { return cell_; }
-  std::size_t size() const { return order_.size(); }
   /// Input indices in sorted order ("slots").
   std::span<const std::uint32_t> order() const { return order_; }
 
@@ -87,7 +85,7 @@ class SpatialHash {
   std::vector<std::uint32_t> order_;  // slot -> input index
   std::vector<std::uint64_t> keys_;   // slot -> cell key
   std::vector<Run> runs_;
-  std::vector<std::uint64_t> key_in_;     // build() scratch, kept to avoid reallocation
+  std::vector<std::uint64_t> key_in_;  // build() scratch, kept to avoid reallocation
   std::vector<std::uint32_t> bucket_in_;
 };
 

@@ -80,8 +80,8 @@ std::string suggestion(const std::string& name) {
 // A clip for a typed equation that comes without one: when F is a polynomial whose
 // highest-degree part H_d keeps one sign on the unit sphere, the surface is bounded, since
 // |F(R u)| ≥ m R^d - Σ_{k<d} |H_k|₁ R^k > 0 for R large (m = min |H_d| on the sphere, |H_k|₁ the
-// sum of the absolute coefficients of degree k). m is estimated on 4,000 directions and halved
-// for safety. Returns an empty clip when no bound is found (an unbounded surface).
+// sum of the absolute coefficients of degree k). m is estimated on 4,000 directions and the
+// axes and halved for safety; forms that come near zero anywhere are treated as indefinite. Returns an empty clip when no bound is found (an unbounded surface).
 Clip default_clip(const Field& field) {
   if (!field.is_polynomial() || !field.missing_parameters().empty()) return {};
   const Polynomial poly = field.polynomial();
@@ -105,8 +105,20 @@ Clip default_clip(const Field& field) {
     lo = std::min(lo, v);
     hi = std::max(hi, v);
   }
+  for (int k = 0; k < 3; ++k)  // the axes, where semidefinite forms such as x²+y² vanish
+    for (double sgn : {-1.0, 1.0}) {
+      Vec3 u = Vec3::Zero();
+      u[k] = sgn;
+      const double v = lead.value(u);
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
   if (!(lo > 0 || hi < 0)) return {};
-  const double m = 0.5 * std::min(std::abs(lo), std::abs(hi));
+  // A form that nearly vanishes in some sampled direction may vanish between samples
+  // (semidefinite): then no bound is claimed.
+  const double small = std::min(std::abs(lo), std::abs(hi)), big = std::max(std::abs(lo), std::abs(hi));
+  if (small < 0.02 * big) return {};
+  const double m = 0.5 * small;
   auto separated = [&](double R) {
     double rest = 0;
     for (int k = 0; k < d; ++k) rest += l1[k] * std::pow(R, k);

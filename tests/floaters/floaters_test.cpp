@@ -84,9 +84,8 @@ TEST(FloaterSystem, ConeIsDenserNearTheCusp) {
   const double dense = measure_samples(cone, adaptive.positions(), mo).band_density_ratio;
   EXPECT_GT(dense, 1.8);
 
-  FloaterSystem uniform(cone, {.seed = 3,
-                               .radius_adapt = RadiusAdapt::kWitkinHeckbert,
-                               .snap_to_nodes = false});
+  FloaterSystem uniform(
+      cone, {.seed = 3, .radius_adapt = RadiusAdapt::kWitkinHeckbert, .snap_to_nodes = false});
   settle(uniform, 600);
   const double plain = measure_samples(cone, uniform.positions(), mo).band_density_ratio;
   EXPECT_LT(plain, 1.4);
@@ -96,8 +95,8 @@ TEST(FloaterSystem, ConeIsDenserNearTheCusp) {
 // Density within σ̂/2 of the planes' intersection line relative to elsewhere (paper figure 4).
 double line_density(bool cos_weight, RadiusAdapt mode) {
   const Surface planes = catalog_surface("planes");
-  FloaterSystem sys(planes, {.max_count = 4000, .seed = 4, .cos_weight = cos_weight,
-                             .radius_adapt = mode});
+  FloaterSystem sys(planes,
+                    {.max_count = 4000, .seed = 4, .cos_weight = cos_weight, .radius_adapt = mode});
   settle(sys, 600);
   MetricsOptions mo{.covering = false, .band_halfwidth = sys.nominal_radius() / 2};
   return measure_samples(planes, sys.positions(), mo).band_density_ratio;
@@ -154,7 +153,7 @@ TEST(FloaterSystem, SameResultOnOneAndTwoThreads) {
   auto run = [&](int threads) {
     omp_set_num_threads(threads);
     FloaterSystem sys(kummer, {.radius = 0.05, .max_count = 9000, .seed_count = 6000, .seed = 9});
-    for (int k = 0; k < 60; ++k) sys.step();
+    for (int k = 0; k < 40; ++k) sys.step();
     EXPECT_GT(sys.size(), 5000u);
     return std::vector<Vec3>(sys.positions().begin(), sys.positions().end());
   };

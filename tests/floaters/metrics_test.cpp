@@ -42,26 +42,28 @@ TEST(ReferenceSampling, IsDeterministic) {
 }
 
 TEST(ReferenceSampling, AreaOfTheUnitSphereIsFourPi) {
-  EXPECT_NEAR(estimate_area(resolve_surface("sphere")), 4 * std::numbers::pi, 0.05 * 4 * std::numbers::pi);
+  EXPECT_NEAR(estimate_area(resolve_surface("sphere")), 4 * std::numbers::pi,
+              0.05 * 4 * std::numbers::pi);
 }
 
 TEST(ReferenceSampling, AreaOfTwoPlanesInABall) {
   // Two planes through the centre of the unit ball: two unit disks.
-  EXPECT_NEAR(estimate_area(resolve_surface("planes")), 2 * std::numbers::pi, 0.05 * 2 * std::numbers::pi);
+  EXPECT_NEAR(estimate_area(resolve_surface("planes")), 2 * std::numbers::pi,
+              0.05 * 2 * std::numbers::pi);
 }
 
 TEST(ReferenceSampling, IsUniformInArea) {
   // On the unit sphere a uniform sampling puts a fraction (1 - cos θ)/2 within angle θ of a pole.
-  const ReferenceSampling ref = reference_sampling(resolve_surface("sphere"), {.count = 20000});
+  const ReferenceSampling ref = reference_sampling(resolve_surface("sphere"), {.count = 10000});
   std::size_t cap = 0;
   for (const Vec3& p : ref.points) cap += p.z() > std::cos(0.5) ? 1 : 0;
-  const double expected = (1 - std::cos(0.5)) / 2;
-  EXPECT_NEAR(static_cast<double>(cap) / 20000.0, expected, 0.1 * expected);
+  const double expected = (1 - std::cos(0.5)) / 2;  // 612 of 10,000 points, ± 25 by chance
+  EXPECT_NEAR(static_cast<double>(cap) / 10000.0, expected, 0.15 * expected);
 }
 
 TEST(ReferenceSampling, EmptySurfaceGivesNothing) {
-  const ReferenceSampling ref =
-      reference_sampling(with_clip("sphere", "sphere:0.5"), {.count = 100, .max_candidates = 50000});
+  const ReferenceSampling ref = reference_sampling(with_clip("sphere", "sphere:0.5"),
+                                                   {.count = 100, .max_candidates = 50000});
   EXPECT_TRUE(ref.points.empty());
   EXPECT_EQ(ref.area, 0);
   EXPECT_EQ(ref.candidates, 50000u);
@@ -145,15 +147,17 @@ TEST(MeasureSamples, SingularPointCoverage) {
 TEST(MeasureSamples, ResidualLeavesOutTheSingularBalls) {
   const Surface cone = resolve_surface("cone");
   const std::vector<Vec3> pts = {Vec3(0.5, 0, 0.5), Vec3(0, 0.5, 0.5 + 1e-3), Vec3(1e-3, 0, 0)};
-  const SampleMetrics m = measure_samples(cone, pts, {.singular_exclusion = 0.1, .covering = false});
+  const SampleMetrics m =
+      measure_samples(cone, pts, {.singular_exclusion = 0.1, .covering = false});
   EXPECT_EQ(m.residual_excluded, 1u);
   EXPECT_NEAR(m.residual_max, 1e-3 / std::sqrt(2.0), 1e-5);
 }
 
 TEST(MeasureSamples, BandDensityIsOneForUniformSamplesAndZeroForAGap) {
   const Surface planes = resolve_surface("planes");
-  const ReferenceSampling other = reference_sampling(planes, {.count = 10000, .seed = 99});
+  const ReferenceSampling other = reference_sampling(planes, {.count = 5000, .seed = 99});
   MetricsOptions mo{.covering = false, .band_halfwidth = 0.05};
+  mo.reference.count = 5000;
   const SampleMetrics uniform = measure_samples(planes, other.points, mo);
   EXPECT_NEAR(uniform.band_density_ratio, 1.0, 0.1);
   std::vector<Vec3> gap;

@@ -64,7 +64,8 @@ TEST_F(PlyTest, EmptyPointSet) {
 
 TEST_F(PlyTest, MismatchedSizesAreRejectedBeforeWriting) {
   EXPECT_THROW(write_points_ply(path("d.ply"), positions_, {normals_.data(), 2}), InvalidArgument);
-  EXPECT_THROW(write_points_ply(path("d.ply"), positions_, {}, {radii_.data(), 1}), InvalidArgument);
+  EXPECT_THROW(write_points_ply(path("d.ply"), positions_, {}, {radii_.data(), 1}),
+               InvalidArgument);
   EXPECT_FALSE(fs::exists(path("d.ply")));
 }
 

@@ -17,8 +17,8 @@ class SampleCommand : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
-           ("zeroset_sample_" + std::string(
-                                    ::testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("zeroset_sample_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::create_directories(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
@@ -60,9 +60,11 @@ TEST_F(SampleCommand, AnimationReportsTheWorstResidual) {
 }
 
 TEST_F(SampleCommand, ExtensionsCanBeSwitchedOff) {
-  const auto r = run("sample planes --max-count 200 --steps 20 --no-cos-weight --no-snap "
-                     "--no-clip-projection --plain-repulsion --grading 0 --radius-adapt wh "
-                     "--ascii -o " + path("p.ply") + " --stats " + path("p.json"));
+  const auto r =
+      run("sample planes --max-count 200 --steps 20 --no-cos-weight --no-snap "
+          "--no-clip-projection --plain-repulsion --grading 0 --radius-adapt wh "
+          "--ascii -o " +
+          path("p.ply") + " --stats " + path("p.json"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::ifstream in(path("p.json"));
   const auto o = nlohmann::json::parse(in)["options"];
@@ -79,8 +81,8 @@ TEST_F(SampleCommand, ReadsFloaterSettingsFromASceneFile) {
     out << R"({"zeroset_scene": 1, "name": "kummer", "parameters": {"mu": {"value": 2.0}},
                "floaters": {"max_count": 400, "seed": 5, "radius_adapt": "wh"}})";
   }
-  const auto r = run("sample " + path("scene.json") + " --steps 5 --seed 6 --stats " +
-                     path("s.json"));
+  const auto r =
+      run("sample " + path("scene.json") + " --steps 5 --seed 6 --stats " + path("s.json"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::ifstream in(path("s.json"));
   const auto j = nlohmann::json::parse(in);

@@ -126,6 +126,8 @@ TEST(Scene, BoundedEquationsGetADefaultClipThatHoldsTheSurface) {
 TEST(Scene, UnboundedEquationsGetNoDefaultClip) {
   EXPECT_TRUE(resolve_surface("x^2 + y^2 - z^2").clip.is_empty_spec());
   EXPECT_TRUE(resolve_surface("x*y*z - 1").clip.is_empty_spec());
+  EXPECT_TRUE(resolve_surface("x^2 + y^2 - 1").clip.is_empty_spec());  // a cylinder
+  EXPECT_TRUE(resolve_surface("x^4 + (y - z)^4 - 1").clip.is_empty_spec());
   EXPECT_TRUE(resolve_surface("sin(x) + y").clip.is_empty_spec());
   EXPECT_THROW((void)resolve_surface("x^2 + y^2 - z^2").bounds(), BadInput);
 }

@@ -69,10 +69,12 @@ struct FloaterOptions {
   double feedback = 15;                ///< φ, pull of the φF term towards F = 0
   /// The tangential move of one step is at most this fraction of σ_i (stability).
   double max_step_fraction = 0.5;
-  double equilibrium_speed = 4;        ///< γ: near equilibrium when |ṗ_i| < γσ_i
+  double equilibrium_speed = 4;  ///< γ: near equilibrium when |ṗ_i| < γσ_i
+  // Fission and death use the local nominal radius σ̂_i = min(σ̂, σ_max^i), so floaters made
+  // small near a singular point are not killed for being small.
   double fission_energy_factor = 0.2;  ///< ν: energised fission when E_i > νÊ and σ_i > σ̂_i
   double death_radius_factor = 0.7;    ///< δ: death candidate when σ_i < δσ̂_i
-  double max_radius_factor = 1.5;      ///< σ_max = factor·σ̂
+  double max_radius_factor = 1.5;      ///< σ_max = factor·σ̂ (fission whenever σ_i > σ_max^i)
   /// Pair forces use the pair's mean radius σ_ij = (σ_i + σ_j)/2 and scale with it:
   /// P_i = σ_i Σ_j (r_ij/σ_ij) 2E(r_ij; σ_ij), the same as A.2 when all radii are equal. Then a
   /// graded density (smaller σ_max^i near singular points) is an equilibrium; with A.2 the
@@ -88,8 +90,9 @@ struct FloaterOptions {
   /// §3.3: E_ij is weighted by |cos(∇F_i, ∇F_j)|, so sheets pass through each other.
   bool cos_weight = true;
   RadiusAdapt radius_adapt = RadiusAdapt::kMixed;  ///< §3.3: per-particle σ_max^i = μ_i σ_max
-  int estimator_interval = 8;   ///< α_i and β_i are refreshed every this many steps (≥ 1)
-  int curvature_samples = 4;    ///< random perimeter points for α_i
+  /// α_i and β_i (and node snapping) are refreshed every this many steps (≥ 1).
+  int estimator_interval = 8;
+  int curvature_samples = 4;  ///< random perimeter points for α_i
   /// γ_s of β_i = min(|r|/γ_s, 1), in world units. 0: scene_radius/3 (= 1 on the paper's
   /// Kummer scene, the value it used).
   double singular_scale = 0;
@@ -109,7 +112,7 @@ struct FloaterOptions {
   // With per-particle fission radii the equilibrium is dynamic: a trickle of fissions near
   // singular points and deaths elsewhere never stops entirely. "Settled" is therefore judged
   // over a window of steps (StepStats::converged):
-  int converge_window = 50;      ///< steps looked back over
+  int converge_window = 50;  ///< steps looked back over
   /// Births + deaths + removals + insertions per floater per step, averaged over the window,
   /// at most this (0.002: two floaters in a thousand per step)...
   double converge_churn = 0.002;
@@ -117,7 +120,9 @@ struct FloaterOptions {
   /// floater speed, averaged over the window, below this many radii per time unit.
   double converge_speed = 1.0;
 
-  int threads = 0;  ///< OpenMP threads for one step; 0: OpenMP's default (all cores)
+  /// OpenMP threads for one step; 0: OpenMP's default (all cores). Systems of fewer than
+  /// 4,096 floaters step on one thread (a parallel region would cost more than it saves).
+  int threads = 0;
 };
 
 /// What one step did, and the state after it.
@@ -129,7 +134,8 @@ struct StepStats {
   std::size_t removed = 0;   ///< strays (far from F = 0, degenerate σ, or outside the clip)
   std::size_t inserted = 0;  ///< random insertions (start, reset, or an empty system)
   /// |F|/|∇F| at the floaters after the step (first-order distance; infinite-free: a floater
-  /// with ∇F = 0 and F ≠ 0 counts as the largest double). 0 when there are no floaters.
+  /// with ∇F = 0 and F ≠ 0 counts as the largest double), floaters held on nodes left out. 0
+  /// when there are none.
   double median_residual = 0;
   double max_residual = 0;
   double rms_speed = 0;  ///< RMS over the floaters of |ṗ_i|/σ_i (radii per time unit)
@@ -149,7 +155,8 @@ struct StepStats {
 /// `estimator_interval` steps.
 class FloaterSystem {
  public:
-  /// Seeds `seed_count` random floaters in the surface's clip volume. Throws BadInput when the
+  /// Seeds `seed_count` random floaters in the surface's clip volume. With options.radius = 0
+  /// the surface's area is estimated first (tens of milliseconds). Throws BadInput when the
   /// clip is unbounded or a parameter has no value, InvalidArgument for a bad option (named).
   FloaterSystem(const Surface& surface, const FloaterOptions& options = {});
   ~FloaterSystem();
@@ -193,12 +200,15 @@ class FloaterSystem {
   std::size_t size() const;
   std::size_t steps_taken() const;
   /// Floater state after the last step, all of length size(), in an order that changes from
-  /// step to step (floaters are kept sorted by spatial cell); ids() follows them.
+  /// step to step (floaters are kept sorted by spatial cell); ids() follows them. The spans
+  /// stay valid until the next call that changes the system.
   std::span<const Vec3> positions() const;
   std::span<const double> radii() const;  ///< σ_i
-  /// Unit ∇F at each position ((0,0,1) where ∇F = 0): the orientation for drawing.
+  /// Unit ∇F at each position ((0,0,1) where ∇F = 0): the orientation for drawing. Built on
+  /// the first call after a change (O(n), no field evaluation).
   std::span<const Vec3> normals() const;
-  std::span<const std::uint64_t> ids() const;  ///< unique per floater, never reused
+  /// Unique per floater since construction or the last reset() (which numbers afresh).
+  std::span<const std::uint64_t> ids() const;
   /// σ_max^i, the fission radius of each floater (μ_i σ_max after grading; σ_max everywhere
   /// with RadiusAdapt::kWitkinHeckbert).
   std::span<const double> max_radii() const;

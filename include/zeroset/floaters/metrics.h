@@ -58,7 +58,7 @@ struct MetricsOptions {
   /// many samples nearest to it.
   int local_neighbours = 8;
   ReferenceOptions reference = {};  ///< for the covering radius and the band density
-  bool covering = true;        ///< compute the covering radius (needs the reference sampling)
+  bool covering = true;             ///< compute the covering radius (needs the reference sampling)
   /// Half width of the band around the singular set for band_density_ratio (distance from
   /// singular_distance). 0: not computed.
   double band_halfwidth = 0;
@@ -77,9 +77,9 @@ struct SampleMetrics {
   double residual_median = 0;  ///< |F|/|∇F| over samples outside the exclusion balls
   double residual_max = 0;
   std::size_t residual_excluded = 0;  ///< samples inside the exclusion balls
-  double spacing_mean = 0;  ///< mean nearest-neighbour distance
-  double spacing_cv = 0;    ///< its coefficient of variation (std / mean)
-  double covering_radius = 0;  ///< largest distance from a reference point to the nearest sample
+  double spacing_mean = 0;            ///< mean nearest-neighbour distance
+  double spacing_cv = 0;              ///< its coefficient of variation (std / mean)
+  double covering_radius = 0;    ///< largest distance from a reference point to the nearest sample
   double covering_relative = 0;  ///< covering_radius / spacing_mean
   std::size_t reference_count = 0;
   std::vector<SingularCoverage> singular;  ///< one per known singular point inside the clip
