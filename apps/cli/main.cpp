@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
+#include <string>
 #include <fmt/core.h>
 
 #include "common.h"
@@ -47,7 +48,11 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    app.exit(e);
+    // Same form as every other error, and a pointer to the help of the command at fault.
+    const auto commands = app.get_subcommands();
+    const std::string help =
+        commands.empty() ? "zeroset --help" : fmt::format("zeroset {} --help", commands.front()->get_name());
+    fmt::print(stderr, "zeroset: error: {}\nSee `{}` for the usage.\n", e.what(), help);
     return 2;
   } catch (const BadInput& e) {
     fmt::print(stderr, "zeroset: error: {}\n", e.what());

@@ -152,31 +152,11 @@ struct MeshImprover::State {
   }
 
   void evaluate_field() {
-    const long long n = static_cast<long long>(nv());
-    f.resize(nv()), grad.resize(nv()), unit.resize(nv());
-    constexpr long long kChunk = 1024;
-    const long long chunks = (n + kChunk - 1) / kChunk;
-#pragma omp parallel num_threads(workers)
-    {
-      std::vector<double> x, y, z, fv, gx, gy, gz;
-#pragma omp for schedule(static)
-      for (long long c = 0; c < chunks; ++c) {
-        const long long b = c * kChunk, e = std::min(n, b + kChunk);
-        const size_t m = static_cast<size_t>(e - b);
-        x.resize(m), y.resize(m), z.resize(m), fv.resize(m), gx.resize(m), gy.resize(m), gz.resize(m);
-        for (size_t q = 0; q < m; ++q) {
-          const Vec3& p = mesh.positions[static_cast<size_t>(b) + q];
-          x[q] = p.x(), y[q] = p.y(), z[q] = p.z();
-        }
-        pool.local().values_gradients(x, y, z, fv, gx, gy, gz);
-        for (size_t q = 0; q < m; ++q) {
-          const size_t v = static_cast<size_t>(b) + q;
-          f[v] = fv[q];
-          grad[v] = Vec3(gx[q], gy[q], gz[q]);
-          const double len = grad[v].norm();
-          unit[v] = len > 0 && std::isfinite(len) ? Vec3(grad[v] / len) : Vec3::Zero();
-        }
-      }
+    detail::values_gradients(pool, workers, mesh.positions, f, grad);
+    unit.resize(nv());
+    for (size_t v = 0; v < nv(); ++v) {
+      const double len = grad[v].norm();
+      unit[v] = len > 0 && std::isfinite(len) ? Vec3(grad[v] / len) : Vec3::Zero();
     }
     std::vector<double> lens;
     lens.reserve(nv());

@@ -169,29 +169,14 @@ void compute_field_normals(Mesh& mesh, const Surface& surface, int threads) {
   const long long nv = static_cast<long long>(mesh.positions.size());
   mesh.normals.assign(static_cast<size_t>(nv), Vec3::Zero());
   detail::EvaluatorPool pool(surface.field, workers);
-  constexpr long long kChunk = 1024;
-  const long long chunks = (nv + kChunk - 1) / kChunk;
+  std::vector<double> f;
+  std::vector<Vec3> g;
+  detail::values_gradients(pool, workers, mesh.positions, f, g);
   long long missing = 0;
-#pragma omp parallel num_threads(workers) reduction(+ : missing)
-  {
-    std::vector<double> x, y, z, f, gx, gy, gz;
-#pragma omp for schedule(static)
-    for (long long c = 0; c < chunks; ++c) {
-      const long long b = c * kChunk, e = std::min(nv, b + kChunk);
-      const size_t n = static_cast<size_t>(e - b);
-      x.resize(n), y.resize(n), z.resize(n), f.resize(n), gx.resize(n), gy.resize(n), gz.resize(n);
-      for (size_t q = 0; q < n; ++q) {
-        const Vec3& p = mesh.positions[static_cast<size_t>(b) + q];
-        x[q] = p.x(), y[q] = p.y(), z[q] = p.z();
-      }
-      pool.local().values_gradients(x, y, z, f, gx, gy, gz);
-      for (size_t q = 0; q < n; ++q) {
-        const Vec3 g(gx[q], gy[q], gz[q]);
-        const double len = g.norm();
-        if (len > 0 && std::isfinite(len)) mesh.normals[static_cast<size_t>(b) + q] = g / len;
-        else ++missing;
-      }
-    }
+  for (long long v = 0; v < nv; ++v) {
+    const double len = g[static_cast<size_t>(v)].norm();
+    if (len > 0 && std::isfinite(len)) mesh.normals[static_cast<size_t>(v)] = g[static_cast<size_t>(v)] / len;
+    else ++missing;
   }
   if (missing == 0) return;
   std::vector<Vec3> face_sum(static_cast<size_t>(nv), Vec3::Zero());

@@ -1,5 +1,7 @@
 #pragma once
 // OpenMP helpers with a serial fallback, and one field evaluator per worker thread.
+#include <algorithm>
+#include <span>
 #include <vector>
 
 #ifdef _OPENMP
@@ -7,6 +9,7 @@
 #endif
 
 #include "zeroset/expr/field.h"
+#include "zeroset/types.h"
 
 namespace zeroset::detail {
 
@@ -40,5 +43,35 @@ class EvaluatorPool {
  private:
   std::vector<Evaluator> pool_;
 };
+
+// F and ∇F at many points, in structure-of-arrays batches of 1,024 split over the workers
+// (one evaluator each from `pool`, which must have at least `workers` of them).
+inline void values_gradients(EvaluatorPool& pool, int workers, std::span<const Vec3> pts,
+                             std::vector<double>& f, std::vector<Vec3>& g) {
+  const long long n = static_cast<long long>(pts.size());
+  f.resize(pts.size());
+  g.resize(pts.size());
+  constexpr long long kChunk = 1024;
+  const long long chunks = (n + kChunk - 1) / kChunk;
+#pragma omp parallel num_threads(workers)
+  {
+    std::vector<double> x, y, z, fv, gx, gy, gz;
+#pragma omp for schedule(static)
+    for (long long c = 0; c < chunks; ++c) {
+      const long long b = c * kChunk, e = std::min(n, b + kChunk);
+      const size_t m = static_cast<size_t>(e - b);
+      x.resize(m), y.resize(m), z.resize(m), fv.resize(m), gx.resize(m), gy.resize(m), gz.resize(m);
+      for (size_t q = 0; q < m; ++q) {
+        const Vec3& p = pts[static_cast<size_t>(b) + q];
+        x[q] = p.x(), y[q] = p.y(), z[q] = p.z();
+      }
+      pool.local().values_gradients(x, y, z, fv, gx, gy, gz);
+      for (size_t q = 0; q < m; ++q) {
+        f[static_cast<size_t>(b) + q] = fv[q];
+        g[static_cast<size_t>(b) + q] = Vec3(gx[q], gy[q], gz[q]);
+      }
+    }
+  }
+}
 
 }  // namespace zeroset::detail

@@ -13,7 +13,9 @@
 
 #include <fmt/core.h>
 
-#if defined(__SSE2__)
+#if defined(__AVX__)
+#include <immintrin.h>
+#elif defined(__SSE2__)
 #include <emmintrin.h>
 #endif
 
@@ -116,60 +118,109 @@ bool use_sparse(const Grid& g, const PolygonizeOptions& o) {
          static_cast<double>(o.sparse_auto_nodes);
 }
 
-// Samples F at runs of grid nodes along x. For a polynomial, the restriction of F to the
-// row's line is a univariate polynomial of the surface's degree: Horner's rule then costs a
-// few multiply-adds per node. Its parameter t counts cells from the middle of the whole grid
-// row, so a node gets the bit-identical value whichever brick samples it. The row's
-// coefficients come from G(t, y, z) = F(x_mid + h·t, y, z), expanded once: coefficient m is
-// the sum of G's terms with t^m evaluated at the row's (y, z), a few dozen multiply-adds.
+// A polynomial F restricted to the grid lines along one axis. Along the line through grid
+// coordinates (u, v) of the other two axes (in increasing axis order), F is a univariate
+// polynomial in t, the number of cells from the middle node of the whole line: G(t, u, v) =
+// F with the axis coordinate coord(mid) + h·t, expanded once. Its coefficient of t^m is a
+// polynomial in u whose coefficients depend on v alone; those are kept for the last v, since
+// callers walk lines with v fixed (a layer of rows, the edges of one row), so a line then
+// costs one Horner pass in u per coefficient. A node gets the bit-identical value whichever
+// caller (a slab, a brick) evaluates it along this axis with the same u and v.
+class LineRestriction {
+ public:
+  LineRestriction(const Polynomial& poly, const Grid& grid, int axis)
+      : degree_(poly.degree()), mid_(grid.cells[static_cast<size_t>(axis)] / 2) {
+    if (degree_ < 0) return;
+    Vec3 origin = Vec3::Zero();
+    origin[axis] = grid.coord(axis, mid_);
+    const int ua = axis == 0 ? 1 : 0, va = axis == 2 ? 1 : 2;
+    const Polynomial translated = poly.translated(origin);
+    for (const Monomial& m : translated.terms()) {
+      const int e[3] = {m.i, m.j, m.k};
+      terms_.push_back({m.c * std::pow(grid.h, e[axis]), e[axis], e[ua], e[va]});
+    }
+    const size_t n = static_cast<size_t>(degree_ + 1);
+    in_u_.resize(n * n);
+    v_powers_.resize(n);
+  }
+
+  /// −1 for the zero polynomial.
+  int degree() const { return degree_; }
+  /// t of grid index `index` along the axis.
+  double t_of(long long index) const { return static_cast<double>(index - mid_); }
+
+  /// c[0..degree] of F along the line through (u, v).
+  void coefficients(double u, double v, double* c) {
+    const size_t n = static_cast<size_t>(degree_ + 1);
+    if (!have_v_ || v != v_) {
+      v_powers_[0] = 1;
+      for (size_t a = 1; a < n; ++a) v_powers_[a] = v_powers_[a - 1] * v;
+      std::fill(in_u_.begin(), in_u_.end(), 0.0);
+      for (const Term& m : terms_)
+        in_u_[static_cast<size_t>(m.t) * n + static_cast<size_t>(m.u)] +=
+            m.c * v_powers_[static_cast<size_t>(m.v)];
+      v_ = v, have_v_ = true;
+    }
+    for (size_t m = 0; m < n; ++m) {
+      const double* d = &in_u_[m * n];
+      double sum = d[n - 1 - m];  // u's degree in the t^m coefficient is at most degree − m
+      for (size_t a = n - 1 - m; a-- > 0;) sum = sum * u + d[a];
+      c[m] = sum;
+    }
+  }
+
+ private:
+  struct Term {
+    double c;
+    int t, u, v;
+  };
+  int degree_;
+  long long mid_;
+  std::vector<Term> terms_;
+  std::vector<double> in_u_;     // [m · (degree + 1) + a]: coefficient of t^m u^a at v_
+  std::vector<double> v_powers_;
+  double v_ = 0;
+  bool have_v_ = false;
+};
+
+// Samples F at runs of grid nodes along x: through the line restriction for polynomials
+// (vectorised Horner), otherwise through the field over structure-of-arrays rows.
 class RowSampler {
  public:
   RowSampler(const Field& field, const Grid& grid, const Polynomial* poly)
-      : eval_(field), grid_(grid), poly_(poly) {
-    if (!poly_ || poly_->degree() < 0) return;
-    const long long mid = grid_.cells[0] / 2;
-    std::vector<Monomial> terms = poly_->translated(Vec3(grid_.coord(0, mid), 0, 0)).terms();
-    for (Monomial& m : terms) m.c *= std::pow(grid_.h, m.i);
-    row_terms_ = std::move(terms);
-    degree_ = poly_->degree();
-    coeffs_.resize(static_cast<size_t>(degree_ + 1));
-    y_powers_.resize(coeffs_.size());
-    z_powers_.resize(coeffs_.size());
+      : eval_(field), grid_(grid) {
+    if (!poly) return;
+    line_.emplace(*poly, grid, 0);
+    coeffs_.resize(static_cast<size_t>(std::max(0, line_->degree()) + 1));
     t_.resize(static_cast<size_t>(grid_.nx()));
-    for (long long i = 0; i < grid_.nx(); ++i) t_[static_cast<size_t>(i)] = static_cast<double>(i - mid);
+    for (long long i = 0; i < grid_.nx(); ++i) t_[static_cast<size_t>(i)] = line_->t_of(i);
   }
 
   void sample(long long i0, long long count, long long j, long long k, double* out) {
-    if (poly_ && degree_ >= 0) {
-      const double y = grid_.coord(1, j), z = grid_.coord(2, k);
-      y_powers_[0] = z_powers_[0] = 1;
-      for (size_t a = 1; a < coeffs_.size(); ++a)
-        y_powers_[a] = y_powers_[a - 1] * y, z_powers_[a] = z_powers_[a - 1] * z;
-      std::fill(coeffs_.begin(), coeffs_.end(), 0.0);
-      for (const Monomial& m : row_terms_)
-        coeffs_[static_cast<size_t>(m.i)] +=
-            m.c * y_powers_[static_cast<size_t>(m.j)] * z_powers_[static_cast<size_t>(m.k)];
+    if (line_ && line_->degree() >= 0) {
+      line_->coefficients(grid_.coord(1, j), grid_.coord(2, k), coeffs_.data());
       // Horner's rule on blocks of nodes held in registers, the block loop innermost so
       // that it vectorizes; every node sees the same operations in the same order.
+      const int degree = line_->degree();
       const double* t = &t_[static_cast<size_t>(i0)];
       const double* c = coeffs_.data();
       constexpr int kBlock = 8;
       long long n = 0;
       for (; n + kBlock <= count; n += kBlock) {
         double acc[kBlock];
-        for (int q = 0; q < kBlock; ++q) acc[q] = c[degree_];
-        for (int m = degree_ - 1; m >= 0; --m)
+        for (int q = 0; q < kBlock; ++q) acc[q] = c[degree];
+        for (int m = degree - 1; m >= 0; --m)
           for (int q = 0; q < kBlock; ++q) acc[q] = acc[q] * t[n + q] + c[m];
         for (int q = 0; q < kBlock; ++q) out[n + q] = acc[q];
       }
       for (; n < count; ++n) {
-        double v = c[degree_];
-        for (int m = degree_ - 1; m >= 0; --m) v = v * t[n] + c[m];
+        double v = c[degree];
+        for (int m = degree - 1; m >= 0; --m) v = v * t[n] + c[m];
         out[n] = v;
       }
       return;
     }
-    if (poly_) {  // the zero polynomial
+    if (line_) {  // the zero polynomial
       std::fill(out, out + count, 0.0);
       return;
     }
@@ -183,85 +234,160 @@ class RowSampler {
  private:
   Evaluator eval_;
   const Grid& grid_;
-  const Polynomial* poly_;
-  int degree_ = -1;
-  std::vector<Monomial> row_terms_;  // G's terms (see above)
-  std::vector<double> coeffs_, y_powers_, z_powers_, t_, x_, y_, z_;
+  std::optional<LineRestriction> line_;
+  std::vector<double> coeffs_, t_, x_, y_, z_;
 };
 
 bool is_positive(double v) { return !(v < 0); }  // NaN counts as positive
 
 // One crossing edge: its lower node, axis and the field values at both ends.
 struct Crossing {
-  Vec3 a;
+  long long i, j, k;
   int axis;
   double fa, fb;
 };
 
-// Places one vertex on each crossing edge: linear interpolation, then the Illinois variant
-// of regula falsi on F restricted to the edge, all edges of the batch evaluated together.
-void place_vertices(Evaluator& ev, std::span<const Crossing> in, double h, int steps,
-                    Vec3* out, long long& evaluations) {
-  const size_t n = in.size();
-  std::vector<double> t_lo(n, 0.0), t_hi(n, 1.0), f_lo(n), f_hi(n), t(n);
-  std::vector<int> last_side(n, 0);
-  for (size_t e = 0; e < n; ++e) {
-    f_lo[e] = in[e].fa;
-    f_hi[e] = in[e].fb;
-    const double s = in[e].fa / (in[e].fa - in[e].fb);
-    t[e] = std::isfinite(s) ? std::clamp(s, 0.0, 1.0) : 0.5;
-  }
-  std::vector<size_t> active(n);
-  for (size_t e = 0; e < n; ++e) active[e] = e;
-  std::vector<double> x, y, z, f;
-  for (int it = 0; it < steps && !active.empty(); ++it) {
-    const size_t m = active.size();
-    x.resize(m), y.resize(m), z.resize(m), f.resize(m);
-    for (size_t q = 0; q < m; ++q) {
-      const size_t e = active[q];
-      Vec3 p = in[e].a;
-      p[in[e].axis] += t[e] * h;
-      x[q] = p.x(), y[q] = p.y(), z[q] = p.z();
-    }
-    ev.values(x, y, z, f);
-    evaluations += static_cast<long long>(m);
-    size_t kept = 0;
-    for (size_t q = 0; q < m; ++q) {
-      const size_t e = active[q];
-      const double fv = f[q];
-      if (fv == 0) continue;  // exact root
-      // Keep the bracket [t_lo, t_hi] with opposite signs; Illinois halves the value kept
-      // twice in a row so the bracket shrinks from both sides.
-      if (is_positive(fv) == is_positive(f_hi[e])) {
-        t_hi[e] = t[e], f_hi[e] = fv;
-        if (last_side[e] == 1) f_lo[e] *= 0.5;
-        last_side[e] = 1;
-      } else {
-        t_lo[e] = t[e], f_lo[e] = fv;
-        if (last_side[e] == -1) f_hi[e] *= 0.5;
-        last_side[e] = -1;
-      }
-      double next = t_hi[e] - f_hi[e] * (t_hi[e] - t_lo[e]) / (f_hi[e] - f_lo[e]);
-      if (!std::isfinite(next) || next <= std::min(t_lo[e], t_hi[e]) ||
-          next >= std::max(t_lo[e], t_hi[e]))
-        next = 0.5 * (t_lo[e] + t_hi[e]);
-      const double moved = std::abs(next - t[e]);
-      t[e] = next;
-      if (moved > 1e-13 && std::abs(t_hi[e] - t_lo[e]) > 1e-15) active[kept++] = e;
-    }
-    active.resize(kept);
-  }
-  for (size_t e = 0; e < n; ++e) {
-    Vec3 p = in[e].a;
-    p[in[e].axis] += std::clamp(t[e], 0.0, 1.0) * h;
-    out[e] = p;
-  }
+// Where the sign changes on the edge by linear interpolation, as a fraction of the edge.
+double linear_fraction(double fa, double fb) {
+  const double s = fa / (fa - fb);
+  return std::isfinite(s) ? std::clamp(s, 0.0, 1.0) : 0.5;
 }
 
+// The Illinois variant of regula falsi on one edge, in the edge's fraction s ∈ [0, 1]: the
+// bracket [lo, hi] keeps opposite signs, and the end value kept twice in a row is halved so
+// the bracket shrinks from both sides. Robust where the surface touches the edge (a double
+// root), where Newton's method would crawl.
+struct IllinoisBracket {
+  double lo = 0, hi = 1, f_lo, f_hi;
+  int last_side = 0;
+
+  IllinoisBracket(double fa, double fb) : f_lo(fa), f_hi(fb) {}
+
+  /// Takes F at s (not 0) and returns the next s; sets `done` once s no longer moves.
+  double next(double s, double f, bool& done) {
+    if (is_positive(f) == is_positive(f_hi)) {
+      hi = s, f_hi = f;
+      if (last_side == 1) f_lo *= 0.5;
+      last_side = 1;
+    } else {
+      lo = s, f_lo = f;
+      if (last_side == -1) f_hi *= 0.5;
+      last_side = -1;
+    }
+    // Converged, the estimate may round onto the end just set (s): that ends the search,
+    // so only an estimate outside the closed bracket falls back to bisection.
+    double n = hi - f_hi * (hi - lo) / (f_hi - f_lo);
+    if (!std::isfinite(n) || n < std::min(lo, hi) || n > std::max(lo, hi)) n = 0.5 * (lo + hi);
+    done = std::abs(n - s) <= 1e-13 || std::abs(hi - lo) <= 1e-15;
+    return n;
+  }
+};
+
+// Places one vertex on each crossing edge: linear interpolation, then refinement on F
+// restricted to the edge by the Illinois method. Polynomials: F along the edge is a
+// univariate polynomial (its grid line's restriction), so each step is one Horner
+// evaluation. Other fields: all edges of a batch are evaluated together through the
+// field's tape. One per worker.
+class VertexPlacer {
+ public:
+  VertexPlacer(const Field& field, const Grid& grid, const Polynomial* poly, int steps)
+      : eval_(field), grid_(grid), steps_(steps) {
+    if (!poly || poly->degree() < 1) return;
+    for (int a = 0; a < 3; ++a) lines_[static_cast<size_t>(a)].emplace(*poly, grid, a);
+    coeffs_.resize(static_cast<size_t>(poly->degree() + 1));
+  }
+
+  void place(std::span<const Crossing> in, Vec3* out, long long& evaluations) {
+    if (lines_[0]) place_polynomial(in, out, evaluations);
+    else place_batched(in, out, evaluations);
+  }
+
+ private:
+  Vec3 point(const Crossing& c, double s) const {
+    Vec3 p = grid_.node(c.i, c.j, c.k);
+    p[c.axis] += std::clamp(s, 0.0, 1.0) * grid_.h;
+    return p;
+  }
+
+  void place_polynomial(std::span<const Crossing> in, Vec3* out, long long& evaluations) {
+    const int degree = lines_[0]->degree();
+    const double* c = coeffs_.data();
+    long long have[3] = {-1, -1, -1};  // the line whose coefficients are in coeffs_
+    int have_axis = -1;
+    for (size_t e = 0; e < in.size(); ++e) {
+      const Crossing& x = in[e];
+      double s = linear_fraction(x.fa, x.fb);
+      if (steps_ > 0 && std::isfinite(x.fa) && std::isfinite(x.fb)) {
+        // The other two grid indices fix the line; consecutive x edges share it.
+        const long long idx[3] = {x.i, x.j, x.k};
+        const int ua = x.axis == 0 ? 1 : 0, va = x.axis == 2 ? 1 : 2;
+        LineRestriction& line = *lines_[static_cast<size_t>(x.axis)];
+        if (x.axis != have_axis || idx[ua] != have[ua] || idx[va] != have[va]) {
+          line.coefficients(grid_.coord(ua, idx[ua]), grid_.coord(va, idx[va]), coeffs_.data());
+          have[0] = x.i, have[1] = x.j, have[2] = x.k, have_axis = x.axis;
+        }
+        const double t0 = line.t_of(idx[x.axis]);
+        IllinoisBracket bracket(x.fa, x.fb);
+        for (int it = 0; it < steps_; ++it) {
+          double f = c[degree];
+          for (int m = degree - 1; m >= 0; --m) f = f * (t0 + s) + c[m];
+          ++evaluations;
+          if (f == 0 || !std::isfinite(f)) break;
+          bool done = false;
+          s = bracket.next(s, f, done);
+          if (done) break;
+        }
+      }
+      out[e] = point(x, s);
+    }
+  }
+
+  void place_batched(std::span<const Crossing> in, Vec3* out, long long& evaluations) {
+    const size_t n = in.size();
+    brackets_.clear();
+    t_.resize(n);
+    active_.resize(n);
+    for (size_t e = 0; e < n; ++e) {
+      brackets_.emplace_back(in[e].fa, in[e].fb);
+      t_[e] = linear_fraction(in[e].fa, in[e].fb);
+      active_[e] = e;
+    }
+    for (int it = 0; it < steps_ && !active_.empty(); ++it) {
+      const size_t m = active_.size();
+      x_.resize(m), y_.resize(m), z_.resize(m), f_.resize(m);
+      for (size_t q = 0; q < m; ++q) {
+        const Vec3 p = point(in[active_[q]], t_[active_[q]]);
+        x_[q] = p.x(), y_[q] = p.y(), z_[q] = p.z();
+      }
+      eval_.values(x_, y_, z_, f_);
+      evaluations += static_cast<long long>(m);
+      size_t kept = 0;
+      for (size_t q = 0; q < m; ++q) {
+        const size_t e = active_[q];
+        if (f_[q] == 0) continue;  // exact root
+        bool done = false;
+        t_[e] = brackets_[e].next(t_[e], f_[q], done);
+        if (!done) active_[kept++] = e;
+      }
+      active_.resize(kept);
+    }
+    for (size_t e = 0; e < n; ++e) out[e] = point(in[e], t_[e]);
+  }
+
+  Evaluator eval_;
+  const Grid& grid_;
+  int steps_;
+  std::array<std::optional<LineRestriction>, 3> lines_;
+  std::vector<double> coeffs_;
+  std::vector<IllinoisBracket> brackets_;
+  std::vector<double> t_, x_, y_, z_, f_;
+  std::vector<size_t> active_;
+};
+
 // Places a batch of crossings split over the workers (chunks of a few thousand edges).
-void place_vertices_parallel(detail::EvaluatorPool& pool, int workers,
-                             const std::vector<Crossing>& in, double h, int steps, Vec3* out,
-                             long long& evaluations, const std::stop_token& stop) {
+void place_vertices_parallel(std::vector<std::unique_ptr<VertexPlacer>>& placers, int workers,
+                             const std::vector<Crossing>& in, Vec3* out, long long& evaluations,
+                             const std::stop_token& stop) {
   constexpr size_t kChunk = 4096;
   const long long chunks = static_cast<long long>((in.size() + kChunk - 1) / kChunk);
   long long evals = 0;
@@ -269,8 +395,8 @@ void place_vertices_parallel(detail::EvaluatorPool& pool, int workers,
   for (long long c = 0; c < chunks; ++c) {
     if (stop.stop_requested()) continue;
     const size_t b = static_cast<size_t>(c) * kChunk, e = std::min(in.size(), b + kChunk);
-    place_vertices(pool.local(), std::span<const Crossing>(in.data() + b, e - b), h, steps,
-                   out + b, evals);
+    placers[static_cast<size_t>(detail::worker_index())]->place(
+        std::span<const Crossing>(in.data() + b, e - b), out + b, evals);
   }
   evaluations += evals;
 }
@@ -281,8 +407,7 @@ void place_vertices_parallel(detail::EvaluatorPool& pool, int workers,
 Vec3 linear_point(const Grid& g, long long i, long long j, long long k, int axis, double fa,
                   double fb) {
   Vec3 p = g.node(i, j, k);
-  const double s = fa / (fa - fb);
-  p[axis] += (std::isfinite(s) ? std::clamp(s, 0.0, 1.0) : 0.5) * g.h;
+  p[axis] += linear_fraction(fa, fb) * g.h;
   return p;
 }
 
@@ -300,14 +425,22 @@ void triangulate_cycle(const std::uint8_t* edges, int n, const Vec3* pos, Emit&&
     const Vec3& pa = pos[edges[a]];
     const Vec3& pb = pos[edges[b]];
     const Vec3& pc = pos[edges[c]];
-    const double area2 = (pb - pa).cross(pc - pa).norm();
+    // The square of the quality up to a constant factor: it orders triangles alike.
+    const double area2 = (pb - pa).cross(pc - pa).squaredNorm();
     const double sum = (pb - pa).squaredNorm() + (pc - pb).squaredNorm() + (pa - pc).squaredNorm();
-    return sum > 0 ? 2 * std::sqrt(3.0) * area2 / sum : 0.0;
+    return sum > 0 ? area2 / (sum * sum) : 0.0;
   };
   auto allowed = [&](int a, int b) {
     return b - a == 1 || (a == 0 && b == n - 1) ||
            !detail::edges_share_face(edges[a], edges[b]);
   };
+  if (n == 4) {  // the most common cycle: two diagonals, decided as the general case would
+    const double via1 = allowed(1, 3) ? std::min(quality(0, 1, 3), quality(1, 2, 3)) : -1;
+    const double via2 = allowed(0, 2) ? std::min(quality(0, 2, 3), quality(0, 1, 2)) : -1;
+    if (via2 > via1) emit(edges[0], edges[2], edges[3]), emit(edges[0], edges[1], edges[2]);
+    else emit(edges[0], edges[1], edges[3]), emit(edges[1], edges[2], edges[3]);
+    return;
+  }
   double best[12][12];
   int split[12][12];
   for (int len = 2; len < n; ++len)
@@ -378,14 +511,14 @@ using Triangle = std::array<std::uint32_t, 3>;
 // ---------------------------------------------------------------------------------------
 // Dense path: every node sampled; vertex ids from per-row prefix counts over bit sets.
 //
-// The grid is cut into slabs of kSlabLayers cell layers, handled one at a time by a worker
+// The grid is cut into slabs of a few cell layers (slab_layers), handled one at a time by a worker
 // from sampling to triangles, so only a slab's values are held (not the whole volume) and
 // they are still in cache when its triangles are made. Vertices are numbered in row order
 // (row = (j, k), then axis, then x), the same order whatever the slabs: a slab numbers the
 // rows of its own node layers from 0 and carries on into the next slab's first layer (the
 // top faces of its last cells), so adding the slab's first global id makes all its ids
 // global. That numbering needs the z edges of that layer, so a slab samples two node
-// layers beyond its own. Slabs have a fixed size, so the mesh does not depend on the
+// layers beyond its own. Slab sizes depend on the grid only, so the mesh does not depend on the
 // thread count.
 
 struct DenseResult {
@@ -395,15 +528,31 @@ struct DenseResult {
 
 constexpr long long kSlabLayers = 16;
 
+// Cell layers per slab: kSlabLayers, fewer on small grids so that they still make eight slabs
+// for the workers to share (never fewer than 8 layers: each slab samples two extra layers).
+long long slab_layers(const Grid& g) { return std::clamp<long long>(g.cells[2] / 8, 8, kSlabLayers); }
+
 // Bit i of bits[i / 64] set where values[i] counts as positive (is_positive); returns how many
-// values are NaN. Two values per SSE2 compare where available.
+// values are NaN. Four (AVX) or two (SSE2) values per compare where available.
 long long sign_bits(const double* values, long long n, std::uint64_t* bits) {
   long long nans = 0;
   for (long long b = 0; b < n; b += 64) {
     const long long e = std::min(n, b + 64);
     std::uint64_t word = 0;
     long long i = b;
-#if defined(__SSE2__)
+#if defined(__AVX__)
+    __m256d unordered = _mm256_setzero_pd();
+    for (; i + 4 <= e; i += 4) {
+      const __m256d v = _mm256_loadu_pd(values + i);
+      // not (v < 0), true for NaN: NaN counts as positive
+      const auto positive =
+          static_cast<std::uint64_t>(_mm256_movemask_pd(_mm256_cmp_pd(v, _mm256_setzero_pd(), _CMP_NLT_UQ)));
+      word |= positive << (i - b);
+      unordered = _mm256_or_pd(unordered, _mm256_cmp_pd(v, v, _CMP_UNORD_Q));
+    }
+    if (_mm256_movemask_pd(unordered))  // rare: count the NaNs one by one
+      for (long long q = b; q < i; ++q) nans += std::isnan(values[q]) ? 1 : 0;
+#elif defined(__SSE2__)
     const __m128d zero = _mm_setzero_pd();
     __m128d unordered = _mm_setzero_pd();
     for (; i + 2 <= e; i += 2) {
@@ -443,12 +592,12 @@ struct SlabScratch {
   std::vector<Crossing> crossings;
 };
 
-// Samples, numbers and triangulates the cells of layers [k0, k0 + kSlabLayers).
-void extract_slab(RowSampler& sampler, Evaluator& ev, SlabScratch& scratch, const Grid& g,
-                  const PolygonizeOptions& o, long long k0, Slab& slab) {
+// Samples, numbers and triangulates the cells of layers [k0, k0 + layers).
+void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratch, const Grid& g,
+                  long long k0, long long layers, Slab& slab) {
   const long long nx = g.nx(), ny = g.ny(), nz = g.nz();
   const long long W = (nx + 63) / 64;
-  const long long k_cells = std::min(k0 + kSlabLayers, nz - 1);  // cell layers [k0, k_cells)
+  const long long k_cells = std::min(k0 + layers, nz - 1);  // cell layers [k0, k_cells)
   const long long k_own = k_cells == nz - 1 ? nz : k_cells;      // own node layers [k0, k_own)
   const long long k_num = std::min(k_own + 1, nz);               // numbered node layers
   const long long k_end = std::min(k_own + 2, nz);               // sampled node layers
@@ -531,13 +680,13 @@ void extract_slab(RowSampler& sampler, Evaluator& ev, SlabScratch& scratch, cons
             const long long i = w * 64 + std::countr_zero(b);
             b &= b - 1;
             const long long at = r * nx + i;
-            crossings.push_back({g.node(i, j, k), a, V[static_cast<size_t>(at)],
+            crossings.push_back({i, j, k, a, V[static_cast<size_t>(at)],
                                  V[static_cast<size_t>(at + stride[a])]});
           }
         }
     }
     slab.positions.resize(crossings.size());
-    place_vertices(ev, crossings, g.h, o.refine_steps, slab.positions.data(), slab.evaluations);
+    placer.place(crossings, slab.positions.data(), slab.evaluations);
   }
   slab.seconds_refinement += seconds_since(tr);
 
@@ -597,7 +746,8 @@ DenseResult extract_dense(const Surface& surface, const Grid& g, const Polygoniz
                           const Polynomial* poly, int workers, PolygonizeStats& st,
                           const std::stop_token& stop) {
   const auto t0 = Clock::now();
-  const long long slabs = (g.cells[2] + kSlabLayers - 1) / kSlabLayers;
+  const long long layers = slab_layers(g);
+  const long long slabs = (g.cells[2] + layers - 1) / layers;
   // At least four slabs per worker: a worker that the system preempts while it holds a slab
   // then delays the end by a fraction of the work, not by half of it (small grids, where a
   // slab is a quarter of the grid or more, run on one worker).
@@ -606,13 +756,14 @@ DenseResult extract_dense(const Surface& surface, const Grid& g, const Polygoniz
   {
     std::vector<std::unique_ptr<RowSampler>> samplers(static_cast<size_t>(workers));
     for (auto& s : samplers) s = std::make_unique<RowSampler>(surface.field, g, poly);
-    detail::EvaluatorPool pool(surface.field, workers);
+    std::vector<std::unique_ptr<VertexPlacer>> placers(static_cast<size_t>(workers));
+    for (auto& p : placers) p = std::make_unique<VertexPlacer>(surface.field, g, poly, o.refine_steps);
     std::vector<SlabScratch> scratch(static_cast<size_t>(workers));
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
     for (long long s = 0; s < slabs; ++s) {
       if (stop.stop_requested()) continue;
       const auto w = static_cast<size_t>(detail::worker_index());
-      extract_slab(*samplers[w], pool.local(), scratch[w], g, o, s * kSlabLayers,
+      extract_slab(*samplers[w], *placers[w], scratch[w], g, s * layers, layers,
                    out[static_cast<size_t>(s)]);
     }
   }
@@ -808,7 +959,7 @@ DenseResult extract_sparse(const Surface& surface, const Grid& g, const Polygoni
               const long long gi = i0 + ii + d[0], gj = j0 + jj + d[1], gk = k0 + kk + d[2];
               key[e] = key_of(gi, gj, gk, a);
               pos[e] = linear_point(g, gi, gj, gk, a, cv[c0], cv[c1]);
-              out_c.push_back({key[e], {g.node(gi, gj, gk), a, cv[c0], cv[c1]}});
+              out_c.push_back({key[e], {gi, gj, gk, a, cv[c0], cv[c1]}});
             }
             emit_cell(*cc.polys, key, pos, out_t);
           }
@@ -853,8 +1004,12 @@ DenseResult extract_sparse(const Surface& surface, const Grid& g, const Polygoni
 
   auto t_ref = Clock::now();
   res.positions.resize(crossings.size());
-  place_vertices_parallel(pool, workers, crossings, g.h, o.refine_steps, res.positions.data(),
-                          st.refine_evaluations, stop);
+  {
+    std::vector<std::unique_ptr<VertexPlacer>> placers(static_cast<size_t>(workers));
+    for (auto& p : placers) p = std::make_unique<VertexPlacer>(surface.field, g, poly, o.refine_steps);
+    place_vertices_parallel(placers, workers, crossings, res.positions.data(),
+                            st.refine_evaluations, stop);
+  }
   st.seconds_refinement += seconds_since(t_ref);
   if (stop.stop_requested()) return {};
 

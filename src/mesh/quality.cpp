@@ -17,30 +17,7 @@ constexpr double kDeg = 180.0 / std::numbers::pi;
 void evaluate(const Surface& surface, const std::vector<Vec3>& pts, int workers,
               std::vector<double>& f, std::vector<Vec3>& g) {
   detail::EvaluatorPool pool(surface.field, workers);
-  const long long n = static_cast<long long>(pts.size());
-  f.resize(pts.size());
-  g.resize(pts.size());
-  constexpr long long kChunk = 1024;
-  const long long chunks = (n + kChunk - 1) / kChunk;
-#pragma omp parallel num_threads(workers)
-  {
-    std::vector<double> x, y, z, fv, gx, gy, gz;
-#pragma omp for schedule(static)
-    for (long long c = 0; c < chunks; ++c) {
-      const long long b = c * kChunk, e = std::min(n, b + kChunk);
-      const size_t m = static_cast<size_t>(e - b);
-      x.resize(m), y.resize(m), z.resize(m), fv.resize(m), gx.resize(m), gy.resize(m), gz.resize(m);
-      for (size_t q = 0; q < m; ++q) {
-        const Vec3& p = pts[static_cast<size_t>(b) + q];
-        x[q] = p.x(), y[q] = p.y(), z[q] = p.z();
-      }
-      pool.local().values_gradients(x, y, z, fv, gx, gy, gz);
-      for (size_t q = 0; q < m; ++q) {
-        f[static_cast<size_t>(b) + q] = fv[q];
-        g[static_cast<size_t>(b) + q] = Vec3(gx[q], gy[q], gz[q]);
-      }
-    }
-  }
+  detail::values_gradients(pool, workers, pts, f, g);
 }
 
 }  // namespace
