@@ -8,10 +8,15 @@
 namespace zeroset {
 
 MeshAdjacency build_adjacency(const Mesh& mesh) {
-  const size_t nv = mesh.positions.size();
-  const size_t nt = mesh.triangles.size();
+  return build_adjacency(mesh.positions.size(), mesh.triangles);
+}
+
+MeshAdjacency build_adjacency(size_t vertex_count,
+                              std::span<const std::array<std::uint32_t, 3>> triangles) {
+  const size_t nv = vertex_count;
+  const size_t nt = triangles.size();
   for (size_t t = 0; t < nt; ++t)
-    for (std::uint32_t v : mesh.triangles[t])
+    for (std::uint32_t v : triangles[t])
       if (v >= nv)
         throw InvalidArgument("triangle " + std::to_string(t), std::to_string(v),
                               "refers to a vertex the mesh does not have (" +
@@ -22,7 +27,7 @@ MeshAdjacency build_adjacency(const Mesh& mesh) {
     std::uint32_t triangle;
   };
   std::vector<std::uint32_t> start(nv + 1, 0);
-  for (const auto& tri : mesh.triangles)
+  for (const auto& tri : triangles)
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t a = tri[static_cast<size_t>(k)], b = tri[static_cast<size_t>((k + 1) % 3)];
       if (a != b) ++start[std::min(a, b) + 1];
@@ -31,7 +36,7 @@ MeshAdjacency build_adjacency(const Mesh& mesh) {
   std::vector<Half> half(start[nv]);
   std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
   for (size_t t = 0; t < nt; ++t) {
-    const auto& tri = mesh.triangles[t];
+    const auto& tri = triangles[t];
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t a = tri[static_cast<size_t>(k)], b = tri[static_cast<size_t>((k + 1) % 3)];
       if (a == b) continue;

@@ -1,6 +1,7 @@
 // Cutting a mesh at the clip surface (polygonize.h) and projections onto the clip curve.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -68,13 +69,35 @@ Vec3 project_onto_clip_curve(Evaluator& ev, const Clip& clip, const Vec3& p, dou
 }
 
 void flag_open_boundary(Mesh& mesh) {
-  mesh.is_boundary.resize(mesh.positions.size(), 0);
-  const MeshAdjacency adj = build_adjacency(mesh);
-  for (size_t e = 0; e < adj.edges.size(); ++e)
-    if (adj.edge_triangle_count[e] == 1) {
-      mesh.is_boundary[adj.edges[e][0]] = 1;
-      mesh.is_boundary[adj.edges[e][1]] = 1;
+  // Only how many triangles share each edge matters here, so the edges are bucketed by
+  // their smaller vertex with just the other one (a lighter cousin of build_adjacency).
+  const size_t nv = mesh.positions.size();
+  mesh.is_boundary.resize(nv, 0);
+  std::vector<std::uint32_t> start(nv + 1, 0);
+  for (const auto& tri : mesh.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = tri[static_cast<size_t>(k)], b = tri[static_cast<size_t>((k + 1) % 3)];
+      if (a != b) ++start[std::min(a, b) + 1];
     }
+  for (size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+  std::vector<std::uint32_t> other(start[nv]);
+  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+  for (const auto& tri : mesh.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = tri[static_cast<size_t>(k)], b = tri[static_cast<size_t>((k + 1) % 3)];
+      if (a != b) other[fill[std::min(a, b)]++] = std::max(a, b);
+    }
+  for (size_t v = 0; v < nv; ++v) {
+    std::uint32_t* b = other.data() + start[v];
+    std::uint32_t* e = other.data() + start[v + 1];
+    std::sort(b, e);
+    for (std::uint32_t* h = b; h != e;) {
+      std::uint32_t* g = h;
+      while (g != e && *g == *h) ++g;
+      if (g - h == 1) mesh.is_boundary[v] = mesh.is_boundary[*h] = 1;
+      h = g;
+    }
+  }
 }
 
 ClipCutStats cut_at_clip(Mesh& mesh, const Surface& surface, double snap_distance, int workers) {
@@ -89,9 +112,15 @@ ClipCutStats cut_at_clip(Mesh& mesh, const Surface& surface, double snap_distanc
     g[static_cast<size_t>(v)] = gv;
     side[static_cast<size_t>(v)] = std::abs(gv) <= snap_distance ? kOn : gv < 0 ? kIn : kOut;
   }
-  const MeshAdjacency adj = build_adjacency(mesh);
+  // Only triangles with a vertex on or outside the clip can change, and every edge that
+  // matters below (one with a vertex on the clip, or one that crosses it) has all its
+  // triangles among them: connectivity over that band is enough.
+  std::vector<std::array<std::uint32_t, 3>> band;
+  for (const auto& tri : mesh.triangles)
+    if (side[tri[0]] != kIn || side[tri[1]] != kIn || side[tri[2]] != kIn) band.push_back(tri);
+  const MeshAdjacency adj = build_adjacency(mesh.positions.size(), band);
   auto kept = [&](std::uint32_t t) {
-    const auto& tri = mesh.triangles[t];
+    const auto& tri = band[t];
     bool any_in = false, all_on = true;
     for (std::uint32_t v : tri) any_in |= side[v] == kIn, all_on &= side[v] == kOn;
     return any_in || all_on;

@@ -258,9 +258,10 @@ double linear_fraction(double fa, double fb) {
 // the bracket shrinks from both sides. Robust where the surface touches the edge (a double
 // root), where Newton's method would crawl.
 struct IllinoisBracket {
-  double lo = 0, hi = 1, f_lo, f_hi;
+  double lo = 0, hi = 1, f_lo = 0, f_hi = 0;
   int last_side = 0;
 
+  IllinoisBracket() = default;
   IllinoisBracket(double fa, double fb) : f_lo(fa), f_hi(fb) {}
 
   /// Takes F at s (not 0) and returns the next s; sets `done` once s no longer moves.
@@ -309,15 +310,33 @@ class VertexPlacer {
     return p;
   }
 
+  // Edges go through in blocks of kLanes, refined in lockstep: each step is a chain of
+  // dependent multiply-adds and a division, so independent edges side by side keep the
+  // processor busy (and the Horner loop vectorises across lanes). Finished lanes stay put.
+  static constexpr int kLanes = 8;
+
   void place_polynomial(std::span<const Crossing> in, Vec3* out, long long& evaluations) {
     const int degree = lines_[0]->degree();
-    const double* c = coeffs_.data();
+    const size_t nc = static_cast<size_t>(degree + 1);
+    lane_coeffs_.resize(nc * kLanes);  // [m · kLanes + lane]
+    double* C = lane_coeffs_.data();
     long long have[3] = {-1, -1, -1};  // the line whose coefficients are in coeffs_
     int have_axis = -1;
-    for (size_t e = 0; e < in.size(); ++e) {
-      const Crossing& x = in[e];
-      double s = linear_fraction(x.fa, x.fb);
-      if (steps_ > 0 && std::isfinite(x.fa) && std::isfinite(x.fb)) {
+    for (size_t b = 0; b < in.size(); b += kLanes) {
+      const int lanes = static_cast<int>(std::min<size_t>(kLanes, in.size() - b));
+      double s[kLanes], t0[kLanes];
+      bool active[kLanes];
+      std::array<IllinoisBracket, kLanes> bracket;
+      int running = 0;
+      for (int q = 0; q < kLanes; ++q) {
+        const Crossing& x = in[b + static_cast<size_t>(q < lanes ? q : 0)];
+        s[q] = linear_fraction(x.fa, x.fb);
+        t0[q] = 0;
+        active[q] = q < lanes && steps_ > 0 && std::isfinite(x.fa) && std::isfinite(x.fb);
+        if (!active[q]) {
+          for (size_t m = 0; m < nc; ++m) C[m * kLanes + static_cast<size_t>(q)] = 0;
+          continue;
+        }
         // The other two grid indices fix the line; consecutive x edges share it.
         const long long idx[3] = {x.i, x.j, x.k};
         const int ua = x.axis == 0 ? 1 : 0, va = x.axis == 2 ? 1 : 2;
@@ -326,19 +345,25 @@ class VertexPlacer {
           line.coefficients(grid_.coord(ua, idx[ua]), grid_.coord(va, idx[va]), coeffs_.data());
           have[0] = x.i, have[1] = x.j, have[2] = x.k, have_axis = x.axis;
         }
-        const double t0 = line.t_of(idx[x.axis]);
-        IllinoisBracket bracket(x.fa, x.fb);
-        for (int it = 0; it < steps_; ++it) {
-          double f = c[degree];
-          for (int m = degree - 1; m >= 0; --m) f = f * (t0 + s) + c[m];
+        for (size_t m = 0; m < nc; ++m) C[m * kLanes + static_cast<size_t>(q)] = coeffs_[m];
+        t0[q] = line.t_of(idx[x.axis]);
+        bracket[static_cast<size_t>(q)] = IllinoisBracket(x.fa, x.fb);
+        ++running;
+      }
+      for (int it = 0; it < steps_ && running > 0; ++it) {
+        double f[kLanes], t[kLanes];
+        for (int q = 0; q < kLanes; ++q) t[q] = t0[q] + s[q], f[q] = C[static_cast<size_t>(degree) * kLanes + static_cast<size_t>(q)];
+        for (int m = degree - 1; m >= 0; --m)
+          for (int q = 0; q < kLanes; ++q) f[q] = f[q] * t[q] + C[static_cast<size_t>(m) * kLanes + static_cast<size_t>(q)];
+        for (int q = 0; q < kLanes; ++q) {
+          if (!active[q]) continue;
           ++evaluations;
-          if (f == 0 || !std::isfinite(f)) break;
-          bool done = false;
-          s = bracket.next(s, f, done);
-          if (done) break;
+          bool done = f[q] == 0 || !std::isfinite(f[q]);
+          if (!done) s[q] = bracket[static_cast<size_t>(q)].next(s[q], f[q], done);
+          if (done) active[q] = false, --running;
         }
       }
-      out[e] = point(x, s);
+      for (int q = 0; q < lanes; ++q) out[b + static_cast<size_t>(q)] = point(in[b + static_cast<size_t>(q)], s[q]);
     }
   }
 
@@ -378,7 +403,7 @@ class VertexPlacer {
   const Grid& grid_;
   int steps_;
   std::array<std::optional<LineRestriction>, 3> lines_;
-  std::vector<double> coeffs_;
+  std::vector<double> coeffs_, lane_coeffs_;
   std::vector<IllinoisBracket> brackets_;
   std::vector<double> t_, x_, y_, z_, f_;
   std::vector<size_t> active_;

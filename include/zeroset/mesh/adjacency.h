@@ -3,6 +3,7 @@
 /// side, vertex rings, and a topology summary (closedness, Euler characteristic).
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "zeroset/mesh/mesh.h"
@@ -31,6 +32,10 @@ struct MeshAdjacency {
 /// Builds the adjacency in O(V + T) time and memory (bucketed by the smaller vertex index).
 /// Throws InvalidArgument when a triangle refers to a vertex that does not exist.
 MeshAdjacency build_adjacency(const Mesh& mesh);
+/// The same for a set of triangles over `vertex_count` vertices (part of a mesh, say: edge
+/// triangle indices then refer to positions in `triangles`).
+MeshAdjacency build_adjacency(size_t vertex_count,
+                              std::span<const std::array<std::uint32_t, 3>> triangles);
 
 /// Counts that decide whether a mesh is a closed, consistently oriented 2-manifold.
 struct MeshTopology {
