@@ -70,19 +70,12 @@ CellPolygons build_cell(int cube_case, int connected) {
 
 struct Tables {
   std::vector<CellPolygons> cells;  // [case * 64 + connected]
-  std::array<std::uint8_t, 256> ambiguous{};
 
   Tables() : cells(256 * 64) {
     for (int c = 0; c < 256; ++c) {
-      for (int f = 0; f < 6; ++f) {
-        const auto& q = kFaceCcw[f];
-        const bool s0 = (c >> q[0]) & 1, s1 = (c >> q[1]) & 1, s2 = (c >> q[2]) & 1,
-                   s3 = (c >> q[3]) & 1;
-        if (s0 == s2 && s1 == s3 && s0 != s1) ambiguous[c] |= static_cast<std::uint8_t>(1 << f);
-      }
       // Only the resolutions of faces that are ambiguous differ (lookups mask the rest): build
       // each subset of the ambiguous faces once, a few hundred cells instead of 16,384.
-      const int amb = ambiguous[c];
+      const int amb = kAmbiguousFaces[static_cast<size_t>(c)];
       for (int d = amb;; d = (d - 1) & amb) {
         cells[static_cast<size_t>(c * 64 + d)] = build_cell(c, d);
         if (d == 0) break;
@@ -98,11 +91,9 @@ const Tables& tables() {
 
 }  // namespace
 
-std::uint8_t ambiguous_faces(int cube_case) { return tables().ambiguous[cube_case]; }
-
 const CellPolygons& cell_polygons(int cube_case, int connected) {
   const Tables& t = tables();
-  return t.cells[static_cast<size_t>(cube_case * 64 + (connected & t.ambiguous[cube_case]))];
+  return t.cells[static_cast<size_t>(cube_case * 64 + (connected & ambiguous_faces(cube_case)))];
 }
 
 }  // namespace zeroset::detail

@@ -3,6 +3,7 @@
 // sign configuration of a cube and every resolution of its ambiguous faces, the oriented
 // cycles of edge points that bound the surface inside the cube.
 #include <array>
+#include <cstddef>
 #include <cstdint>
 
 namespace zeroset::detail {
@@ -31,7 +32,20 @@ struct CellPolygons {
 };
 
 // Faces whose corners alternate in sign (bit f for face f) for a case (bit k: corner k ≥ 0).
-std::uint8_t ambiguous_faces(int cube_case);
+inline constexpr std::array<std::uint8_t, 256> kAmbiguousFaces = [] {
+  std::array<std::uint8_t, 256> amb{};
+  for (int c = 0; c < 256; ++c)
+    for (int f = 0; f < 6; ++f) {
+      const auto& q = kFaceCcw[static_cast<std::size_t>(f)];
+      const int s0 = (c >> q[0]) & 1, s1 = (c >> q[1]) & 1, s2 = (c >> q[2]) & 1, s3 = (c >> q[3]) & 1;
+      if (s0 == s2 && s1 == s3 && s0 != s1)
+        amb[static_cast<std::size_t>(c)] |= static_cast<std::uint8_t>(1 << f);
+    }
+  return amb;
+}();
+inline std::uint8_t ambiguous_faces(int cube_case) {
+  return kAmbiguousFaces[static_cast<std::size_t>(cube_case)];
+}
 // The cycles for a case; `connected` has bit f set when the positive corners of face f are
 // joined (saddle value ≥ 0). Bits of faces that are not ambiguous are ignored.
 const CellPolygons& cell_polygons(int cube_case, int connected);

@@ -615,6 +615,7 @@ struct SlabScratch {
   std::vector<std::uint64_t> positive, x_cross, y_cross, z_cross;
   std::vector<std::uint32_t> first_id;
   std::vector<Crossing> crossings;
+  std::vector<Vec3> linear;
 };
 
 // Samples, numbers and triangulates the cells of layers [k0, k0 + layers).
@@ -688,15 +689,17 @@ void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratc
   if (num_rows == own_rows) own_count = id;
   slab.numbered = id;
 
-  // Vertices of the own layers, in id order, refined in one batch.
+  // Every numbered crossing in id order with its linear point (the cells use those), then the
+  // vertices of the own layers refined in one batch.
   const auto tr = Clock::now();
+  std::vector<Vec3>& linear = scratch.linear;
   {
     std::vector<Crossing>& crossings = scratch.crossings;
     crossings.clear();
-    crossings.reserve(own_count);
+    crossings.reserve(id);
     const std::vector<std::uint64_t>* bits[3] = {&X, &Y, &Z};
     const long long stride[3] = {1, nx, nx * ny};
-    for (long long r = 0; r < own_rows; ++r) {
+    for (long long r = 0; r < num_rows; ++r) {
       const long long j = r % ny, k = k0 + r / ny;
       for (int a = 0; a < 3; ++a)
         for (long long w = 0; w < W; ++w) {
@@ -710,8 +713,14 @@ void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratc
           }
         }
     }
-    slab.positions.resize(crossings.size());
-    placer.place(crossings, slab.positions.data(), slab.evaluations);
+    linear.resize(crossings.size());
+    for (size_t e = 0; e < crossings.size(); ++e) {
+      const Crossing& c = crossings[e];
+      linear[e] = linear_point(g, c.i, c.j, c.k, c.axis, c.fa, c.fb);
+    }
+    slab.positions.resize(own_count);
+    placer.place(std::span<const Crossing>(crossings.data(), own_count), slab.positions.data(),
+                 slab.evaluations);
   }
   slab.seconds_refinement += seconds_since(tr);
 
@@ -758,8 +767,7 @@ void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratc
             const std::uint64_t word = bits[static_cast<size_t>(r * W + (ii >> 6))];
             ids[e] = off[static_cast<size_t>((r * 3 + a) * W + (ii >> 6))] +
                      static_cast<std::uint32_t>(std::popcount(word & ((1ull << (ii & 63)) - 1)));
-            pos[e] = linear_point(g, i + d[0], j + d[1], k + d[2], a, v[kEdgeCorners[e][0]],
-                                  v[kEdgeCorners[e][1]]);
+            pos[e] = linear[ids[e]];
           }
           emit_cell(*cc.polys, ids, pos, slab.triangles);
         }
