@@ -116,8 +116,9 @@ TEST(Polygonize, BoxClipCutsAlongItsPlanes) {
   const Surface s = test::equation("x^2 + y^2 - z^2 - 0.1", Clip::box(Box3::cube(1)));
   const Mesh m = polygonize(s, {.cells = 30});
   ASSERT_FALSE(m.empty());
-  for (size_t v = 0; v < m.positions.size(); ++v)
+  for (size_t v = 0; v < m.positions.size(); ++v) {
     if (m.is_boundary[v]) EXPECT_LE(std::abs(s.clip.value(m.positions[v])), 1e-9);
+  }
   EXPECT_EQ(mesh_topology(m).non_manifold_edges, 0u);
 }
 
