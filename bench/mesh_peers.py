@@ -12,6 +12,7 @@ Usage: /usr/bin/python3 bench/mesh_peers.py BUILD_DIR [--repeat N]
 """
 import argparse
 import json
+import os
 import pathlib
 import statistics
 import subprocess
@@ -67,10 +68,15 @@ def run_peers(n, repeat):
     ax = np.linspace(-R, R, n + 1)
 
     def sample():
+        # Broadcasting: the fastest way numpy offers (no coordinate arrays of the full grid).
+        return kummer(ax[:, None, None], ax[None, :, None], ax[None, None, :])
+
+    def sample_meshgrid():
         x, y, z = np.meshgrid(ax, ax, ax, indexing="ij")
         return kummer(x, y, z)
 
     t_sample, vol = median_time(sample, repeat)
+    t_meshgrid, _ = median_time(sample_meshgrid, repeat)
 
     image = vtk.vtkImageData()
     image.SetDimensions(n + 1, n + 1, n + 1)
@@ -99,15 +105,22 @@ def run_peers(n, repeat):
 
     t_sk, (sv, sf, _, _) = median_time(lambda: measure.marching_cubes(vol, 0.0, spacing=(h, h, h)), repeat)
     q_sk = quality(sv - R, sf)
-    return {"n": n, "numpy_sampling": t_sample, "vtk_copy": t_copy, "vtk": t_vtk, "skimage": t_sk,
+    return {"n": n, "numpy_sampling": t_sample, "numpy_meshgrid": t_meshgrid, "vtk_copy": t_copy, "vtk": t_vtk, "skimage": t_sk,
             "vtk_quality": q_vtk, "vtk_vertices": int(len(verts)), "skimage_quality": q_sk}
+
+
+def vtk_backend():
+    import vtk
+    return f"{vtk.vtkSMPTools.GetBackend()}, {vtk.vtkSMPTools.GetEstimatedNumberOfThreads()} threads"
 
 
 def run_zeroset_bench(build, repeat):
     exe = pathlib.Path(build) / "bench" / "mesh_bench"
+    # The passive OpenMP wait policy, as the zeroset command line sets it for itself.
+    env = dict(os.environ, OMP_WAIT_POLICY=os.environ.get("OMP_WAIT_POLICY", "PASSIVE"))
     out = subprocess.run([str(exe), "--benchmark_filter=BM_Polygonize", "--benchmark_format=json",
                           f"--benchmark_repetitions={repeat}", "--benchmark_report_aggregates_only=true"],
-                         check=True, capture_output=True, text=True).stdout
+                         check=True, capture_output=True, text=True, env=env).stdout
     rows = {}
     for b in json.loads(out)["benchmarks"]:
         if b.get("aggregate_name") != "median":
@@ -140,17 +153,24 @@ def main():
     ap.add_argument("build")
     ap.add_argument("--repeat", type=int, default=5)
     args = ap.parse_args()
+    load = os.getloadavg()[0]
     zs = run_zeroset_bench(args.build, args.repeat)
     lines = ["## Meshing: marching cubes on Kummer mu = 1.5, grid over [-3, 3]^3, clip sphere R = 3", "",
              f"Command: `/usr/bin/python3 bench/mesh_peers.py BUILD_DIR --repeat {args.repeat}` "
              "(medians; zeroset from `mesh_bench`, its sampling and extraction from PolygonizeStats).", "",
-             "Times in milliseconds. zeroset samples F through the polynomial's restriction to each grid "
-             "row (Horner); extraction includes vertex refinement by regula falsi on F (12 steps at most), "
-             "the column without refinement does the same work as VTK (linear interpolation). "
-             "Peers get their field from numpy.", "",
+             "Times in milliseconds, 2 threads for zeroset (OpenMP, passive wait policy as its command "
+             f"line uses) and for VTK (its SMP backend: {vtk_backend()}); load average "
+             f"{load:.1f} when the run started. zeroset samples F through the polynomial's restriction to each grid "
+             "row (Horner); its extraction includes vertex refinement on F along each edge (Illinois, "
+             "12 steps at most); the column without refinement does the same work as VTK (linear "
+             "interpolation). Clean-up (cutting at the clip sphere, collapsing degenerate triangles, "
+             "normals from ∇F) is zeroset's own extra work and not in the totals. Peers get their field "
+             "from numpy by broadcasting over the axes (the faster of the two usual ways; the other, "
+             "np.meshgrid, is in the note below).", "",
              "| cells | numpy sampling | VTK copy-in | vtkFlyingEdges3D | skimage | zeroset sampling | "
-             "zeroset extraction | zeroset extraction, no refinement | (numpy + VTK) / zeroset total |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "zeroset extraction | zeroset extraction, no refinement | zeroset clean-up | "
+             "VTK / zeroset extraction | (numpy + VTK) / zeroset (sampling + extraction) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     quality_rows = []
     for n in (64, 128, 256):
         p = run_peers(n, args.repeat)
@@ -160,8 +180,11 @@ def main():
         peer_total = 1e3 * (p["numpy_sampling"] + p["vtk"])
         lines.append(f"| {n}³ | {1e3 * p['numpy_sampling']:.1f} | {1e3 * p['vtk_copy']:.1f} | {1e3 * p['vtk']:.1f} | "
                      f"{1e3 * p['skimage']:.1f} | {z['sampling_ms']:.1f} | {z['extraction_ms']:.1f} | "
-                     f"{z0['extraction_ms']:.1f} | {peer_total / zs_total:.1f}× |")
+                     f"{z0['extraction_ms']:.1f} | {z['cleanup_ms']:.1f} | "
+                     f"{1e3 * p['vtk'] / z['extraction_ms']:.2f}× | {peer_total / zs_total:.1f}× |")
         quality_rows.append((n, p, z))
+    lines += ["", "numpy through np.meshgrid instead of broadcasting: " + ", ".join(
+        f"{1e3 * p['numpy_meshgrid']:.1f} ms at {n}³" for n, p, _ in quality_rows) + "."]
     sparse = zs.get((256, 1, 12, 1))
     if sparse:
         lines += ["", f"Sparse bricks at 256³: sampling {sparse['sampling_ms']:.1f} ms, extraction "

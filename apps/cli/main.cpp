@@ -1,15 +1,39 @@
 // zeroset: make implicit surfaces F(x, y, z; q) = 0 visible.
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <string>
 #include <fmt/core.h>
+#if defined(__linux__)
+#include <unistd.h>
+#endif
 
 #include "common.h"
 #include "zeroset/error.h"
 
+namespace {
+
+// OpenMP's default wait policy keeps idle workers spinning at every barrier for a while. On
+// a machine with other work running (the usual desktop) that steals the core the busy worker
+// needs: zeroset's coarse-grained parallel loops then ran several times slower than on one
+// thread. The runtime reads the policy when it loads, before main, so the process executes
+// itself once more with the passive policy, unless the user chose a policy.
+void prefer_passive_openmp(char** argv) {
+#if defined(__linux__)
+  if (std::getenv("OMP_WAIT_POLICY") != nullptr) return;
+  if (setenv("OMP_WAIT_POLICY", "PASSIVE", 1) != 0) return;
+  execv("/proc/self/exe", argv);  // returns only when it failed: run on as we are
+#else
+  (void)argv;
+#endif
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   using namespace zeroset;
+  prefer_passive_openmp(argv);
   CLI::App app{
       "zeroset — make implicit surfaces F(x, y, z; q) = 0 visible, singular points and\n"
       "self-intersections included.\n\n"
