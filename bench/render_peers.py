@@ -56,8 +56,9 @@ def surf_script(equation, radius, ppm):
         f'filename="{ppm}";', "color_file_format=ppm;", "save_color_image;", ""])
 
 
-def timed(cmd, repeat, cwd=None):
-    """Median wall time and median CPU time (user + system, all threads) of `cmd`."""
+def timed(cmd, repeat, cwd=None, after_run=None):
+    """Median wall time and median CPU time (user + system, all threads) of `cmd`; calls
+    `after_run()` after each run."""
     wall, cpu = [], []
     for _ in range(repeat):
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -68,6 +69,8 @@ def timed(cmd, repeat, cwd=None):
         cpu.append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
         if r.returncode != 0:
             sys.exit(f"render_peers: {' '.join(map(str, cmd))} failed:\n{r.stdout.decode()}")
+        if after_run:
+            after_run()
     return statistics.median(wall), statistics.median(cpu)
 
 
@@ -92,8 +95,10 @@ def main():
         png, stats = out / f"{tag}-zeroset.png", out / f"{tag}-zeroset.json"
         z_cmd = [str(zeroset), "--threads", "2", "-q", "render", *spec, "--size", "800x800",
                  "--aa", "1", "-o", str(png), "--stats", str(stats)]
-        t_z = timed(z_cmd, args.repeat)
-        t_cast = json.loads(stats.read_text())["seconds"]
+        casting = []
+        t_z = timed(z_cmd, args.repeat,
+                    after_run=lambda: casting.append(json.loads(stats.read_text())["seconds"]))
+        t_cast = statistics.median(casting)
         t_surf = t_pov = None
         if have_surf:
             pic = out / f"{tag}.pic"
@@ -123,10 +128,10 @@ def main():
         f"of all threads); load average {load:.1f} when the run started (other work on the "
         f"machine slows the 2-thread zeroset more than the 1-thread surf, so also compare the "
         f"CPU columns). zeroset: `zeroset --threads 2 render SURFACE --aa 1` (exact "
-        f"polynomial ray casting), with the wall time of the ray casting alone from `--stats` "
-        f"(no start-up, no PNG encoding); surf: `surf-alggeo-nox` (1 thread) with a script "
-        f"from the same equation; POV-Ray 3.7: the scene of `zeroset export` (`polynomial`, "
-        f"`sturm`, `clipped_by`), its default threads.",
+        f"polynomial ray casting), with the median wall time of the ray casting alone from "
+        f"`--stats` (no start-up, no PNG encoding); surf: `surf-alggeo-nox` (1 thread) with a "
+        f"script from the same equation; POV-Ray 3.7: the scene of `zeroset export` "
+        f"(`polynomial`, `sturm`, `clipped_by`), its default threads.",
         "",
         "| scene | zeroset | casting only | surf | POV-Ray | surf / zeroset (wall, CPU) "
         "| POV-Ray / zeroset (wall, CPU) |",

@@ -16,7 +16,7 @@
 namespace zeroset {
 namespace {
 
-constexpr int kTile = 16;  // must match for_each_tile's tile size
+constexpr int kTile = 16;  // screen tiles: the bins, and the tiles rendered
 
 /// Primitive indices per screen tile, and each primitive's pixel bounding box.
 struct Bins {
@@ -94,7 +94,7 @@ Image render_binned(const RenderOptions& options, const View& view, const Bins& 
   const Color edge_color(0.05, 0.05, 0.05);
   Image image(options.width, options.height);
   detail::for_each_tile(
-      options.width, options.height, detail::thread_count(options.threads), {},
+      options.width, options.height, kTile, kTile, detail::thread_count(options.threads), {},
       options.progress, [&](int x0, int y0, int x1, int y1, int) {
         const int w = x1 - x0;
         std::vector<SampleHit> hits(static_cast<size_t>(w) * (y1 - y0) * ns);

@@ -15,104 +15,149 @@ constexpr int kN = RootFinder::kMaxDegree + 1;
 // more than depth + 1 intervals; the tolerance is clamped so the depth stays below this.
 constexpr int kMaxStack = 64;
 constexpr double kMinTolerance = 1e-15;
+// Subdivisions a guided piece may take before the search falls back to the plain one.
+constexpr int kGuidedSplits = 8;
 
-/// ratio[d][i][k] = C(i, k) / C(d, k): power to Bernstein coefficients on [0, 1] for
-/// degree d, b_i = Σ_{k ≤ i} ratio[d][i][k] g_k. Built once (256 KB; a render touches
-/// one degree's 8 KB).
-struct BernsteinTable {
-  double ratio[kN][kN][kN] = {};
-  BernsteinTable() {
+/// inverse[d][k] = 1 / C(d, k), for the change to the Bernstein basis.
+struct InverseBinomials {
+  double inverse[kN][kN] = {};
+  InverseBinomials() {
     double binom[kN][kN] = {};
     for (int n = 0; n < kN; ++n) {
       binom[n][0] = binom[n][n] = 1;
       for (int k = 1; k < n; ++k) binom[n][k] = binom[n - 1][k - 1] + binom[n - 1][k];
+      for (int k = 0; k <= n; ++k) inverse[n][k] = 1 / binom[n][k];
     }
-    for (int d = 0; d < kN; ++d)
-      for (int i = 0; i <= d; ++i)
-        for (int k = 0; k <= i; ++k) ratio[d][i][k] = binom[i][k] / binom[d][k];
   }
 };
-const BernsteinTable& bernstein_table() {
-  static const BernsteinTable table;
+const InverseBinomials& inverse_binomials() {
+  static const InverseBinomials table;
   return table;
 }
 
-struct Interval {
-  double a, c;  // in the unit parameter u of the search interval
-  double b[kN];
-};
+// The coefficient arrays below are written one double at a time; vectorized code that reads
+// two at once stalls on store forwarding (the load straddles two earlier scalar stores), which
+// made these loops the hottest spots of a render. So the search is kept scalar.
+#if defined(__GNUC__) && !defined(__clang__)
+#define ZS_NO_VECTORIZE __attribute__((optimize("no-tree-vectorize", "no-tree-slp-vectorize")))
+#else
+#define ZS_NO_VECTORIZE
+#endif
 
 // The helpers below take the degree both as a template argument D (> 0: fixed, so loops
-// unroll) and at run time (used when D == 0).
+// unroll and arrays fit the degree) and at run time (used when D == 0).
 template <int D>
-int sign_variations(const double* b, int d_) {
-  // Zeros count as positive, which keeps the count branch-free. It can only overcount (a
-  // zero between two negatives adds two), never turn a count of 0 or 2 into 1, so "exactly
-  // one variation" still proves exactly one root; the callers also require b_0, b_d ≠ 0.
+constexpr int kCapacity = D > 0 ? D + 1 : kN;
+
+/// Bernstein coefficients of g on [a, c], in the unit parameter u of the search interval.
+template <int D>
+struct Interval {
+  double a, c;
+  double b[kCapacity<D>];
+};
+
+/// g at u by Horner's rule, and its derivative.
+template <int D>
+inline void horner2(const double* g, int d_, double u, double& value, double& slope) {
   const int d = D > 0 ? D : d_;
-  int v = 0;
-  for (int i = 0; i < d; ++i) v += (b[i] < 0) != (b[i + 1] < 0);
-  return v;
+  value = g[d];
+  slope = 0;
+  for (int k = d - 1; k >= 0; --k) {
+    slope = slope * u + value;
+    value = value * u + g[k];
+  }
 }
+
+/// Σ_k k(k−1)|g_k| r^(k−2): a bound on |g''| over [−r, r].
+template <int D>
+double curvature_bound(const double* g, int d_, double r) {
+  const int d = D > 0 ? D : d_;
+  double m = 0;
+  for (int k = d; k >= 2; --k) m = m * r + k * (k - 1) * std::abs(g[k]);
+  return m;
+}
+
+/// A refined root and g' at the last point evaluated next to it (0 when unknown).
+struct Refined {
+  double u;
+  double slope;
+};
 
 /// Safeguarded Newton on g in [a, c] with g(a) = ga, g(c) = gc of opposite signs: starts at
 /// `start` (the regula falsi point when it is outside the bracket), keeps the bracket, and
 /// bisects when a Newton step would leave it. Converges quadratically at a simple root.
+/// `curvature` ≥ |g''| on the bracket: a Newton step dx from x leaves an error of at most
+/// curvature·dx² / (2|g'(x)|), so one step from a close start often suffices.
 template <int D>
-double refine(const double* g, int d_, double a, double c, double ga, double gc, double tol,
-              long long& evaluations, double start = -1) {
+ZS_NO_VECTORIZE Refined refine(const double* g, int d_, double a, double c, double ga, double gc,
+                               double tol, double curvature, long long& evaluations,
+                               double start = -1) {
   const int d = D > 0 ? D : d_;
   double x = start;
   if (!(x > a && x < c)) x = (a * gc - c * ga) / (gc - ga);
   if (!(x > a && x < c)) x = 0.5 * (a + c);
+  const bool a_positive = ga > 0;
   double last_step = -1;  // the previous Newton step, -1 after a bisection
   for (int iter = 0; iter < 100; ++iter) {
-    double v = g[d], s = 0;
-    for (int k = d - 1; k >= 0; --k) {
-      s = s * x + v;
-      v = v * x + g[k];
-    }
+    double v, s;
+    horner2<D>(g, d, x, v, s);
     ++evaluations;
-    if (v == 0) return x;
-    if ((v > 0) == (ga > 0))
+    if (v == 0) return {x, s};
+    if ((v > 0) == a_positive)
       a = x;
     else
       c = x;
-    double next = s != 0 ? x - v / s : -1;
+    double next = s != 0 ? x - v / s : a - 1;  // (outside the bracket when s = 0)
     const bool newton = next > a && next < c;
     if (!newton) next = 0.5 * (a + c);
     const double step = std::abs(next - x);
-    if (step <= tol || c - a <= tol) return next;
-    // Two Newton steps in a row converging quadratically: step ≈ C·last_step², so the error
-    // left in `next` is about C·step², with C estimated from the two; stop when that is
-    // within the tolerance.
-    if (newton && last_step > 0 && step < 0.5 * last_step &&
-        step * (step / last_step) * (step / last_step) <= tol)
-      return next;
+    if (step <= tol || c - a <= tol) return {next, s};
+    if (newton) {
+      if (curvature * step * step <= std::abs(s) * tol) return {next, s};
+      // Two Newton steps in a row converging quadratically: step ≈ C·last_step², so the
+      // error left in `next` is about C·step², with C estimated from the two.
+      if (last_step > 0 && step < 0.5 * last_step &&
+          step * (step / last_step) * (step / last_step) <= tol)
+        return {next, s};
+    }
     last_step = newton ? step : -1;
     x = next;
   }
-  return x;
+  return {x, 0};
 }
 
 /// De Casteljau at 1/2: Bernstein coefficients of the two halves. `b` may alias `right`.
-/// Kept scalar: vectorized, each level's loads straddle the previous level's scalar stores
-/// and stall on store forwarding, which made this loop the hottest spot of a render.
-#if defined(__GNUC__) && !defined(__clang__)
-#define ZS_NO_VECTORIZE __attribute__((optimize("no-tree-vectorize")))
-#else
-#define ZS_NO_VECTORIZE
-#endif
 template <int D>
 ZS_NO_VECTORIZE void split_half(const double* b, int d_, double* left, double* right) {
   const int d = D > 0 ? D : d_;
-  double tmp[kN];
+  double tmp[kCapacity<D>];
   for (int i = 0; i <= d; ++i) tmp[i] = b[i];
   for (int r = 0; r <= d; ++r) {
     left[r] = tmp[0];
     right[d - r] = tmp[d - r];
     for (int i = 0; i < d - r; ++i) tmp[i] = 0.5 * (tmp[i] + tmp[i + 1]);
   }
+}
+
+/// Bernstein coefficients b of g (power basis in u) on [lo, hi] ⊂ [0, 1]: the power
+/// coefficients h of g(lo + v (hi − lo)) in v (Taylor shift, scaling), then
+/// b_i = Σ_k C(i, k) h_k / C(d, k), the binomial transform done by repeated sums.
+template <int D>
+ZS_NO_VECTORIZE void to_bernstein(const double* g, int d_, double lo, double hi, double* b) {
+  const int d = D > 0 ? D : d_;
+  for (int k = 0; k <= d; ++k) b[k] = g[k];
+  if (lo != 0)
+    for (int i = 0; i < d; ++i)
+      for (int k = d - 1; k >= i; --k) b[k] += lo * b[k + 1];
+  const double* inverse = inverse_binomials().inverse[d];
+  const double w = hi - lo;
+  double wk = w;
+  for (int k = 1; k <= d; ++k) {
+    b[k] *= wk * inverse[k];
+    wk *= w;
+  }
+  for (int i = 0; i < d; ++i)
+    for (int k = d; k > i; --k) b[k] += b[k - 1];
 }
 
 /// Where the Bernstein control polygon of b on [a, c] first crosses zero: it converges to the
@@ -128,135 +173,208 @@ double control_polygon_root(const double* b, int d_, double a, double c) {
   return 0.5 * (a + c);
 }
 
-/// g at u by Horner's rule, and its derivative.
+/// Polishes a root u_root of g found in double precision, where g' ≈ `slope`. An
+/// even-multiplicity root (a tangent ray, a squared equation) is not seen exactly: rounding
+/// turns it into a band where |g| ≤ band, or a pair of close simple roots, and the root found
+/// is off by about sqrt(band / g''). The true root is the local extremum of g that follows
+/// within the band, where g' changes sign: searched with doubling steps while |g| stays within
+/// the band (or still decreases), then refined; a sign change of g met with no extremum is
+/// the root. A simple root leaves the band after the first step and stays where it is.
 template <int D>
-inline void horner2(const double* g, int d_, double u, double& value, double& slope) {
+ZS_NO_VECTORIZE double polish_even_root(const double* g, int d_, double u_root, double slope,
+                                        double band, double step, double tol, double curvature,
+                                        long long& evaluations) {
   const int d = D > 0 ? D : d_;
-  value = g[d];
-  slope = 0;
-  for (int k = d - 1; k >= 0; --k) {
-    slope = slope * u + value;
-    value = value * u + g[k];
-  }
-}
-
-/// Polishes a root u_root of g found in double precision. An even-multiplicity root (a
-/// tangent ray, a squared equation) is not seen exactly: rounding turns it into a band where
-/// |g| ≤ band, or a pair of close simple roots, and the root found is off by about
-/// sqrt(band / g''). The true root is the local extremum of g that follows within the band,
-/// where g' changes sign: searched with doubling steps while |g| stays within the band (or
-/// still decreases), then refined. A simple root leaves the band after the first step and
-/// stays where it is.
-template <int D>
-double polish_even_root(const double* g, int d_, double u_root, double band, double step,
-                        double tol, long long& evaluations) {
-  const int d = D > 0 ? D : d_;
-  double dg[kN];
-  for (int k = 1; k <= d; ++k) dg[k - 1] = k * g[k];
+  // A simple root leaves the band within about band / |g'|: the first step goes twice as
+  // far, so a simple root costs one evaluation. An even root's neighbouring extremum lies
+  // within sqrt(band / g''), which this step reaches or the doubling steps do.
+  step = std::clamp(2 * band / std::abs(slope), step, 1e-3);
+  // g' keeps its sign within |g'| / curvature of the root: when that reaches well past where
+  // the search below would stop (g leaves the band within about 2·step, with room for the
+  // doubling), the search would meet no extremum and return u_root (up to the tolerance).
+  if (std::abs(slope) > 16 * curvature * step) return u_root;
   double prev_value, prev_slope;
   horner2<D>(g, d, u_root, prev_value, prev_slope);
   if (prev_slope == 0) return u_root;
   double prev = u_root;
-  // A simple root leaves the band within about band / |g'|: the first step goes twice as
-  // far, so a simple root costs one evaluation. An even root's neighbouring extremum lies
-  // within sqrt(band / g''), which this step reaches or the doubling steps do.
-  step = std::clamp(2 * band / std::abs(prev_slope), step, 1e-3);
+  struct {
+    double a = -1, c = -1, ga = 0, gc = 0;
+  } crossing;  // the first sign change of g on the way
   for (int i = 0; i < 64 && prev < 1.0; ++i, step *= 2) {
     const double u = std::min(1.0, u_root + step);
     double gv, gs;
     horner2<D>(g, d, u, gv, gs);
     ++evaluations;
     if (gs == 0) return u;
-    if ((gs > 0) != (prev_slope > 0))
-      return refine<(D > 1 ? D - 1 : 0)>(dg, d - 1, prev, u, prev_slope, gs, tol, evaluations);
+    if ((gs > 0) != (prev_slope > 0)) {
+      double dg[kCapacity<D>];
+      for (int k = 1; k <= d; ++k) dg[k - 1] = k * g[k];
+      double third = 0;  // Σ k(k−1)(k−2)|g_k|, a bound on the third derivative
+      for (int k = 3; k <= d; ++k) third += k * (k - 1) * (k - 2) * std::abs(g[k]);
+      return refine<(D > 1 ? D - 1 : 0)>(dg, d - 1, prev, u, prev_slope, gs, tol, third,
+                                         evaluations)
+          .u;
+    }
+    if (crossing.c < 0 && prev_value != 0 && gv != 0 && (gv > 0) != (prev_value > 0))
+      crossing = {prev, u, prev_value, gv};
     // Outside the band and moving away from zero: no even root here.
     if (std::abs(gv) > band && std::abs(gv) >= std::abs(prev_value)) break;
     prev = u;
     prev_value = gv;
     prev_slope = gs;
   }
+  // No extremum within the band. A sign change met on the way is the root: u_root was a
+  // point where |g| came within the band before it (a band root declared where a
+  // subdivision cut a slope flatter than the rounding), or a root already.
+  if (crossing.c >= 0)
+    return refine<D>(g, d, crossing.a, crossing.c, crossing.ga, crossing.gc, tol, curvature,
+                     evaluations)
+        .u;
   return u_root;
 }
 
-/// The search of RootFinder::first_root for a polynomial of degree d ≥ 1 (fixed when D > 0).
+/// The search of RootFinder::first_root for a polynomial of degree d ≥ 1 (fixed when D > 0);
+/// NaN when there is no root.
 template <int D>
-std::optional<double> isolate(const double* coeffs, int d_, double t0, double t1, double band,
-                              const RootOptions& options, RootStats& stats) {
+ZS_NO_VECTORIZE double isolate(const double* coeffs, int d_, double t0, double t1, double band,
+                               const RootGuess& guess, const RootOptions& options,
+                               RootStats& stats, double& start_value) {
   const int d = D > 0 ? D : d_;
   // g(u) = f(t0 + u w), u in [0, 1]: Taylor shift by t0, then scale by powers of w.
   const double w = t1 - t0;
-  double g[kN];
-  for (int k = 0; k <= d; ++k) g[k] = coeffs[k];
+  double g[kCapacity<D>];
+  g[0] = coeffs[0];  // d ≥ 1: every entry up to g[d] is set here
+  for (int k = 1; k <= d; ++k) g[k] = coeffs[k];
   for (int i = 0; i < d; ++i)
     for (int k = d - 1; k >= i; --k) g[k] += t0 * g[k + 1];
-  double wk = 1;
-  for (int k = 0; k <= d; ++k) {
+  start_value = g[0];
+  double wk = w;
+  for (int k = 1; k <= d; ++k) {
     g[k] *= wk;
     wk *= w;
   }
 
-  Interval stack[kMaxStack];
-  int top = 0;
-  {
-    Interval& root = stack[top++];
-    root.a = 0;
-    root.c = 1;
-    const auto& ratio = bernstein_table().ratio[d];
-    for (int i = 0; i <= d; ++i) {
-      double s = 0;
-      for (int k = 0; k <= i; ++k) s += ratio[i][k] * g[k];
-      root.b[i] = s;
-    }
-  }
   const double leaf = std::max(options.tolerance, kMinTolerance);
   const double rtol = std::max(options.refine_tolerance, 0.25 * kMinTolerance);
-  auto to_t = [&](double u) { return std::clamp(t0 + u * w, t0, t1); };
-  auto polished = [&](double u) {
-    return to_t(polish_even_root<D>(g, d, u, band, leaf, rtol, stats.refinements));
-  };
-
-  while (top > 0) {
-    Interval& iv = stack[--top];
-    double lo = iv.b[0], hi = iv.b[0];
-    for (int i = 1; i <= d; ++i) {
-      lo = std::min(lo, iv.b[i]);
-      hi = std::max(hi, iv.b[i]);
-    }
-    // Convex hull property: the graph lies within [lo, hi] on this interval.
-    if (lo > band || hi < -band) continue;
-
-    const double b0 = iv.b[0], bd = iv.b[d];
-    const int v = sign_variations<D>(iv.b, d);
-    if (v == 1 && b0 != 0 && bd != 0) {
-      // Exactly one simple root inside (Descartes), bracketed by the end values.
-      return polished(refine<D>(g, d, iv.a, iv.c, b0, bd, rtol, stats.refinements,
-                             control_polygon_root<D>(iv.b, d, iv.a, iv.c)));
-    }
-    if (b0 == 0) return polished(iv.a);
-    if (iv.c - iv.a <= leaf) {
-      // Too narrow to separate further: either roots too close to tell apart, or |f| touching
-      // zero within rounding (an even-multiplicity root). Both are a hit here.
-      if ((b0 > 0) != (bd > 0))
-        return polished(refine<D>(g, d, iv.a, iv.c, b0, bd, rtol, stats.refinements));
-      ++stats.band_roots;
-      return polished(iv.a);
-    }
-
-    // De Casteljau at the midpoint. `iv` is stack[top]: it is overwritten by the right half,
-    // and the left half goes above it so that it is processed first.
-    ZS_ASSERT(top + 2 <= kMaxStack);
-    ++stats.subdivisions;
-    const double a = iv.a, c = iv.c, m = 0.5 * (a + c);
-    Interval& right = stack[top];
-    Interval& left = stack[top + 1];
-    split_half<D>(iv.b, d, left.b, right.b);
-    right.a = m;
-    right.c = c;
-    left.a = a;
-    left.c = m;
-    top += 2;
+  // A guess splits [0, 1] at its limit: [0, split] is searched first, then [split, 1]. The
+  // guided piece must be decided cleanly: a root refined from a single sign variation, or
+  // every part discarded by its hull. One that needs a decision at the leaf width (a band
+  // root, which the cut could fake where |f| is within the band just before a root beyond
+  // `split`) or many subdivisions is abandoned for the plain search of [0, 1].
+  double u_guess = -1, split = 1;
+  if (guess.t > t0 && guess.t < t1) {  // false for NaN
+    ++stats.guided;
+    const double inverse_w = 1 / w;
+    u_guess = (guess.t - t0) * inverse_w;
+    split = std::min(1.0, u_guess + std::max(guess.spread, 0.0) * inverse_w);
   }
-  return std::nullopt;
+  Interval<D> stack[kMaxStack];
+  for (double lo = 0, hi = split;;) {
+    const bool guided = hi < 1;
+    // A root refined from the interval iv (start: where Newton begins), then polished.
+    auto refined = [&](const Interval<D>& iv, double start) {
+      stats.guided_roots += guided;
+      // |g''| ≤ d(d−1)·max|second difference of the Bernstein coefficients| / (c − a)² on
+      // [a, c], or the power form's bound over [0, c]: the smaller. The polish may look
+      // beyond c, so it gets the bound over [0, 1].
+      const double a = iv.a, c = iv.c;
+      double second = 0;
+      for (int i = 0; i + 2 <= d; ++i)
+        second = std::max(second, std::abs(iv.b[i + 2] - 2 * iv.b[i + 1] + iv.b[i]));
+      const double curvature =
+          std::min(curvature_bound<D>(g, d, c), d * (d - 1) * second / ((c - a) * (c - a)));
+      const Refined r = refine<D>(g, d, a, c, iv.b[0], iv.b[d], rtol, curvature,
+                                  stats.refinements, start);
+      const double u = r.slope == 0 ? r.u
+                                    : polish_even_root<D>(g, d, r.u, r.slope, band, leaf, rtol,
+                                                          curvature_bound<D>(g, d, 1),
+                                                          stats.refinements);
+      return std::clamp(t0 + u * w, t0, t1);
+    };
+    // A root at u without a sign change around it, polished.
+    auto touching = [&](double u) {
+      stats.guided_roots += guided;
+      double value, slope;
+      horner2<D>(g, d, u, value, slope);
+      if (slope != 0)
+        u = polish_even_root<D>(g, d, u, slope, band, leaf, rtol, curvature_bound<D>(g, d, 1),
+                                stats.refinements);
+      return std::clamp(t0 + u * w, t0, t1);
+    };
+    int top = 0;
+    {
+      Interval<D>& piece = stack[top++];
+      piece.a = lo;
+      piece.c = hi;
+      to_bernstein<D>(g, d, lo, hi, piece.b);
+    }
+    int budget = kGuidedSplits;
+    bool abandoned = false;
+    while (top > 0) {
+      Interval<D>& iv = stack[--top];
+      const double b0 = iv.b[0], bd = iv.b[d];
+      // Convex hull property: the graph lies within the hull of the coefficients, so when
+      // they all lie beyond the band on one side there is no root here.
+      if (std::abs(b0) > band) {
+        int i = 1;
+        if (b0 > 0)
+          while (i <= d && iv.b[i] > band) ++i;
+        else
+          while (i <= d && iv.b[i] < -band) ++i;
+        if (i > d) continue;
+      }
+      // Sign variations count zeros as positive, which keeps the count branch-free: it can
+      // only overcount (a zero between two negatives adds two), never turn a count of 0 or 2
+      // into 1, so "exactly one variation" still proves exactly one root (with b_0, b_d ≠ 0).
+      int v = 0;
+      for (int i = 1; i <= d; ++i) v += (iv.b[i - 1] < 0) != (iv.b[i] < 0);
+      if (v == 1 && b0 != 0 && bd != 0) {
+        // Exactly one simple root inside (Descartes), bracketed by the end values; the
+        // refinement starts at the guess when it lies inside, else where the control
+        // polygon crosses zero.
+        const double start = u_guess > iv.a && u_guess < iv.c
+                                 ? u_guess
+                                 : control_polygon_root<D>(iv.b, d, iv.a, iv.c);
+        return refined(iv, start);
+      }
+      if (b0 == 0) return touching(iv.a);
+      if (guided && (iv.c - iv.a <= leaf || --budget < 0)) {
+        abandoned = true;
+        break;
+      }
+      if (iv.c - iv.a <= leaf) {
+        // Too narrow to separate further: either roots too close to tell apart, or |f|
+        // touching zero within rounding (an even-multiplicity root). Both are a hit here.
+        if ((b0 > 0) != (bd > 0)) return refined(iv, -1);
+        ++stats.band_roots;
+        return touching(iv.a);
+      }
+
+      // De Casteljau at the midpoint. `iv` is stack[top]: it is overwritten by the right
+      // half, and the left half goes above it so that it is processed first.
+      ZS_ASSERT(top + 2 <= kMaxStack);
+      ++stats.subdivisions;
+      const double a = iv.a, c = iv.c, m = 0.5 * (a + c);
+      Interval<D>& right = stack[top];
+      Interval<D>& left = stack[top + 1];
+      split_half<D>(iv.b, d, left.b, right.b);
+      right.a = m;
+      right.c = c;
+      left.a = a;
+      left.c = m;
+      top += 2;
+    }
+    if (abandoned) {
+      ++stats.guides_abandoned;
+      lo = 0;
+      hi = 1;
+    } else if (hi < 1) {
+      lo = hi;
+      hi = 1;
+    } else {
+      return std::numeric_limits<double>::quiet_NaN();
+    }
+  }
 }
 
 }  // namespace
@@ -277,31 +395,32 @@ double rounding_band(std::span<const double> abs_coeffs, double t_max) {
   return 16.0 * d * std::numeric_limits<double>::epsilon() * s;
 }
 
-std::optional<double> RootFinder::first_root(std::span<const double> coeffs, double t0,
-                                             double t1, double band) {
+double RootFinder::find_first_root(std::span<const double> coeffs, double t0, double t1,
+                                   double band, const RootGuess& guess) {
   ++stats_.calls;
   int d = static_cast<int>(coeffs.size()) - 1;
   while (d >= 0 && coeffs[static_cast<size_t>(d)] == 0) --d;
   if (d > kMaxDegree)
     throw InvalidArgument("polynomial degree", std::to_string(d),
                           "ray casting supports degree up to " + std::to_string(kMaxDegree));
-  if (!(t1 >= t0)) return std::nullopt;
+  if (!(t1 >= t0)) return std::numeric_limits<double>::quiet_NaN();
   if (d <= 0) {
     // A constant: the whole interval lies in the zero set when it is (nearly) zero.
     const double c = d < 0 ? 0.0 : coeffs[0];
-    if (std::abs(c) <= band) return t0;
-    return std::nullopt;
+    start_value_ = c;
+    return std::abs(c) <= band ? t0 : std::numeric_limits<double>::quiet_NaN();
   }
 
+  const double* c = coeffs.data();
   switch (d) {
-    case 1: return isolate<1>(coeffs.data(), d, t0, t1, band, options_, stats_);
-    case 2: return isolate<2>(coeffs.data(), d, t0, t1, band, options_, stats_);
-    case 3: return isolate<3>(coeffs.data(), d, t0, t1, band, options_, stats_);
-    case 4: return isolate<4>(coeffs.data(), d, t0, t1, band, options_, stats_);
-    case 5: return isolate<5>(coeffs.data(), d, t0, t1, band, options_, stats_);
-    case 6: return isolate<6>(coeffs.data(), d, t0, t1, band, options_, stats_);
-    case 8: return isolate<8>(coeffs.data(), d, t0, t1, band, options_, stats_);
-    default: return isolate<0>(coeffs.data(), d, t0, t1, band, options_, stats_);
+    case 1: return isolate<1>(c, d, t0, t1, band, guess, options_, stats_, start_value_);
+    case 2: return isolate<2>(c, d, t0, t1, band, guess, options_, stats_, start_value_);
+    case 3: return isolate<3>(c, d, t0, t1, band, guess, options_, stats_, start_value_);
+    case 4: return isolate<4>(c, d, t0, t1, band, guess, options_, stats_, start_value_);
+    case 5: return isolate<5>(c, d, t0, t1, band, guess, options_, stats_, start_value_);
+    case 6: return isolate<6>(c, d, t0, t1, band, guess, options_, stats_, start_value_);
+    case 8: return isolate<8>(c, d, t0, t1, band, guess, options_, stats_, start_value_);
+    default: return isolate<0>(c, d, t0, t1, band, guess, options_, stats_, start_value_);
   }
 }
 

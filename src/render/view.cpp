@@ -45,6 +45,13 @@ Vec3 View::direction(double x, double y) const {
   return (forward + sx * right + sy * up).normalized();
 }
 
+void View::row(double y, Vec3& base, Vec3& step) const {
+  const double half_width = tan_half_fov * aspect();  // of the image plane at depth 1
+  const double sy = (1.0 - 2.0 * y / height) * tan_half_fov;
+  base = forward - half_width * right + sy * up;
+  step = (2.0 * half_width / width) * right;
+}
+
 bool View::project(const Vec3& p, double& x, double& y, double& depth) const {
   const Vec3 q = p - eye;
   depth = q.dot(forward);

@@ -8,6 +8,7 @@
 
 #include "zeroset/error.h"
 #include "zeroset/expr/polynomial.h"
+#include "zeroset/render/view.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/scene.h"
 
@@ -198,6 +199,99 @@ TEST_P(CatalogRays, FirstHitAgreesWithDenseReference) {
   EXPECT_GT(hits, total / 20) << "too few rays hit the surface to test anything";
   RecordProperty("hits", hits);
   RecordProperty("ambiguous", ambiguous);
+}
+
+/// The renderer's way: rows of rays eye + t·(base + s·step), each guided by the hits of the
+/// rays before it, or misled on purpose by a random guess. Every hit must still agree with
+/// the reference, and every ray that meets the clip must lie inside the row's extent.
+TEST_P(CatalogRays, RowRaysAgreeWithDenseReferenceWhateverTheGuess) {
+  const Surface surface = make_surface(*find_catalog_entry(GetParam()));
+  ReferenceCaster reference(surface.field.polynomial());
+  const Box3 box = surface.bounds();
+  const double radius = surface.scene_radius();
+  std::mt19937 rng(20240612);
+  std::uniform_real_distribution<double> u(-1, 1), unit(0, 1);
+  auto random_unit = [&] {
+    Vec3 v;
+    do v = Vec3(u(rng), u(rng), u(rng));
+    while (v.squaredNorm() > 1 || v.squaredNorm() < 1e-6);
+    return v.normalized();
+  };
+  int hits = 0, guided = 0, misled = 0, ambiguous = 0;
+  long long guided_roots = 0;  // found before the guess's limit
+  constexpr int kEyes = 10, kRowsPerEye = 5, kRaysPerRow = 120;
+  for (int e = 0; e < kEyes; ++e) {
+    View view;
+    view.eye = box.center() + radius * (2.5 + 2 * std::abs(u(rng))) * random_unit();
+    view.target = box.center() + 0.2 * radius * random_unit();
+    view.forward = (view.target - view.eye).normalized();
+    view.right = view.forward.cross(random_unit()).normalized();
+    view.up = view.right.cross(view.forward);
+    view.tan_half_fov = 1.1 * radius / (view.target - view.eye).norm();
+    view.width = view.height = kRaysPerRow;
+    SurfaceRayCaster caster(surface, view.eye);
+    for (int r = 0; r < kRowsPerEye; ++r) {
+      Vec3 base, step;
+      view.row(kRaysPerRow * unit(rng), base, step);
+      caster.begin_row(base, step);
+      double s_min, s_max;
+      caster.row_extent(s_min, s_max);
+      double last = NAN, before_last = NAN;
+      for (int i = 0; i < kRaysPerRow; ++i) {
+        const double s = i + 0.5;
+        const Vec3 d = base + s * step;
+        const Vec3 dir = d.normalized();
+        double t0 = 0, t1 = 0;
+        const bool in_clip = surface.clip.ray_interval(view.eye, dir, 0, t0, t1);
+        if (in_clip) {
+          EXPECT_GE(s, s_min);
+          EXPECT_LE(s, s_max);
+        }
+        RootGuess guess;
+        if (i % 3 == 2 && in_clip) {
+          // Anywhere in the clipped segment, or before it, with any spread.
+          guess.t = (t0 + (t1 - t0) * (1.2 * unit(rng) - 0.1)) / d.norm();
+          guess.spread = (t1 - t0) * unit(rng) * unit(rng) / d.norm();
+          ++misled;
+        } else if (!std::isnan(last)) {
+          guess.t = std::isnan(before_last) ? last : 2 * last - before_last;
+          guess.spread = 2 * (std::isnan(before_last) ? 0 : std::abs(last - before_last)) +
+                         1e-4 * last;
+          ++guided;
+        }
+        SurfaceHit hit;
+        const bool got = caster.intersect_in_row(s, hit, guess);
+        before_last = last;
+        last = got ? hit.t : NAN;
+        if (!in_clip) {
+          EXPECT_FALSE(got);
+          continue;
+        }
+        const Reference ref = reference.first_hit(view.eye, dir, t0, t1);
+        if (ref.kind == Reference::Kind::kAmbiguous) {
+          ++ambiguous;
+          continue;
+        }
+        if (ref.kind == Reference::Kind::kMiss) {
+          EXPECT_FALSE(got) << "spurious hit at t = " << hit.t * d.norm() << ", eye "
+                            << view.eye.transpose() << ", dir " << dir.transpose();
+          continue;
+        }
+        ++hits;
+        ASSERT_TRUE(got) << "missed hit at t = " << ref.t << ", eye " << view.eye.transpose()
+                         << ", dir " << dir.transpose();
+        EXPECT_NEAR(hit.t * d.norm(), ref.t, 1e-7)
+            << "eye " << view.eye.transpose() << ", dir " << dir.transpose();
+        EXPECT_LT((hit.point - (view.eye + ref.t * dir)).norm(), 1e-6);
+      }
+    }
+    guided_roots += caster.root_stats().guided_roots;
+  }
+  EXPECT_LT(ambiguous, kEyes * kRowsPerEye * kRaysPerRow / 50);
+  EXPECT_GT(hits, kEyes * kRowsPerEye * kRaysPerRow / 20);
+  EXPECT_GT(guided, hits / 2);
+  EXPECT_GT(misled, 100);
+  EXPECT_GT(guided_roots, hits / 4) << "the neighbours' guesses should mostly be good";
 }
 
 INSTANTIATE_TEST_SUITE_P(Catalog, CatalogRays,

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -134,6 +135,62 @@ TEST(RootFinder, AgreesWithKnownRootsOfRandomPolynomials) {
       EXPECT_NEAR(*got, expected, 1e-8) << "trial " << trial << " degree " << d;
     }
   }
+}
+
+TEST(RootFinder, FindsTheSameFirstRootWhateverTheGuess) {
+  // Guesses before, at, between and beyond the roots, with small and large spreads: the
+  // search order changes, the answer must not.
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> u(-4, 4), unit(0, 1);
+  std::uniform_int_distribution<int> deg(1, 12);
+  RootFinder f;
+  int with_root = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const int d = deg(rng);
+    std::vector<double> roots(static_cast<size_t>(d));
+    for (double& r : roots) r = u(rng);
+    std::sort(roots.begin(), roots.end());
+    bool separated = true;
+    for (size_t i = 1; i < roots.size(); ++i) separated &= roots[i] - roots[i - 1] > 0.05;
+    if (!separated) continue;
+    const double t0 = u(rng), t1 = t0 + std::abs(u(rng)) + 0.1;
+    const auto c = from_roots(roots, 0.5 + std::abs(u(rng)));
+    const double band = band_of(c, std::max(std::abs(t0), std::abs(t1)));
+    const auto plain = f.first_root(c, t0, t1, band);
+    for (int g = 0; g < 4; ++g) {
+      RootGuess guess;
+      guess.t = t0 + (t1 - t0) * (1.4 * unit(rng) - 0.2);
+      guess.spread = (t1 - t0) * std::pow(10.0, -6 * unit(rng));
+      const auto guided = f.first_root(c, t0, t1, band, guess);
+      ASSERT_EQ(guided.has_value(), plain.has_value()) << "trial " << trial;
+      if (plain) {
+        EXPECT_NEAR(*guided, *plain, 1e-9) << "trial " << trial << " degree " << d;
+      }
+    }
+    with_root += plain.has_value();
+  }
+  EXPECT_GT(with_root, 300);
+  EXPECT_GT(f.stats().guided_roots, 0);
+}
+
+TEST(RootFinder, UsesAGoodGuessToSkipTheSubdivisions) {
+  // Roots at 1, 2, 3: without a guess the first is separated from the others by subdivision;
+  // a guess next to it finds it in the first piece.
+  const auto c = from_roots({1.0, 2.0, 3.0});
+  RootFinder plain, guided;
+  ASSERT_TRUE(plain.first_root(c, 0.0, 4.0, band_of(c, 4)));
+  const auto r = guided.first_root(c, 0.0, 4.0, band_of(c, 4), RootGuess{1.01, 0.05});
+  ASSERT_TRUE(r);
+  EXPECT_NEAR(*r, 1.0, 1e-12);
+  EXPECT_EQ(guided.stats().guided_roots, 1);
+  EXPECT_LT(guided.stats().subdivisions, plain.stats().subdivisions);
+}
+
+TEST(RootFinder, ReportsTheValueAtTheStartOfTheInterval) {
+  RootFinder f;
+  const auto c = from_roots({1.0, 3.0}, 2.0);  // 2 (t − 1)(t − 3)
+  ASSERT_TRUE(f.first_root(c, 0.5, 4.0, band_of(c, 4)));
+  EXPECT_NEAR(f.start_value(), 2 * (0.5 - 1) * (0.5 - 3), 1e-12);
 }
 
 }  // namespace

@@ -3,10 +3,13 @@
 ///
 /// Polynomial surfaces: F is translated to the eye once (G(p) = F(eye + p)), so that along a
 /// ray eye + t·d the restriction is f(t) = Σ_k t^k G_k(d) with G_k the homogeneous parts of
-/// G: per ray only the direction-dependent coefficients are computed. The ray is clipped to
-/// the clip volume and the first root in that interval is isolated by `RootFinder`, even
-/// roots included. Other expressions (and polynomials above RootFinder::kMaxDegree): interval
-/// arithmetic over the field's tape along the ray, subdivided where the enclosure of F
+/// G. The rays of an image row have directions d = base + s·step; each G_k(base + s·step) is
+/// expanded once per row into a polynomial of degree k in s, so that a ray costs O(degree²)
+/// to restrict (Horner in s) whatever the number of terms. The ray is clipped to the clip
+/// volume and the first root in that interval is isolated by `RootFinder`, even roots
+/// included; a neighbouring ray's hit may guide the search (`RootGuess`), never change it.
+/// Other expressions (and polynomials above RootFinder::kMaxDegree): interval arithmetic
+/// over the field's tape along the ray, subdivided where the enclosure of F
 /// contains 0 and F is not provably monotone (enclosure of ∇F·d), then sign-change
 /// refinement.
 #include <memory>
@@ -28,7 +31,7 @@ struct RaycastOptions {
 
 /// One intersection of a ray with the surface.
 struct SurfaceHit {
-  double t = 0;                ///< ray parameter; distance from the eye for a unit direction
+  double t = 0;                ///< ray parameter: point = eye + t·direction
   Vec3 point = Vec3::Zero();
   Vec3 normal = Vec3::UnitZ(); ///< unit, turned towards the eye
   bool front = true;           ///< the eye is on the side ∇F points to (F > 0 there)
@@ -37,7 +40,8 @@ struct SurfaceHit {
 
 /// Casts rays from a fixed eye against a surface inside its clip. Not thread-safe (owns an
 /// Evaluator and scratch memory): use one per thread. Construction translates the polynomial
-/// (cost O(terms · degree³), well under a millisecond for degree ≤ 8).
+/// (cost O(terms · degree³), well under a millisecond for degree ≤ 8). For many rays, cast
+/// them in rows (begin_row, intersect_in_row); a single ray is a row of one.
 class SurfaceRayCaster {
  public:
   /// Throws BadInput when the surface's clip is unbounded or a parameter has no value.
@@ -49,12 +53,23 @@ class SurfaceRayCaster {
   /// True when rays are cast exactly (polynomial path).
   bool is_exact() const;
 
-  /// Ray parameter of the first intersection of eye + t·dir (t ≥ 0) inside the clip. `dir`
-  /// must have unit length (the rounding bounds of the exact path assume it).
+  /// Ray parameter of the first intersection of eye + t·dir (t ≥ 0) inside the clip; `dir`
+  /// is any nonzero direction (t is then in units of its length). Starts a row of one ray
+  /// (see begin_row).
   std::optional<double> first_hit(const Vec3& dir);
-  /// The first intersection with its normal and side; false when the ray misses. `dir` must
-  /// have unit length.
+  /// The first intersection with its normal and side; false when the ray misses.
   bool intersect(const Vec3& dir, SurfaceHit& hit);
+
+  /// Starts a row of rays with directions base + s·step (s real; base + s·step nonzero for
+  /// the s used): expands the restriction of F to the row, O(terms · degree²) once.
+  void begin_row(const Vec3& base, const Vec3& step);
+  /// The rays of the current row with s outside [s_min, s_max] miss the clip volume (a
+  /// conservative range from its spheres; infinite without them, empty when no ray meets it).
+  void row_extent(double& s_min, double& s_max) const;
+  /// The first intersection of the row's ray eye + t·(base + s·step), t ≥ 0, inside the
+  /// clip; `hit.t` is in units of that direction's length. `guess`, e.g. from the neighbouring
+  /// rays' hits, only speeds up the search (exact path).
+  bool intersect_in_row(double s, SurfaceHit& hit, const RootGuess& guess = {});
 
   const RootStats& root_stats() const;
 

@@ -55,11 +55,12 @@ struct RenderStats {
 };
 
 /// Ray casts the surface inside its clip. Polynomials: exact restriction to the ray and robust
-/// root isolation; other expressions: interval arithmetic along the ray (raycast.h). Throws
-/// BadInput when the surface has no bounded clip, a parameter has no value or the size or
-/// samples are out of range. Returns an empty image when stopped through `stop`. Cost: a few
-/// tenths of a microsecond per ray for degree 4 to 6 on one core (an 800×800 picture of the
-/// Kummer surface takes about 0.1 s); tiles run on `threads` workers.
+/// root isolation, rows of rays at a time, each ray's search guided by its neighbours' hits;
+/// other expressions: interval arithmetic along the ray (raycast.h). Throws BadInput when the
+/// surface has no bounded clip, a parameter has no value or the size or samples are out of
+/// range. Returns an empty image when stopped through `stop`. Cost: about a tenth of a
+/// microsecond per ray for degree 4 to 6 on one core (an 800×800 picture of the Kummer
+/// surface takes about 0.06 s); bands of rows run on `threads` workers.
 Image render_surface(const Surface& surface, const RenderOptions& options,
                      RenderStats* stats = nullptr, std::stop_token stop = {});
 

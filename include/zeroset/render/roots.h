@@ -8,6 +8,8 @@
 /// farther than `band` from zero, so a local minimum of |f| that touches zero within rounding
 /// is subdivided down to the tolerance and reported.
 #include <array>
+#include <cmath>
+#include <limits>
 #include <optional>
 #include <span>
 
@@ -29,6 +31,20 @@ struct RootStats {
   long long subdivisions = 0;   ///< de Casteljau splits
   long long refinements = 0;    ///< function evaluations while refining simple roots
   long long band_roots = 0;     ///< roots reported through the zero band (no sign change)
+  long long guided = 0;         ///< searches given a usable `RootGuess`
+  long long guided_roots = 0;   ///< of those, found before the guess's limit
+  long long guides_abandoned = 0;  ///< guided searches that fell back to the plain one
+};
+
+/// Where the first root is expected, e.g. from a neighbouring ray (pixel coherence): near
+/// `t`, and not beyond `t + spread`. A guess only changes the order of the search, never
+/// its result: [t0, t + spread] is searched first, then the rest of the interval, each with
+/// the full isolation, so no root is missed whatever the guess. A good guess saves the
+/// subdivisions that separate the first root from the later ones, and starts the refinement
+/// next to the root.
+struct RootGuess {
+  double t = std::numeric_limits<double>::quiet_NaN();  ///< NaN: no guess
+  double spread = 0;  ///< ≥ 0, in the units of t
 };
 
 /// Finds the smallest root of f(t) = Σ a_k t^k in [t0, t1]. Allocation-free; owns scratch
@@ -43,8 +59,20 @@ class RootFinder {
   /// The first root of Σ coeffs[k] t^k in [t0, t1] (t0 ≤ t1), or nothing.
   /// `band` ≥ 0 is the absolute uncertainty of f's values (see `rounding_band`): a local
   /// minimum of |f| no larger than it counts as a root. Leading zero coefficients are allowed.
+  /// `guess` (optional) orders the search; the result does not depend on it beyond the
+  /// refinement tolerance.
   std::optional<double> first_root(std::span<const double> coeffs, double t0, double t1,
-                                   double band);
+                                   double band, const RootGuess& guess = {}) {
+    const double t = find_first_root(coeffs, t0, t1, band, guess);
+    return std::isnan(t) ? std::nullopt : std::optional<double>(t);
+  }
+  /// The same, with NaN for "no root": cheaper to pass on in tight loops than an optional.
+  double find_first_root(std::span<const double> coeffs, double t0, double t1, double band,
+                         const RootGuess& guess = {});
+
+  /// f(t0) of the last search, as computed by it (the first Bernstein coefficient): tells
+  /// which side of the surface the interval starts on at no extra cost.
+  double start_value() const { return start_value_; }
 
   const RootStats& stats() const { return stats_; }
   void reset_stats() { stats_ = {}; }
@@ -52,6 +80,7 @@ class RootFinder {
  private:
   RootOptions options_;
   RootStats stats_;
+  double start_value_ = 0;
 };
 
 /// A bound on the rounding error of f(t) for |t| ≤ t_max, from bounds `abs_coeffs[k]` on the

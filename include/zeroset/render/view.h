@@ -28,6 +28,9 @@ struct View {
   /// Unit direction of the ray through image position (x, y), in pixels from the top-left
   /// corner (pixel centres at +0.5).
   Vec3 direction(double x, double y) const;
+  /// The rays through image row y, unnormalized: base + x·step points through (x, y), and
+  /// direction(x, y) is its normalization.
+  void row(double y, Vec3& base, Vec3& step) const;
   /// Image position and depth (distance along `forward`) of a world point; false when the
   /// point is not in front of the eye.
   bool project(const Vec3& p, double& x, double& y, double& depth) const;
