@@ -1,9 +1,11 @@
 // zeroset: make implicit surfaces F(x, y, z; q) = 0 visible.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <string>
+#include <string_view>
 #include <fmt/core.h>
 #if defined(__linux__)
 #include <unistd.h>
@@ -18,14 +20,17 @@ namespace {
 // a machine with other work running (the usual desktop) that steals the core the busy worker
 // needs: zeroset's coarse-grained parallel loops then ran several times slower than on one
 // thread. The runtime reads the policy when it loads, before main, so the process executes
-// itself once more with the passive policy, unless the user chose a policy.
-void prefer_passive_openmp(char** argv) {
+// itself once more with the passive policy, unless the user chose a policy. Only the commands
+// whose work runs in OpenMP loops pay for that (the renderer has its own threads).
+void prefer_passive_openmp(int argc, char** argv) {
 #if defined(__linux__)
   if (std::getenv("OMP_WAIT_POLICY") != nullptr) return;
+  const auto uses_openmp = [](std::string_view a) { return a == "mesh" || a == "sample" || a == "view"; };
+  if (std::none_of(argv + 1, argv + argc, [&](const char* a) { return uses_openmp(a); })) return;
   if (setenv("OMP_WAIT_POLICY", "PASSIVE", 1) != 0) return;
   execv("/proc/self/exe", argv);  // returns only when it failed: run on as we are
 #else
-  (void)argv;
+  (void)argc, (void)argv;
 #endif
 }
 
@@ -33,7 +38,7 @@ void prefer_passive_openmp(char** argv) {
 
 int main(int argc, char** argv) {
   using namespace zeroset;
-  prefer_passive_openmp(argv);
+  prefer_passive_openmp(argc, argv);
   CLI::App app{
       "zeroset — make implicit surfaces F(x, y, z; q) = 0 visible, singular points and\n"
       "self-intersections included.\n\n"
