@@ -19,9 +19,12 @@ using namespace zeroset;
 
 constexpr int kSettleSteps = 150;
 
-// A settled system per (count, mode), built on first use and reused by every repetition. σ̂
-// is chosen from the area so that about `count` floaters settle (the refinement near the 16
-// nodes adds about half again to a uniform sampling); the cap leaves a little headroom.
+// A settled system per (count, mode), built on first use and reused by every repetition, with
+// about `count` floaters. It is seeded with `count` random floaters; σ̂ is first chosen from the
+// area (the refinement near the 16 nodes adds about half again to a uniform sampling with the
+// paper's heuristics). Floaters die where they are too dense for σ̂, so while the settled count
+// is more than 3% off, σ̂ is scaled by √(settled/count) and the system seeded and settled
+// again (twice at most). The cap leaves a little headroom.
 FloaterSystem& settled(std::size_t count, RadiusAdapt mode) {
   static std::map<std::pair<std::size_t, RadiusAdapt>, std::unique_ptr<FloaterSystem>> cache;
   auto& slot = cache[{count, mode}];
@@ -36,6 +39,14 @@ FloaterSystem& settled(std::size_t count, RadiusAdapt mode) {
     o.seed = 7;
     slot = std::make_unique<FloaterSystem>(kummer, o);
     for (int k = 0; k < kSettleSteps; ++k) slot->step();
+    for (int round = 0; round < 2; ++round) {
+      const double ratio = static_cast<double>(slot->size()) / static_cast<double>(count);
+      if (std::abs(ratio - 1) < 0.03) break;
+      o.radius *= std::sqrt(ratio);
+      slot->set_options(o);
+      slot->reset();
+      for (int k = 0; k < kSettleSteps; ++k) slot->step();
+    }
   }
   return *slot;
 }

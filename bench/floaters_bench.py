@@ -3,9 +3,10 @@
 
 Runs the Google Benchmark program `floaters_bench` (built with the project) on 1 and 2
 threads (OMP_NUM_THREADS, with OMP_WAIT_POLICY=passive): each system is seeded and settled
-once (untimed), then step() is timed at about 500, 10,000 and 100,000 floaters, with the
-paper's heuristics (curvature and singularity estimators, cosine weighting, node snapping)
-and with the original Witkin-Heckbert radius rule. A particle update is one floater advanced
+once (untimed, with σ̂ calibrated so that about the nominal count settles), then step() is
+timed at about 500, 10,000 and 100,000 floaters, with the paper's heuristics (curvature and
+singularity estimators, cosine weighting, node snapping) and with the original
+Witkin-Heckbert radius rule. A particle update is one floater advanced
 by one step. The 1997 figure beside it: 500 floaters at 5 Hz on a 133 MHz SGI Indy, about
 2,500 updates per second. Writes section "floaters" of docs/benchmarks.md.
 
@@ -79,7 +80,9 @@ def main():
         f"(`floaters_bench`, medians of {args.repeat} runs; load average {load:.1f} when the run "
         "started, on a machine shared with other work; `OMP_WAIT_POLICY=passive`, without which "
         "two threads under load are several times slower). Each system is seeded and settled "
-        "first; then only `step()` is timed. An update is one floater advanced by one step.",
+        "first, with σ̂ calibrated so that about the nominal count settles (the floaters column "
+        "gives the count); then only `step()` is timed. An update is one floater advanced by one "
+        "step.",
         "",
         "| floaters | radius rule | threads | ms per step | steps/s | updates/s "
         "| vs 1997 (2,500/s) |",

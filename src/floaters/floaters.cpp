@@ -5,14 +5,18 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <deque>
 #include <limits>
 #include <numbers>
+#include <numeric>
 #include <optional>
 
 #include "critical_detail.h"
+#include "neighbour_filter_detail.h"
+#include "pair_kernel_detail.h"
 #include "rng_detail.h"
 #include "spatial_hash_detail.h"
 #include "zeroset/error.h"
@@ -21,8 +25,17 @@
 #ifdef _OPENMP
 #include <omp.h>
 #endif
-#ifdef __SSE2__
-#include <emmintrin.h>
+
+// Loops the compiler vectorises also get an AVX2 variant, chosen when the program loads on a
+// processor that has it: twice the lanes of the x86-64 baseline. Without FMA contraction
+// (not enabled) each variant computes the same bits, so results do not depend on the machine.
+#if defined(__x86_64__) && defined(__has_attribute)
+#if __has_attribute(target_clones)
+#define ZS_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
+#endif
+#endif
+#ifndef ZS_VECTOR_CLONES
+#define ZS_VECTOR_CLONES
 #endif
 
 namespace zeroset {
@@ -148,6 +161,45 @@ void validate(const FloaterOptions& o) {
   check(o.threads >= 0, "threads", o.threads, "must not be negative");
 }
 
+// The terms of m pairs (i, j) (ALGORITHMS A.1–A.2 and the scaled form, see
+// FloaterOptions::scaled_repulsion), element by element: from r_ij, |r_ij|², σ_i, 1/(2σ_i²),
+// σ_j, α·w_ij and σ_max^j, the energy term E_ij, |r|²·E_ij, the force r_ij times its
+// coefficient (in place of r_ij) and the grading limit σ_max^j + g·|r|. A pair beyond reach
+// 3·max(σ_i, σ_j) (the filters keep a few) adds exactly nothing: no energy or force, and an
+// infinite limit. Branch-free, and the arrays cannot overlap, so the compiler vectorises it;
+// each element is computed the same way whether it does or not.
+template <bool kScaled>
+ZS_VECTOR_CLONES void pair_terms(std::size_t m, double grading, double* __restrict dxs,
+                                 double* __restrict dys, double* __restrict dzs,
+                                 const double* __restrict d2s, const double* __restrict sis,
+                                 const double* __restrict invs, const double* __restrict sjs,
+                                 const double* __restrict aws, const double* __restrict pms,
+                                 double* __restrict es, double* __restrict des,
+                                 double* __restrict lims) {
+  for (std::size_t q = 0; q < m; ++q) {
+    const double d2 = d2s[q], si = sis[q], sj = sjs[q];
+    const bool within = d2 < std::max(9 * si * si, 9 * sj * sj);
+    const double aw = within ? aws[q] : 0.0;
+    const double u = d2 * invs[q];  // |r|²/2σ_i²: E_ij is cut off at u = 9/2 (|r| = 3σ_i)
+    // Scaled: x = |r|²/σ_ij² with σ_ij = (σ_i + σ_j)/2; A.2: x = |r|²/σ_j² (the E_ji term).
+    const double inv = kScaled ? 2 / (si + sj) : 1 / sj;
+    const double x = d2 * inv * inv;
+    const double amplitude = kScaled ? 2 * si * inv : si * si * inv * inv;
+    // Both terms are finite for every listed pair; beyond its own cutoff each is dropped.
+    const double eij = aw * detail::exp_cutoff(-u) * (1 - u * (2.0 / 9));
+    const double pair = amplitude * aw * detail::exp_cutoff(-0.5 * x) * (1 - x * (1.0 / 9));
+    const double e = u < 4.5 ? eij : 0.0;
+    const double f = x < 9 ? pair : 0.0;
+    const double coef = kScaled ? f : f + e;
+    es[q] = e;
+    des[q] = d2 * e;
+    dxs[q] = coef * dxs[q];
+    dys[q] = coef * dys[q];
+    dzs[q] = coef * dzs[q];
+    lims[q] = within ? pms[q] + grading * std::sqrt(d2) : std::numeric_limits<double>::infinity();
+  }
+}
+
 }  // namespace
 
 RadiusAdapt parse_radius_adapt(std::string_view text, std::string_view flag) {
@@ -202,11 +254,28 @@ struct FloaterSystem::Impl {
   std::vector<Vec3> unit;  // ∇F/|∇F|, or 0 where that is undefined
 
   // Per-step scratch.
-  std::vector<double> energy, denergy, graded, fq, speed, new_sigma;
+  std::vector<double> energy, denergy, graded, fq, new_sigma;
   std::vector<Vec3> desired, new_pos;
-  std::vector<std::uint8_t> outside;
-  std::vector<double> px, py, pz, ps, pcut, pm, nx, ny, nz;  // packed in hash slot order
+  // Fates judged in move(), carried out in decide_fates().
+  enum FateFlag : std::uint8_t { kStray = 1, kFission = 2, kDeath = 4 };
+  std::vector<std::uint8_t> fate;
+  std::vector<std::uint32_t> gone;
+  std::vector<double> chunk_speed;  // per chunk of kChunk floaters: Σ (|ṗ_i|/σ_i)²
+  std::vector<std::size_t> chunk_near;  // and the count near equilibrium
+  std::vector<double> residuals, median_octave;  // residual_stats() scratch
+  // What the gather pass reads of a neighbour, in hash slot order: one cache line each, as
+  // neighbours are visited in an order the slots only roughly follow.
+  struct alignas(64) Packed {
+    double x, y, z;
+    double sigma;
+    double smax;        // σ_max^j
+    double nx, ny, nz;  // unit normal, or 0 (pinned on a node, or ∇F = 0)
+  };
+  std::vector<Packed> packed;
+  std::vector<std::uint8_t> free_normal;  // 1 where the packed normal is 0
   std::vector<std::uint64_t> pid;
+  std::vector<float> fx, fy, fz, fcut;  // the prefilter's coordinates and thresholds
+  const detail::FilterPath filter = detail::best_filter_path();
   detail::SpatialHash hash;
 
   std::vector<Evaluator> evaluators;
@@ -285,24 +354,17 @@ struct FloaterSystem::Impl {
     unit.push_back(Vec3::Zero());
   }
 
-  template <class Keep>
-  void compact(Keep&& keep) {
-    std::size_t w = 0;
-    for (std::size_t r = 0; r < size(); ++r) {
-      if (!keep(r)) continue;
-      pos[w] = pos[r];
-      sigma[w] = sigma[r];
-      id[w] = id[r];
-      mu[w] = mu[r];
-      smax[w] = smax[r];
-      age[w] = age[r];
-      pinned[w] = pinned[r];
-      value[w] = value[r];
-      gnorm[w] = gnorm[r];
-      unit[w] = unit[r];
-      ++w;
-    }
-    resize_state(w);
+  void move_floater(std::size_t from, std::size_t to) {
+    pos[to] = pos[from];
+    sigma[to] = sigma[from];
+    id[to] = id[from];
+    mu[to] = mu[from];
+    smax[to] = smax[from];
+    age[to] = age[from];
+    pinned[to] = pinned[from];
+    value[to] = value[from];
+    gnorm[to] = gnorm[from];
+    unit[to] = unit[from];
   }
 
   void resize_state(std::size_t n) {
@@ -319,9 +381,11 @@ struct FloaterSystem::Impl {
   }
 
   template <class T>
-  static void permute(std::vector<T>& v, std::span<const std::uint32_t> order) {
+  void permute(std::vector<T>& v, std::span<const std::uint32_t> order) const {
     std::vector<T> out(v.size());
-    for (std::size_t s = 0; s < order.size(); ++s) out[s] = v[order[s]];
+#pragma omp parallel for schedule(static) num_threads(threads) if (order.size() >= kParallelMin)
+    for (std::int64_t s = 0; s < static_cast<std::int64_t>(order.size()); ++s)
+      out[static_cast<std::size_t>(s)] = v[order[static_cast<std::size_t>(s)]];
     v.swap(out);
   }
 
@@ -423,11 +487,19 @@ struct FloaterSystem::Impl {
         for (std::size_t k = 0; k < m; ++k) {
           const std::size_t i = b + k;
           const FieldSample fs = ev.sample(pos[i], true, false);
+          // Away from singular points the Hessian is regular and only |r| matters: the
+          // eigenvalues are wanted for a singular Hessian or a floater that may snap.
+          const auto regular = detail::regular_corrector(fs.gradient, fs.hessian);
+          const bool may_snap = opt.snap_to_nodes && !pinned[i];
+          if (regular && !(may_snap && regular->norm() < kSnapFraction * sigma[i])) {
+            beta[k] = std::min(regular->norm() / singular_scale, 1.0);
+            continue;
+          }
           const detail::Corrector c = detail::newton_corrector(fs.gradient, fs.hessian);
           const double r = c.reaches ? c.step.norm() : std::numeric_limits<double>::infinity();
           beta[k] = std::isfinite(r) ? std::min(r / singular_scale, 1.0) : 1.0;
-          candidate[i] = opt.snap_to_nodes && !pinned[i] && r < kSnapFraction * sigma[i] &&
-                         c.smallest > kNondegenerate * c.largest;
+          candidate[i] =
+              may_snap && r < kSnapFraction * sigma[i] && c.smallest > kNondegenerate * c.largest;
         }
       }
       if (need_alpha) curvature_estimates(b, e, samples, ev, alpha);
@@ -514,16 +586,23 @@ struct FloaterSystem::Impl {
                            std::vector<double>& alpha) {
     const std::size_t m = (e - b) * static_cast<std::size_t>(samples);
     std::vector<double> x(m), y(m), z(m), f(m), gx(m), gy(m), gz(m);
+    // Stratified angles θ_j = 2π(j + phase)/samples: every direction around the floater gets
+    // looked at. Each is the previous one turned by 2π/samples (one sine and cosine per
+    // floater instead of one per sample).
+    const double turn = 2 * std::numbers::pi / samples;
+    const double turn_cos = std::cos(turn), turn_sin = std::sin(turn);
     for (std::size_t k = 0; k < e - b; ++k) {
       const std::size_t i = b + k;
       Vec3 t1, t2;
       tangent_basis(unit[i], t1, t2);
       Rng rng(opt.seed, id[i], step_count, Stream::kCurvature);
-      const double phase = rng.uniform();
+      const double theta = turn * rng.uniform();
+      double c = std::cos(theta), sn = std::sin(theta);
       for (int j = 0; j < samples; ++j) {
-        // Stratified angles: every direction around the floater gets looked at.
-        const double theta = 2 * std::numbers::pi * (j + phase) / samples;
-        const Vec3 v = pos[i] + sigma[i] * (std::cos(theta) * t1 + std::sin(theta) * t2);
+        const Vec3 v = pos[i] + sigma[i] * (c * t1 + sn * t2);
+        const double next_c = c * turn_cos - sn * turn_sin;
+        sn = sn * turn_cos + c * turn_sin;
+        c = next_c;
         const std::size_t s = k * samples + j;
         x[s] = v.x();
         y[s] = v.y();
@@ -566,45 +645,87 @@ struct FloaterSystem::Impl {
   // Builds the hash over the current positions and the packed neighbour data in slot order.
   void build_neighbours() {
     const std::size_t n = size();
-    double largest = 0;
-    for (double s : sigma) largest = std::max(largest, s);
+    // The largest σ, and the largest coordinate relative to the box centre (for the
+    // prefilter's scale below); maxima do not depend on the order of reduction.
+    const Vec3 centre = box.center();
+    double largest = 0, extent = 0;
+#pragma omp parallel for schedule(static) num_threads(threads) if (n >= kParallelMin) \
+    reduction(max : largest, extent)
+    for (std::int64_t i = 0; i < static_cast<std::int64_t>(n); ++i) {
+      largest = std::max(largest, sigma[static_cast<std::size_t>(i)]);
+      extent = std::max(extent, (pos[static_cast<std::size_t>(i)] - centre).cwiseAbs().maxCoeff());
+    }
     // Cells as large as the largest reach 3σ: a floater's neighbours lie in the 3×3×3 cells
     // around its own. (Smaller cells hold fewer candidates; measured on the Kummer scene, the
     // extra ranges and the larger grid cost as much as they save.)
-    hash.build(pos, box, 3 * largest);
+    hash.build(pos, box, 3 * largest, threads);
     if (step_count % kResortInterval == 0) {
       permute_state(hash.order());
-      hash.build(pos, box, 3 * largest);
+      hash.build(pos, box, 3 * largest, threads);
     }
-    for (auto* v : {&px, &py, &pz, &ps, &pcut, &pm, &nx, &ny, &nz}) v->resize(n);
+    packed.resize(n);
+    free_normal.resize(n);
     pid.resize(n);
+    // The filter reads whole groups of slots past a range's end: padding keeps that in bounds.
+    for (auto* v : {&fx, &fy, &fz, &fcut}) {
+      v->resize(n + detail::kFilterPad);
+      std::fill(v->begin() + static_cast<std::ptrdiff_t>(n), v->end(), 0.0f);
+    }
+    // Single-precision coordinates for the prefilter: relative to the box centre, scaled into
+    // [−1, 1] (see detail::prefilter_threshold). An infinite coordinate makes the scale 0, and
+    // then every candidate passes to the exact test (a NaN one never passes either test).
+    extent = std::max(extent, 3 * largest);
+    const double scale = extent > 0 && std::isfinite(extent) ? 1 / extent : 0;
     const auto order = hash.order();
 #pragma omp parallel for schedule(static) num_threads(threads) if (n >= kParallelMin)
     for (std::int64_t signed_slot = 0; signed_slot < static_cast<std::int64_t>(n); ++signed_slot) {
       const auto s = static_cast<std::size_t>(signed_slot);
       const std::uint32_t i = order[s];
-      px[s] = pos[i].x();
-      py[s] = pos[i].y();
-      pz[s] = pos[i].z();
-      ps[s] = sigma[i];
-      pcut[s] = 9 * sigma[i] * sigma[i];
-      pm[s] = smax[i];
       // A floater on a node has no tangent plane: it repels every sheet through the node.
       const Vec3 n = pinned[i] ? Vec3::Zero() : unit[i];
-      nx[s] = n.x();
-      ny[s] = n.y();
-      nz[s] = n.z();
+      packed[s] = {pos[i].x(), pos[i].y(), pos[i].z(), sigma[i], smax[i], n.x(), n.y(), n.z()};
+      free_normal[s] = n.squaredNorm() == 0;
       pid[s] = id[i];
+      fx[s] = static_cast<float>((pos[i].x() - centre.x()) * scale);
+      fy[s] = static_cast<float>((pos[i].y() - centre.y()) * scale);
+      fz[s] = static_cast<float>((pos[i].z() - centre.z()) * scale);
+      fcut[s] = detail::prefilter_threshold(3 * sigma[i] * scale);
     }
   }
 
-  // Slot ranges of the cells within reach of one cell.
-  struct Candidates {
-    std::array<std::pair<std::uint32_t, std::uint32_t>, detail::SpatialHash::kMaxBlockRanges>
-        ranges;
-    int count = 0;
-    std::vector<double> r2;
-    std::vector<std::uint32_t> near;
+  // Pair terms are computed in batches of about this many pairs, over several floaters: long
+  // vectorised loops, and the batch stays in the first-level cache.
+  static constexpr std::size_t kPairBatch = 256;
+
+  // Per-thread scratch of the gather pass.
+  struct Scratch {
+    std::array<detail::SpatialHash::Range, detail::SpatialHash::kMaxBlockRanges> ranges;
+    // The block's floaters that may be within reach of a floater of the cell: their slots, and
+    // their single-precision coordinates and thresholds, contiguous.
+    std::vector<std::uint32_t> slot;
+    std::vector<float> x, y, z, cut;
+    std::vector<std::uint32_t> near;  // indices into the above one floater's test kept
+    // The batch of pairs: offset r_ij (then the force along it), |r_ij|², σ_i, 1/(2σ_i²), σ_j,
+    // α·w_ij, σ_max^j; then the pair's energy term, its σ-derivative part and grading limit.
+    // Each floater's pairs are consecutive, in slot order.
+    std::vector<double> dx, dy, dz, d2, si, inv, sj, aw, pm, e, de, lim;
+    std::size_t pairs = 0;
+    struct Owner {
+      std::uint32_t slot, index, first, last;  // a floater and its pairs [first, last)
+    };
+    std::vector<Owner> owners;
+
+    void reserve_candidates(std::size_t candidates) {
+      const std::size_t size = candidates + detail::kFilterPad;
+      if (slot.size() >= size) return;
+      for (auto* v : {&slot, &near}) v->resize(size);
+      for (auto* v : {&x, &y, &z, &cut}) v->resize(size);
+    }
+    void reserve_pairs(std::size_t count) {
+      if (dx.size() >= count) return;
+      for (auto* v : {&dx, &dy, &dz, &d2, &si, &inv, &sj, &aw, &pm, &e, &de, &lim})
+        v->resize(std::max(count, kPairBatch));
+    }
   };
 
   // Gather pass (ALGORITHMS A.1–A.3, B): for floater i, E_i = Σ_j E_ij, ∂E_i/∂σ_i and the
@@ -625,76 +746,79 @@ struct FloaterSystem::Impl {
     const auto order = hash.order();
 #pragma omp parallel num_threads(threads) if (n >= kParallelMin)
     {
-      Candidates c;
+      Scratch c;
 #pragma omp for schedule(dynamic, 16)
       for (std::int64_t r = 0; r < static_cast<std::int64_t>(runs.size()); ++r) {
         const auto& run = runs[static_cast<std::size_t>(r)];
-        gather_candidates(run.key, c);
-        for (std::uint32_t s = run.first; s < run.last; ++s) interact(s, order[s], c);
+        const std::uint32_t candidates = gather_block(run, c);
+        const detail::SpatialHash::Range all{0, candidates};
+        for (std::uint32_t s = run.first; s < run.last; ++s) {
+          const std::size_t kept =
+              detail::filter_near(filter, {&all, 1}, c.x.data(), c.y.data(), c.z.data(),
+                                  c.cut.data(), fx[s], fy[s], fz[s], fcut[s], c.near.data());
+          if (c.pairs + kept > kPairBatch) sum_pairs(c);
+          list_pairs(s, order[s], kept, c);
+        }
       }
+      sum_pairs(c);
     }
     smax.swap(graded);
   }
 
-  void gather_candidates(std::uint64_t key, Candidates& c) const {
-    c.count = hash.block_ranges(key, c.ranges);
-    if (c.r2.size() < pz.size()) {
-      c.r2.resize(pz.size());
-      c.near.resize(pz.size());
+  // The neighbour search tests single-precision distances first (detail::filter_box and
+  // filter_near), keeping every pair within reach 3·max(σ_i, σ_j) and a few more (see
+  // detail::prefilter_threshold); list_pairs() then decides each exactly. This is the first
+  // test, per cell: the floaters of the 3×3×3 block within reach of the bounding box of the
+  // cell's floaters, copied into c (contiguous, for the second test, per floater); returns how
+  // many.
+  std::uint32_t gather_block(const detail::SpatialHash::Run& run, Scratch& c) const {
+    const auto block = std::span(c.ranges).first(
+        static_cast<std::size_t>(hash.block_ranges(run.key, c.ranges)));
+    std::size_t candidates = 0;
+    for (const auto& [first, last] : block) candidates += last - first;
+    c.reserve_candidates(candidates);
+    const float *x = fx.data(), *y = fy.data(), *z = fz.data(), *cut = fcut.data();
+    float lo[3] = {x[run.first], y[run.first], z[run.first]}, hi[3] = {lo[0], lo[1], lo[2]};
+    float reach = 0;
+    for (std::uint32_t s = run.first; s < run.last; ++s) {
+      lo[0] = std::min(lo[0], x[s]);
+      hi[0] = std::max(hi[0], x[s]);
+      lo[1] = std::min(lo[1], y[s]);
+      hi[1] = std::max(hi[1], y[s]);
+      lo[2] = std::min(lo[2], z[s]);
+      hi[2] = std::max(hi[2], z[s]);
+      reach = std::max(reach, cut[s]);
     }
+    const std::size_t m =
+        detail::filter_box(filter, block, x, y, z, cut, lo, hi, reach, c.slot.data());
+    for (std::size_t k = 0; k < m; ++k) {
+      const std::uint32_t t = c.slot[k];
+      c.x[k] = x[t];
+      c.y[k] = y[t];
+      c.z[k] = z[t];
+      c.cut[k] = cut[t];
+    }
+    return static_cast<std::uint32_t>(m);
   }
 
-  void interact(std::uint32_t s, std::uint32_t i, Candidates& c) {
-    const double alpha = opt.repulsion, grading = opt.radius_grading;
-    const bool cos_weight = opt.cos_weight, scaled = opt.scaled_repulsion;
-    const double xi = px[s], yi = py[s], zi = pz[s], si = ps[s];
-    const double nxi = nx[s], nyi = ny[s], nzi = nz[s];
-    const bool has_normal_i = nxi != 0 || nyi != 0 || nzi != 0;
-    const double si2 = si * si, cut_i = 9 * si2, inv_i = 1 / (2 * si2), taper_i = 1 / cut_i;
-    // Distances first, in one branch-free sweep that lists the candidates within reach (most
-    // of the 27 cells' floaters are not).
-    double* r2 = c.r2.data();
-    std::uint32_t* near = c.near.data();
-    std::size_t m = 0;
-    const double *x = px.data(), *y = py.data(), *z = pz.data(), *cut = pcut.data();
-    for (int r = 0; r < c.count; ++r) {
-      std::uint32_t t = c.ranges[r].first;
-      const std::uint32_t last = c.ranges[r].second;
-#ifdef __SSE2__
-      // Two candidates at a time; the comparison mask says which of them to list.
-      const __m128d vx = _mm_set1_pd(xi), vy = _mm_set1_pd(yi), vz = _mm_set1_pd(zi);
-      const __m128d vcut = _mm_set1_pd(cut_i);
-      for (; t + 2 <= last; t += 2) {
-        const __m128d dx = _mm_sub_pd(vx, _mm_loadu_pd(x + t));
-        const __m128d dy = _mm_sub_pd(vy, _mm_loadu_pd(y + t));
-        const __m128d dz = _mm_sub_pd(vz, _mm_loadu_pd(z + t));
-        const __m128d d2 =
-            _mm_add_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy)), _mm_mul_pd(dz, dz));
-        _mm_storeu_pd(r2 + t, d2);
-        const int mask = _mm_movemask_pd(_mm_cmplt_pd(d2, _mm_max_pd(vcut, _mm_loadu_pd(cut + t))));
-        near[m] = t;
-        m += static_cast<std::size_t>(mask & 1);
-        near[m] = t + 1;
-        m += static_cast<std::size_t>(mask >> 1);
-      }
-#endif
-      for (; t < last; ++t) {
-        const double dx = xi - x[t], dy = yi - y[t], dz = zi - z[t];
-        r2[t] = dx * dx + dy * dy + dz * dz;
-        near[m] = t;
-        m += static_cast<std::size_t>(r2[t] < std::max(cut_i, cut[t]));
-      }
-    }
-    double e_sum = 0, de_sum = 0, vx = 0, vy = 0, vz = 0;
-    double limit = mu[i] * sigma_max();
-    for (std::size_t q = 0; q < m; ++q) {
-      const std::uint32_t t = near[q];
-      if (t == s) continue;
-      const double sj = ps[t], sj2 = sj * sj, cut_j = pcut[t];
-      double d2 = r2[t];
-      double dx = xi - px[t], dy = yi - py[t], dz = zi - pz[t];
-      if (grading > 0 && pm[t] < limit) limit = std::min(limit, pm[t] + grading * std::sqrt(d2));
-      if (d2 < 1e-18 * si2) {
+  // Adds the pairs of floater i (at slot s) to the batch in c: the `kept` candidates listed
+  // in c.near other than i itself. pair_terms() tests each exactly, in double precision.
+  void list_pairs(std::uint32_t s, std::uint32_t i, std::size_t kept, Scratch& c) const {
+    const double alpha = opt.repulsion;
+    const Packed& me = packed[s];
+    const double xi = me.x, yi = me.y, zi = me.z, si = me.sigma;
+    const bool weigh = opt.cos_weight && !free_normal[s];
+    const double si2 = si * si, inv_i = 1 / (2 * si2);
+    c.reserve_pairs(c.pairs + kept);
+    const std::size_t first = c.pairs;
+    std::size_t m = first;
+    for (std::size_t q = 0; q < kept; ++q) {
+      const std::uint32_t t = c.slot[c.near[q]];
+      const Packed& other = packed[t];
+      double dx = xi - other.x, dy = yi - other.y, dz = zi - other.z;
+      double d2 = dx * dx + dy * dy + dz * dz;
+      const double sj = other.sigma;
+      if (d2 < 1e-18 * si2 && t != s) {
         // Coincident floaters feel no force along r = 0; separate them along a direction
         // both derive from their ids, with opposite signs.
         const std::uint64_t lo = std::min(pid[s], pid[t]), hi = std::max(pid[s], pid[t]);
@@ -706,32 +830,55 @@ struct FloaterSystem::Impl {
         dz = 0;
         d2 = dx * dx + dy * dy;
       }
-      double w = 1;
-      if (cos_weight && has_normal_i && (nx[t] != 0 || ny[t] != 0 || nz[t] != 0))
-        w = std::abs(nxi * nx[t] + nyi * ny[t] + nzi * nz[t]);
-      double coef = 0;
-      if (d2 < cut_i) {
-        const double eij = alpha * w * std::exp(-d2 * inv_i) * (1 - d2 * taper_i);
-        e_sum += eij;
-        de_sum += d2 * eij;
-        if (!scaled) coef += eij;
-      }
-      if (scaled) {
-        // One division: x = |r|²/σ_ij² with σ_ij = (σ_i + σ_j)/2.
-        const double inv_sm = 2 / (si + sj), x = d2 * inv_sm * inv_sm;
-        if (x < 9) coef += 2 * si * inv_sm * alpha * w * std::exp(-0.5 * x) * (1 - x / 9);
-      } else if (d2 < cut_j) {
-        const double x = d2 / sj2;
-        coef += (si2 / sj2) * alpha * w * std::exp(-0.5 * x) * (1 - x / 9);
-      }
-      vx += coef * dx;
-      vy += coef * dy;
-      vz += coef * dz;
+      // w_ij = |cos(∇F_i, ∇F_j)|, or 1 when either has no normal (then n_j = 0).
+      const double w =
+          weigh ? std::abs(me.nx * other.nx + me.ny * other.ny + me.nz * other.nz) +
+                      static_cast<double>(free_normal[t])
+                : 1.0;
+      c.dx[m] = dx;
+      c.dy[m] = dy;
+      c.dz[m] = dz;
+      c.d2[m] = d2;
+      c.si[m] = si;
+      c.inv[m] = inv_i;
+      c.sj[m] = sj;
+      c.aw[m] = alpha * w;
+      c.pm[m] = other.smax;
+      m += t != s;
     }
-    energy[i] = e_sum;
-    denergy[i] = de_sum / (si2 * si);
-    desired[i] = Vec3(vx, vy, vz);
-    graded[i] = limit;
+    c.owners.push_back({s, i, static_cast<std::uint32_t>(first), static_cast<std::uint32_t>(m)});
+    c.pairs = m;
+  }
+
+  // The pair terms of the batch in c, and from them each listed floater's E_i, ∂E_i/∂σ_i,
+  // desired velocity and graded fission radius, each summed over its pairs in order; empties
+  // the batch.
+  void sum_pairs(Scratch& c) {
+    const double grading = opt.radius_grading;
+    (opt.scaled_repulsion ? pair_terms<true> : pair_terms<false>)(
+        c.pairs, grading, c.dx.data(), c.dy.data(), c.dz.data(), c.d2.data(), c.si.data(),
+        c.inv.data(), c.sj.data(), c.aw.data(), c.pm.data(), c.e.data(), c.de.data(),
+        c.lim.data());
+    for (const Scratch::Owner& o : c.owners) {
+      double e_sum = 0, de_sum = 0, vx = 0, vy = 0, vz = 0;
+      double limit = mu[o.index] * sigma_max();
+      for (std::size_t q = o.first; q < o.last; ++q) {
+        e_sum += c.e[q];
+        de_sum += c.de[q];
+        vx += c.dx[q];
+        vy += c.dy[q];
+        vz += c.dz[q];
+      }
+      if (grading > 0)
+        for (std::size_t q = o.first; q < o.last; ++q) limit = std::min(limit, c.lim[q]);
+      const double si = packed[o.slot].sigma;
+      energy[o.index] = e_sum;
+      denergy[o.index] = de_sum / (si * si * si);
+      desired[o.index] = Vec3(vx, vy, vz);
+      graded[o.index] = limit;
+    }
+    c.pairs = 0;
+    c.owners.clear();
   }
 
   // F_q·q̇ at every floater (exact parameter derivatives).
@@ -750,55 +897,93 @@ struct FloaterSystem::Impl {
   }
 
   // ALGORITHMS A.3–A.6: radius adaptation, constrained velocity with the φF and F_q·q̇ terms,
-  // bounded Euler step, clip projection.
+  // bounded Euler step, clip projection; then each floater's fate (judge()) and, per chunk,
+  // the sums behind StepStats::rms_speed and near_equilibrium.
   void move() {
     const std::size_t n = size();
     new_pos.resize(n);
     new_sigma.resize(n);
-    speed.resize(n);
-    outside.assign(n, 0);
+    fate.resize(n);
+    const std::size_t chunks = (n + kChunk - 1) / kChunk;
+    chunk_speed.assign(chunks, 0);
+    chunk_near.assign(chunks, 0);
     const double dt = opt.dt, e_hat = desired_energy();
     const double max_scene_step = kMaxStepScene * scene_radius;
     const double lo = kMinRadius * sigma_hat, hi = kMaxRadius * sigma_max();
-#pragma omp parallel for schedule(dynamic, 1024) num_threads(threads) if (n >= kParallelMin)
-    for (std::int64_t signed_i = 0; signed_i < static_cast<std::int64_t>(n); ++signed_i) {
-      const auto i = static_cast<std::size_t>(signed_i);
-      const double s = sigma[i];
-      const double rate =
-          -opt.radius_rate * (energy[i] - e_hat) / (denergy[i] + opt.radius_damping);
-      new_sigma[i] = std::clamp(std::clamp(s + dt * rate, 0.5 * s, 2 * s), lo, hi);
-      if (pinned[i]) {
-        new_pos[i] = pos[i];
-        speed[i] = 0;
-        continue;
+    parallel_chunks(n, [&](std::size_t b, std::size_t e, Evaluator& ev) {
+      double speed_sq = 0;
+      std::size_t near_eq = 0;
+      for (std::size_t i = b; i < e; ++i) {
+        const double s = sigma[i];
+        const double rate =
+            -opt.radius_rate * (energy[i] - e_hat) / (denergy[i] + opt.radius_damping);
+        new_sigma[i] = std::clamp(std::clamp(s + dt * rate, 0.5 * s, 2 * s), lo, hi);
+        Vec3 p = pos[i];
+        bool outside = false;
+        if (!pinned[i]) {
+          // Constrained velocity ṗ = P − [(F_x·P + F_q·q̇ + φF)/(F_x·F_x)] F_x, split into the
+          // tangential part of P and the pull along the unit normal. Where ∇F vanishes (or F
+          // is not finite) there is no normal: the floater moves by repulsion alone, and the
+          // pull resumes as soon as it leaves the critical point.
+          Vec3 tangential = desired[i];
+          Vec3 normal_move = Vec3::Zero();
+          const Vec3& nrm = unit[i];
+          if (nrm.squaredNorm() > 0 && std::isfinite(value[i])) {
+            tangential -= nrm.dot(tangential) * nrm;
+            double pull = -(opt.feedback * value[i] + fq[i]) / gnorm[i] * dt;
+            if (!std::isfinite(pull)) pull = std::copysign(max_scene_step, pull);
+            normal_move = std::clamp(pull, -max_scene_step, max_scene_step) * nrm;
+          }
+          Vec3 tangential_move = dt * tangential;
+          const double limit = std::min(opt.max_step_fraction * s, max_scene_step);
+          const double len = tangential_move.norm();
+          if (len > limit) tangential_move *= limit / len;
+          p += tangential_move + normal_move;
+          if (opt.clip_projection) {
+            const Vec3 projected = surface.clip.project(p);
+            if (projected != p) p = onto_boundary_curve(ev, projected, s);
+          } else {
+            outside = !surface.clip.contains(p);
+          }
+        }
+        const double speed = (p - pos[i]).norm() / dt;
+        new_pos[i] = p;
+        fate[i] = judge(i, new_sigma[i], speed, outside);
+        if (age[i] < std::numeric_limits<std::uint32_t>::max()) ++age[i];
+        const double v = speed / new_sigma[i];
+        speed_sq += v * v;
+        near_eq += speed < opt.equilibrium_speed * new_sigma[i];
       }
-      // Constrained velocity ṗ = P − [(F_x·P + F_q·q̇ + φF)/(F_x·F_x)] F_x, split into the
-      // tangential part of P and the pull along the unit normal. Where ∇F vanishes (or F is
-      // not finite) there is no normal: the floater moves by repulsion alone, and the pull
-      // resumes as soon as it leaves the critical point.
-      Vec3 tangential = desired[i];
-      Vec3 normal_move = Vec3::Zero();
-      const Vec3& nrm = unit[i];
-      if (nrm.squaredNorm() > 0 && std::isfinite(value[i])) {
-        tangential -= nrm.dot(tangential) * nrm;
-        double pull = -(opt.feedback * value[i] + fq[i]) / gnorm[i] * dt;
-        if (!std::isfinite(pull)) pull = std::copysign(max_scene_step, pull);
-        normal_move = std::clamp(pull, -max_scene_step, max_scene_step) * nrm;
-      }
-      Vec3 tangential_move = dt * tangential;
-      const double limit = std::min(opt.max_step_fraction * s, max_scene_step);
-      const double len = tangential_move.norm();
-      if (len > limit) tangential_move *= limit / len;
-      Vec3 p = pos[i] + tangential_move + normal_move;
-      if (opt.clip_projection) {
-        const Vec3 projected = surface.clip.project(p);
-        if (projected != p) p = onto_boundary_curve(evaluators[thread_index()], projected, s);
-      } else if (!surface.clip.contains(p)) {
-        outside[i] = 1;
-      }
-      new_pos[i] = p;
-      speed[i] = (p - pos[i]).norm() / dt;
+      chunk_speed[b / kChunk] = speed_sq;
+      chunk_near[b / kChunk] = near_eq;
+    });
+  }
+
+  // What happens to floater i after its move (radius s, speed |ṗ|), ALGORITHMS A.7: a stray is
+  // removed; a floater near equilibrium may fission, or else die by the randomised density
+  // rule. Whether a fission happens also depends on the population, so decide_fates() settles
+  // that, serially. Pure: safe to call in parallel.
+  std::uint8_t judge(std::size_t i, double s, double speed, bool outside) const {
+    const bool near_eq = speed < opt.equilibrium_speed * s;
+    const double residual = residual_of(value[i], gnorm[i]);
+    const bool stray =
+        !std::isfinite(value[i]) ||
+        (!pinned[i] && (s <= kMinRadius * sigma_hat || outside ||
+                        (residual > sigma_hat && (near_eq || age[i] > kStrayAge))));
+    if (stray) return kStray;
+    if (!near_eq) return 0;
+    const double local_max = smax[i];
+    const double local_nominal = std::min(sigma_hat, local_max);
+    std::uint8_t f = 0;
+    if (s > local_max ||
+        (energy[i] > opt.fission_energy_factor * desired_energy() && s > local_nominal))
+      f |= kFission;
+    const double threshold = opt.death_radius_factor * local_nominal;
+    if (s < threshold && !pinned[i]) {
+      Rng rng(opt.seed, id[i], step_count, Stream::kDeath);
+      if (rng.uniform() > s / threshold) f |= kDeath;
     }
+    return f;
   }
 
   // Paper §3.2 projects a floater that left the clip back onto the clip's boundary, which
@@ -826,52 +1011,47 @@ struct FloaterSystem::Impl {
     std::size_t births = 0, deaths = 0, removed = 0;
   };
 
-  // ALGORITHMS A.7, serial so the outcome is the same on any number of threads: strays are
-  // removed; floaters near equilibrium may fission or die (at most one event each).
+  // ALGORITHMS A.7 with the fates judge() chose, serial so the outcome is the same on any
+  // number of threads: at most one event per floater, and no fission beyond the cap.
   Fate decide_fates() {
-    Fate fate;
+    Fate result;
     const std::size_t n = size();
-    const double e_hat = desired_energy(), lo = kMinRadius * sigma_hat;
-    std::vector<std::uint8_t> keep(n, 1);
     std::size_t live = n;
+    gone.clear();
     for (std::size_t i = 0; i < n; ++i) {
-      const double s = sigma[i];
-      const bool near_eq = speed[i] < opt.equilibrium_speed * s;
-      const double residual = residual_of(value[i], gnorm[i]);
-      const bool stray =
-          !std::isfinite(value[i]) ||
-          (!pinned[i] &&
-           (s <= lo || outside[i] || (residual > sigma_hat && (near_eq || age[i] > kStrayAge))));
-      if (stray) {
-        keep[i] = 0;
+      if (fate[i] == 0) continue;
+      if (fate[i] & kStray) {
+        gone.push_back(static_cast<std::uint32_t>(i));
         --live;
-        ++fate.removed;
-        continue;
-      }
-      if (!near_eq) continue;
-      const double local_max = smax[i];
-      const double local_nominal = std::min(sigma_hat, local_max);
-      const bool fission =
-          live < opt.max_count &&
-          (s > local_max || (energy[i] > opt.fission_energy_factor * e_hat && s > local_nominal));
-      if (fission && split(i)) {
+        ++result.removed;
+      } else if ((fate[i] & kFission) && live < opt.max_count && split(i)) {
         ++live;
-        ++fate.births;
-        continue;
-      }
-      const double threshold = opt.death_radius_factor * local_nominal;
-      if (s < threshold && !pinned[i]) {
-        Rng rng(opt.seed, id[i], step_count, Stream::kDeath);
-        if (rng.uniform() > s / threshold) {
-          keep[i] = 0;
-          --live;
-          ++fate.deaths;
-        }
+        ++result.births;
+      } else if (fate[i] & kDeath) {
+        gone.push_back(static_cast<std::uint32_t>(i));
+        --live;
+        ++result.deaths;
       }
     }
-    keep.resize(size(), 1);  // children
-    compact([&](std::size_t i) { return keep[i] != 0; });
-    return fate;
+    remove(gone);
+    return result;
+  }
+
+  // Removes the floaters at the increasing indices `holes`, filling each with the last floater
+  // that stays: O(removed) instead of moving everything behind the first hole.
+  void remove(std::span<const std::uint32_t> holes) {
+    std::size_t last = size(), front = 0, back = holes.size();
+    while (front < back) {
+      if (holes[back - 1] == last - 1) {  // the last floater goes too
+        --back;
+        --last;
+        continue;
+      }
+      move_floater(last - 1, holes[front]);
+      ++front;
+      --last;
+    }
+    resize_state(last);
   }
 
   // Fission: both halves get σ/√2; the child starts at a random tangential offset of a quarter
@@ -916,21 +1096,16 @@ struct FloaterSystem::Impl {
     repulsion();
     move();
 
+    // Summed in chunk order: the same on any number of threads.
     double sq = 0;
-    std::size_t near_eq = 0;
-    for (std::size_t i = 0; i < size(); ++i) {
-      const double v = speed[i] / sigma[i];
-      sq += v * v;
-      if (speed[i] < opt.equilibrium_speed * sigma[i]) ++near_eq;
-    }
+    for (double v : chunk_speed) sq += v;
     st.rms_speed = size() > 0 ? std::sqrt(sq / static_cast<double>(size())) : 0;
-    st.near_equilibrium = near_eq;
+    st.near_equilibrium = std::accumulate(chunk_near.begin(), chunk_near.end(), std::size_t{0});
 
     // Fates are judged on this step's motion and energies, at the moved positions.
     pos.swap(new_pos);
     sigma.swap(new_sigma);
-    const Fate fate = decide_fates();
-    for (auto& a : age) a = a == std::numeric_limits<std::uint32_t>::max() ? a : a + 1;
+    const Fate fates = decide_fates();
     if (!next_q.empty()) {
       apply_parameters(next_q);
       track_nodes();
@@ -939,9 +1114,9 @@ struct FloaterSystem::Impl {
 
     ++step_count;
     st.step = step_count;
-    st.births = fate.births;
-    st.deaths = fate.deaths;
-    st.removed = fate.removed;
+    st.births = fates.births;
+    st.deaths = fates.deaths;
+    st.removed = fates.removed;
     st.count = size();
     st.converged = judge_convergence(st);
     residual_stats(st);
@@ -966,17 +1141,39 @@ struct FloaterSystem::Impl {
            speed / w < opt.converge_speed;
   }
 
-  void residual_stats(StepStats& st) const {
-    // Floaters on nodes are left out: there F and ∇F both vanish and |F|/|∇F| means nothing.
-    std::vector<double> r;
-    r.reserve(size());
-    for (std::size_t i = 0; i < size(); ++i)
-      if (!pinned[i]) r.push_back(residual_of(value[i], gnorm[i]));
-    if (r.empty()) return;
-    const auto mid = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
-    std::nth_element(r.begin(), mid, r.end());
+  // Median and largest |F|/|∇F| over the floaters not held on nodes (there F and ∇F both vanish
+  // and the ratio means nothing). The median without sorting them all: nonnegative doubles
+  // order like their bit patterns, so a histogram of binary exponents (counted in parallel)
+  // finds the octave that holds the median, and only that octave is partially sorted.
+  void residual_stats(StepStats& st) {
+    const std::size_t n = size();
+    constexpr std::size_t kOctaves = 2048;
+    auto octave = [](double r) { return std::bit_cast<std::uint64_t>(r) >> 52; };
+    residuals.resize(n);
+    std::array<std::size_t, kOctaves> counts{};
+    std::size_t* count = counts.data();
+    double largest = 0;
+#pragma omp parallel for schedule(static) num_threads(threads) if (n >= kParallelMin) \
+    reduction(+ : count[:kOctaves]) reduction(max : largest)
+    for (std::int64_t signed_i = 0; signed_i < static_cast<std::int64_t>(n); ++signed_i) {
+      const auto i = static_cast<std::size_t>(signed_i);
+      if (pinned[i]) continue;
+      const double r = residual_of(value[i], gnorm[i]);
+      residuals[i] = r;
+      ++count[octave(r)];
+      largest = std::max(largest, r);
+    }
+    const std::size_t listed = std::accumulate(counts.begin(), counts.end(), std::size_t{0});
+    if (listed == 0) return;
+    std::size_t rank = listed / 2, o = 0;
+    for (; rank >= counts[o]; ++o) rank -= counts[o];
+    median_octave.clear();
+    for (std::size_t i = 0; i < n; ++i)
+      if (!pinned[i] && octave(residuals[i]) == o) median_octave.push_back(residuals[i]);
+    const auto mid = median_octave.begin() + static_cast<std::ptrdiff_t>(rank);
+    std::nth_element(median_octave.begin(), mid, median_octave.end());
     st.median_residual = *mid;
-    st.max_residual = *std::max_element(r.begin(), r.end());
+    st.max_residual = largest;
   }
 
   // The floaters stay where they are, but nothing else of the old surface carries over: ages

@@ -3,6 +3,10 @@
 #include <cmath>
 #include <limits>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include "rng_detail.h"
 #include "spatial_hash_detail.h"
 
@@ -11,9 +15,12 @@ namespace {
 // A dense grid may have this many cells per point before hashing is cheaper in memory.
 constexpr std::int64_t kDenseCellsPerPoint = 64;
 constexpr std::int64_t kDenseMinCells = 1 << 16;
+// Fewer points than this are sorted on one thread.
+constexpr std::int64_t kParallelMin = 4096;
 }  // namespace
 
-void SpatialHash::build(std::span<const Vec3> points, const Box3& box, double cell) {
+void SpatialHash::build(std::span<const Vec3> points, const Box3& box, double cell,
+                        int threads) {
   origin_ = box.lo;
   const Vec3 extent = (box.hi - box.lo).cwiseMax(Vec3::Zero());
   const double max_extent = std::max(extent.maxCoeff(), 1e-300);
@@ -39,28 +46,31 @@ void SpatialHash::build(std::span<const Vec3> points, const Box3& box, double ce
     mask_ = buckets - 1;
   }
 
-  // Counting sort by bucket: count, prefix sums, then place in input order (stable).
+  // Counting sort by bucket: count, prefix sums, then place from the back, each bucket's
+  // cursor moving down from its end (stable: equal cells keep input order), which leaves
+  // start_[b] at bucket b's first slot. Floaters come kept in cell order, so the counting and
+  // placing walk the bucket array almost in order.
   keys_.resize(points.size());
   order_.resize(points.size());
-  start_.assign(buckets + 1, 0);
+  start_.resize(buckets + 1);
   key_in_.resize(points.size());
   bucket_in_.resize(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const auto c = cell_of(points[i]);
-    key_in_[i] = pack(c[0], c[1], c[2]);
-    bucket_in_[i] = static_cast<std::uint32_t>(bucket_index(key_in_[i]));
-    ++start_[bucket_in_[i] + 1];
+  const int team = n >= kParallelMin ? std::max(threads, 1) : 1;
+#pragma omp parallel for schedule(static) num_threads(team)
+  for (std::int64_t i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const auto c = cell_of(points[k]);
+    key_in_[k] = pack(c[0], c[1], c[2]);
+    bucket_in_[k] = static_cast<std::uint32_t>(bucket_index(key_in_[k]));
   }
-  for (std::size_t b = 0; b < buckets; ++b) start_[b + 1] += start_[b];
-  // Place with start_[b] as bucket b's cursor; it ends at the start of bucket b + 1, so one
-  // shift restores the starts.
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const std::uint32_t slot = start_[bucket_in_[i]]++;
+  std::fill(start_.begin(), start_.end(), 0);
+  for (std::uint32_t b : bucket_in_) ++start_[b];
+  prefix_sums(team);
+  for (std::size_t i = points.size(); i-- > 0;) {
+    const std::uint32_t slot = --start_[bucket_in_[i]];
     order_[slot] = static_cast<std::uint32_t>(i);
     keys_[slot] = key_in_[i];
   }
-  std::copy_backward(start_.begin(), start_.end() - 1, start_.end());
-  start_[0] = 0;
   // A hashed bucket may mix cells: order its slots by key (stably, so equal cells keep input
   // order) to make every cell one run of slots. A dense grid has one cell per bucket already.
   if (!dense_) {
@@ -88,6 +98,33 @@ void SpatialHash::build(std::span<const Vec3> points, const Box3& box, double ce
     runs_.push_back({keys_[s], s, e});
     s = e;
   }
+}
+
+void SpatialHash::prefix_sums(int team) {
+  // In place over the bucket counts start_[0, buckets); start_[buckets] becomes the total. A
+  // grid may have several buckets per point, so the sums run in `team` contiguous parts: each
+  // part's total first, then each part adds the totals before it (integers: the same result
+  // whatever the team).
+  const std::size_t buckets = start_.size() - 1;
+  std::vector<std::uint32_t> totals(static_cast<std::size_t>(team) + 1, 0);
+#pragma omp parallel num_threads(team)
+  {
+#ifdef _OPENMP
+    const auto part = static_cast<std::size_t>(omp_get_thread_num());
+    const auto parts = static_cast<std::size_t>(omp_get_num_threads());
+#else
+    const std::size_t part = 0, parts = 1;
+#endif
+    const std::size_t begin = buckets * part / parts, end = buckets * (part + 1) / parts;
+    std::uint32_t sum = 0;
+    for (std::size_t b = begin; b < end; ++b) sum += start_[b];
+    totals[part + 1] = sum;
+#pragma omp barrier
+    std::uint32_t offset = 0;
+    for (std::size_t k = 0; k <= part; ++k) offset += totals[k];
+    for (std::size_t b = begin; b < end; ++b) start_[b] = offset += start_[b];
+  }
+  start_[buckets] = buckets > 0 ? start_[buckets - 1] : 0;
 }
 
 std::pair<std::uint32_t, std::uint32_t> SpatialHash::cell_range(std::uint64_t key) const {
@@ -119,26 +156,31 @@ std::uint64_t SpatialHash::bucket_index(std::uint64_t key) const {
   return mix64(key) & mask_;
 }
 
-int SpatialHash::block_ranges(std::uint64_t key,
-                              std::span<std::pair<std::uint32_t, std::uint32_t>> out) const {
+int SpatialHash::block_ranges(std::uint64_t key, std::span<Range> out) const {
   const auto [x, y, z] = unpack(key);
-  const std::int64_t x0 = std::max<std::int64_t>(0, x - 1);
-  const std::int64_t x1 = std::min(dims_[0] - 1, x + 1);
+  const std::int64_t x0 = std::max<std::int64_t>(0, x - 1), x1 = std::min(dims_[0] - 1, x + 1);
+  const std::int64_t y0 = std::max<std::int64_t>(0, y - 1), y1 = std::min(dims_[1] - 1, y + 1);
+  const std::int64_t z0 = std::max<std::int64_t>(0, z - 1), z1 = std::min(dims_[2] - 1, z + 1);
   int count = 0;
-  auto add = [&](std::pair<std::uint32_t, std::uint32_t> r) {
-    if (r.first < r.second) out[count++] = r;
-  };
-  for (std::int64_t cz = std::max<std::int64_t>(0, z - 1); cz <= std::min(dims_[2] - 1, z + 1);
-       ++cz)
-    for (std::int64_t cy = std::max<std::int64_t>(0, y - 1); cy <= std::min(dims_[1] - 1, y + 1);
-         ++cy) {
-      if (dense_) {
-        // A row of cells is a run of consecutive buckets, hence of consecutive slots.
-        add({start_[bucket_index(pack(x0, cy, cz))], start_[bucket_index(pack(x1, cy, cz)) + 1]});
-      } else {
-        for (std::int64_t cx = x0; cx <= x1; ++cx) add(cell_range(pack(cx, cy, cz)));
+  if (dense_) {
+    // A row of cells is a run of consecutive buckets, hence of consecutive slots.
+    const std::int64_t row = dims_[0], plane = dims_[0] * dims_[1];
+    for (std::int64_t cz = z0; cz <= z1; ++cz)
+      for (std::int64_t cy = y0; cy <= y1; ++cy) {
+        const auto b = static_cast<std::size_t>(x0 + row * cy + plane * cz);
+        const Range r{start_[b], start_[b + static_cast<std::size_t>(x1 - x0) + 1]};
+        out[static_cast<std::size_t>(count)] = r;
+        count += r.first < r.second;
       }
-    }
+    return count;
+  }
+  for (std::int64_t cz = z0; cz <= z1; ++cz)
+    for (std::int64_t cy = y0; cy <= y1; ++cy)
+      for (std::int64_t cx = x0; cx <= x1; ++cx) {
+        const Range r = cell_range(pack(cx, cy, cz));
+        out[static_cast<std::size_t>(count)] = r;
+        count += r.first < r.second;
+      }
   return count;
 }
 
