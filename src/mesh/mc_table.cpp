@@ -91,9 +91,10 @@ const Tables& tables() {
 
 }  // namespace
 
+const CellPolygons* cell_polygon_table() { return tables().cells.data(); }
+
 const CellPolygons& cell_polygons(int cube_case, int connected) {
-  const Tables& t = tables();
-  return t.cells[static_cast<size_t>(cube_case * 64 + (connected & ambiguous_faces(cube_case)))];
+  return cell_polygon_table()[cube_case * 64 + (connected & ambiguous_faces(cube_case))];
 }
 
 }  // namespace zeroset::detail

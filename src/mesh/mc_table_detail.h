@@ -46,9 +46,21 @@ inline constexpr std::array<std::uint8_t, 256> kAmbiguousFaces = [] {
 inline std::uint8_t ambiguous_faces(int cube_case) {
   return kAmbiguousFaces[static_cast<std::size_t>(cube_case)];
 }
+// Edges whose two corners differ in sign (bit e for edge e), per case.
+inline constexpr std::array<std::uint16_t, 256> kCrossingEdges = [] {
+  std::array<std::uint16_t, 256> mask{};
+  for (int c = 0; c < 256; ++c)
+    for (int e = 0; e < 12; ++e)
+      if (((c >> kEdgeCorners[e][0]) & 1) != ((c >> kEdgeCorners[e][1]) & 1))
+        mask[static_cast<std::size_t>(c)] = static_cast<std::uint16_t>(mask[static_cast<std::size_t>(c)] | 1u << e);
+  return mask;
+}();
 // The cycles for a case; `connected` has bit f set when the positive corners of face f are
 // joined (saddle value ≥ 0). Bits of faces that are not ambiguous are ignored.
 const CellPolygons& cell_polygons(int cube_case, int connected);
+// The whole table, for loops that look up many cells: cell_polygons(c, d) is
+// table[c * 64 + (d & ambiguous_faces(c))].
+const CellPolygons* cell_polygon_table();
 // Bit e2 of kFaceMates[e1] is set when edges e1 and e2 lie on one cube face.
 inline constexpr std::array<std::uint16_t, 12> kFaceMates = [] {
   std::array<std::uint16_t, 12> mates{};

@@ -298,6 +298,9 @@ class VertexPlacer {
     coeffs_.resize(static_cast<size_t>(poly->degree() + 1));
   }
 
+  /// False when vertices stay at the linear interpolation (no refinement steps).
+  bool refines() const { return steps_ > 0; }
+
   void place(std::span<const Crossing> in, Vec3* out, long long& evaluations) {
     if (lines_[0]) place_polynomial(in, out, evaluations);
     else place_batched(in, out, evaluations);
@@ -501,20 +504,22 @@ struct CellCase {
   const CellPolygons* polys = nullptr;
 };
 
-CellCase classify_cell(const double v[8]) {
+// `table` is detail::cell_polygon_table(), looked up once by the caller's loop.
+CellCase classify_cell(const double v[8], const CellPolygons* table) {
   CellCase c;
-  for (int k = 0; k < 8; ++k)
-    if (is_positive(v[k])) c.cube_case |= 1 << k;
+  for (int k = 0; k < 8; ++k) c.cube_case |= static_cast<int>(is_positive(v[k])) << k;
   const int amb = detail::ambiguous_faces(c.cube_case);
   int connected = 0;
-  for (int f = 0; f < 6; ++f) {
-    if (!((amb >> f) & 1)) continue;
-    const auto& q = kFaceCanonical[f];
-    if (detail::positive_corners_connected(v[q[0]], v[q[1]], v[q[2]], v[q[3]]))
-      connected |= 1 << f;
+  if (amb) {  // rare: decide each ambiguous face
+    for (int f = 0; f < 6; ++f) {
+      if (!((amb >> f) & 1)) continue;
+      const auto& q = kFaceCanonical[f];
+      if (detail::positive_corners_connected(v[q[0]], v[q[1]], v[q[2]], v[q[3]]))
+        connected |= 1 << f;
+    }
+    c.ambiguous = std::popcount(static_cast<unsigned>(amb));
   }
-  c.ambiguous = std::popcount(static_cast<unsigned>(amb));
-  c.polys = &cell_polygons(c.cube_case, connected);
+  c.polys = &table[c.cube_case * 64 + connected];
   return c;
 }
 
@@ -599,6 +604,24 @@ long long sign_bits(const double* values, long long n, std::uint64_t* bits) {
   return nans;
 }
 
+// Per cube corner: which of the cell's four node rows holds it ((dy, dz) = (0,0), (1,0),
+// (0,1), (1,1)); per cube edge: the row and x offset of its lower corner.
+constexpr std::array<int, 8> kCornerRow = [] {
+  std::array<int, 8> row{};
+  for (int c = 0; c < 8; ++c) row[c] = detail::kCorner[c][1] + 2 * detail::kCorner[c][2];
+  return row;
+}();
+constexpr std::array<int, 12> kEdgeRow = [] {
+  std::array<int, 12> row{};
+  for (int e = 0; e < 12; ++e) row[e] = kCornerRow[kEdgeCorners[e][0]];
+  return row;
+}();
+constexpr std::array<int, 12> kEdgeDx = [] {
+  std::array<int, 12> dx{};
+  for (int e = 0; e < 12; ++e) dx[e] = detail::kCorner[kEdgeCorners[e][0]][0];
+  return dx;
+}();
+
 // What one slab made, with slab-local vertex ids.
 struct Slab {
   std::vector<Vec3> positions;  // the vertices of the slab's own node layers
@@ -612,7 +635,7 @@ struct Slab {
 // written first).
 struct SlabScratch {
   std::vector<double> values;
-  std::vector<std::uint64_t> positive, x_cross, y_cross, z_cross;
+  std::vector<std::uint64_t> positive, crossing_bits;
   std::vector<std::uint32_t> first_id;
   std::vector<Crossing> crossings;
   std::vector<Vec3> linear;
@@ -647,22 +670,21 @@ void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratc
   slab.samples += nx * rows;
   slab.seconds_sampling += seconds_since(ts);
 
-  // Crossing bits per edge axis, per-row counts and the id of the first crossing of each
-  // (row, axis, word).
-  std::vector<std::uint64_t>& X = scratch.x_cross;
-  std::vector<std::uint64_t>& Y = scratch.y_cross;
-  std::vector<std::uint64_t>& Z = scratch.z_cross;
-  X.resize(static_cast<size_t>(W * num_rows)), Y.resize(X.size()), Z.resize(X.size());
+  // Crossing bits per (row, axis, word), and the id of the first crossing of each: a
+  // crossing's id is its word's first id plus the crossings before it in the word.
+  std::vector<std::uint64_t>& C = scratch.crossing_bits;
+  std::vector<std::uint32_t>& off = scratch.first_id;
+  C.resize(static_cast<size_t>(num_rows * 3 * W));
+  off.resize(C.size());
   const std::uint64_t last_node_mask = (nx % 64) ? (1ull << (nx % 64)) - 1 : ~0ull;
   const std::uint64_t last_edge_mask =
       ((nx - 1) % 64) ? (1ull << ((nx - 1) % 64)) - 1 : ~0ull;  // x edges: i ≤ nx − 2
   const long long edge_words = (nx - 1 + 63) / 64;
-  std::vector<std::uint32_t>& off = scratch.first_id;
-  off.resize(static_cast<size_t>(num_rows * 3 * W));
   std::uint64_t id = 0, own_count = 0;
   for (long long r = 0; r < num_rows; ++r) {
     const long long j = r % ny, k = k0 + r / ny;
     const std::uint64_t* p = &P[static_cast<size_t>(r * W)];
+    std::uint64_t* c = &C[static_cast<size_t>(r * 3 * W)];
     if (r == own_rows) own_count = id;
     for (long long w = 0; w < W; ++w) {
       const std::uint64_t next = w + 1 < W ? p[w + 1] : 0;
@@ -672,15 +694,13 @@ void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratc
       std::uint64_t yb = j + 1 < ny ? p[w] ^ p[w + W] : 0;
       std::uint64_t zb = k + 1 < nz ? p[w] ^ p[w + W * ny] : 0;
       if (w == W - 1) yb &= last_node_mask, zb &= last_node_mask;
-      const size_t at = static_cast<size_t>(r * W + w);
-      X[at] = xb, Y[at] = yb, Z[at] = zb;
+      c[w] = xb, c[W + w] = yb, c[2 * W + w] = zb;
     }
-    const std::vector<std::uint64_t>* bits[3] = {&X, &Y, &Z};
-    for (int a = 0; a < 3; ++a)
-      for (long long w = 0; w < W; ++w) {
-        off[static_cast<size_t>((r * 3 + a) * W + w)] = static_cast<std::uint32_t>(id);
-        id += static_cast<std::uint64_t>(std::popcount((*bits[a])[static_cast<size_t>(r * W + w)]));
-      }
+    std::uint32_t* o = &off[static_cast<size_t>(r * 3 * W)];
+    for (long long w = 0; w < 3 * W; ++w) {
+      o[w] = static_cast<std::uint32_t>(id);
+      id += static_cast<std::uint64_t>(std::popcount(c[w]));
+    }
     if (id > kMaxVertices) {  // the caller reports it
       slab.numbered = id;
       return;
@@ -689,42 +709,39 @@ void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratc
   if (num_rows == own_rows) own_count = id;
   slab.numbered = id;
 
-  // Every numbered crossing in id order with its linear point (the cells use those), then the
-  // vertices of the own layers refined in one batch.
+  // The linear point of every numbered crossing, in id order (the cells use those); then the
+  // vertices of the own layers, refined in one batch (without refinement: the linear points).
   const auto tr = Clock::now();
   std::vector<Vec3>& linear = scratch.linear;
+  std::vector<Crossing>& crossings = scratch.crossings;
+  linear.resize(id);
+  crossings.clear();
+  const bool refine = placer.refines();
+  if (refine) crossings.reserve(own_count);
   {
-    std::vector<Crossing>& crossings = scratch.crossings;
-    crossings.clear();
-    crossings.reserve(id);
-    const std::vector<std::uint64_t>* bits[3] = {&X, &Y, &Z};
     const long long stride[3] = {1, nx, nx * ny};
+    size_t n = 0;
     for (long long r = 0; r < num_rows; ++r) {
       const long long j = r % ny, k = k0 + r / ny;
+      const std::uint64_t* c = &C[static_cast<size_t>(r * 3 * W)];
       for (int a = 0; a < 3; ++a)
-        for (long long w = 0; w < W; ++w) {
-          std::uint64_t b = (*bits[a])[static_cast<size_t>(r * W + w)];
-          while (b) {
+        for (long long w = 0; w < W; ++w)
+          for (std::uint64_t b = c[a * W + w]; b; b &= b - 1, ++n) {
             const long long i = w * 64 + std::countr_zero(b);
-            b &= b - 1;
             const long long at = r * nx + i;
-            crossings.push_back({i, j, k, a, V[static_cast<size_t>(at)],
-                                 V[static_cast<size_t>(at + stride[a])]});
+            const double fa = V[static_cast<size_t>(at)], fb = V[static_cast<size_t>(at + stride[a])];
+            linear[n] = linear_point(g, i, j, k, a, fa, fb);
+            if (refine && n < own_count) crossings.push_back({i, j, k, a, fa, fb});
           }
-        }
-    }
-    linear.resize(crossings.size());
-    for (size_t e = 0; e < crossings.size(); ++e) {
-      const Crossing& c = crossings[e];
-      linear[e] = linear_point(g, c.i, c.j, c.k, c.axis, c.fa, c.fb);
     }
     slab.positions.resize(own_count);
-    placer.place(std::span<const Crossing>(crossings.data(), own_count), slab.positions.data(),
-                 slab.evaluations);
+    if (refine) placer.place(crossings, slab.positions.data(), slab.evaluations);
+    else std::copy(linear.begin(), linear.begin() + static_cast<long>(own_count), slab.positions.begin());
   }
   slab.seconds_refinement += seconds_since(tr);
 
   // Triangles of the slab's cells, cell row by cell row.
+  const CellPolygons* table = detail::cell_polygon_table();
   const std::uint64_t last_cell_mask = last_edge_mask;
   const long long cell_words = edge_words;
   for (long long k = k0; k < k_cells; ++k)
@@ -732,6 +749,8 @@ void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratc
       // Node rows of corners (dy, dz) = (0,0), (1,0), (0,1), (1,1).
       const long long r0 = j + ny * (k - k0);
       const long long nr[4] = {r0, r0 + 1, r0 + ny, r0 + ny + 1};
+      const double* vr[4];
+      for (int q = 0; q < 4; ++q) vr[q] = &V[static_cast<size_t>(nr[q] * nx)];
       for (long long w = 0; w < cell_words; ++w) {
         std::uint64_t all = ~0ull, any = 0;
         for (int q = 0; q < 4; ++q) {
@@ -748,25 +767,17 @@ void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratc
           act &= act - 1;
           // Corner c at (i + dx, j + dy, k + dz), Lorensen numbering.
           double v[8];
-          for (int c = 0; c < 8; ++c) {
-            const auto& d = detail::kCorner[c];
-            v[c] = V[static_cast<size_t>(nr[d[1] + 2 * d[2]] * nx + i + d[0])];
-          }
-          const CellCase cc = classify_cell(v);
+          for (int c = 0; c < 8; ++c) v[c] = vr[kCornerRow[c]][i + detail::kCorner[c][0]];
+          const CellCase cc = classify_cell(v, table);
           ++slab.active_cells;
           slab.ambiguous += cc.ambiguous;
           std::uint32_t ids[12];
           Vec3 pos[12];
-          for (int e = 0; e < 12; ++e) {
-            const auto& d = detail::kCorner[kEdgeCorners[e][0]];
-            if (is_positive(v[kEdgeCorners[e][0]]) == is_positive(v[kEdgeCorners[e][1]])) continue;
-            const long long r = nr[d[1] + 2 * d[2]];
-            const long long ii = i + d[0];
-            const int a = kEdgeAxis[e];
-            const std::vector<std::uint64_t>& bits = a == 0 ? X : a == 1 ? Y : Z;
-            const std::uint64_t word = bits[static_cast<size_t>(r * W + (ii >> 6))];
-            ids[e] = off[static_cast<size_t>((r * 3 + a) * W + (ii >> 6))] +
-                     static_cast<std::uint32_t>(std::popcount(word & ((1ull << (ii & 63)) - 1)));
+          for (unsigned m = detail::kCrossingEdges[static_cast<size_t>(cc.cube_case)]; m; m &= m - 1) {
+            const int e = std::countr_zero(m);
+            const long long ii = i + kEdgeDx[e];
+            const size_t at = static_cast<size_t>((nr[kEdgeRow[e]] * 3 + kEdgeAxis[e]) * W + (ii >> 6));
+            ids[e] = off[at] + static_cast<std::uint32_t>(std::popcount(C[at] & ((1ull << (ii & 63)) - 1)));
             pos[e] = linear[ids[e]];
           }
           emit_cell(*cc.polys, ids, pos, slab.triangles);
@@ -940,6 +951,7 @@ DenseResult extract_sparse(const Surface& surface, const Grid& g, const Polygoni
   std::vector<std::vector<KeyedCrossing>> cross(kept.size());
   long long active_cells = 0, ambiguous = 0, samples = 0, nan_count = 0;
   double sampling_seconds = 0;
+  const CellPolygons* table = detail::cell_polygon_table();
   auto t1 = Clock::now();
   {
     std::vector<std::unique_ptr<RowSampler>> samplers(static_cast<size_t>(workers));
@@ -979,14 +991,14 @@ DenseResult extract_sparse(const Surface& surface, const Grid& g, const Polygoni
               any |= p, all &= p;
             }
             if (!any || all) continue;
-            const CellCase cc = classify_cell(cv);
+            const CellCase cc = classify_cell(cv, table);
             ++active_cells;
             ambiguous += cc.ambiguous;
             std::uint64_t key[12];
             Vec3 pos[12];
-            for (int e = 0; e < 12; ++e) {
+            for (unsigned m = detail::kCrossingEdges[static_cast<size_t>(cc.cube_case)]; m; m &= m - 1) {
+              const int e = std::countr_zero(m);
               const int c0 = kEdgeCorners[e][0], c1 = kEdgeCorners[e][1];
-              if (is_positive(cv[c0]) == is_positive(cv[c1])) continue;
               const auto& d = detail::kCorner[c0];
               const int a = kEdgeAxis[e];
               const long long gi = i0 + ii + d[0], gj = j0 + jj + d[1], gk = k0 + kk + d[2];

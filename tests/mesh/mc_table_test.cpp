@@ -26,7 +26,10 @@ TEST(McTable, EveryCrossingEdgeIsInExactlyOneCycle) {
       }
       ASSERT_EQ(total, crossing_edges(c)) << "case " << c;
       for (int k = 0; k < total; ++k) ++seen[p.edges[k]];
-      for (int e = 0; e < 12; ++e) EXPECT_LE(seen[e], 1);
+      for (int e = 0; e < 12; ++e) {
+        EXPECT_LE(seen[e], 1);
+        EXPECT_EQ(seen[e] == 1, ((kCrossingEdges[c] >> e) & 1) != 0) << "case " << c << " edge " << e;
+      }
     }
 }
 
