@@ -199,25 +199,36 @@ class RowSampler {
   void sample(long long i0, long long count, long long j, long long k, double* out) {
     if (line_ && line_->degree() >= 0) {
       line_->coefficients(grid_.coord(1, j), grid_.coord(2, k), coeffs_.data());
-      // Horner's rule on blocks of nodes held in registers, the block loop innermost so
-      // that it vectorizes; every node sees the same operations in the same order.
+      // Horner's rule on blocks of nodes held in registers; every node sees the same
+      // operations in the same order (fused multiply-adds where the processor has them),
+      // whichever block it falls in, so a node's value does not depend on the run.
       const int degree = line_->degree();
       const double* t = &t_[static_cast<size_t>(i0)];
       const double* c = coeffs_.data();
-      constexpr int kBlock = 8;
       long long n = 0;
-      for (; n + kBlock <= count; n += kBlock) {
-        double acc[kBlock];
-        for (int q = 0; q < kBlock; ++q) acc[q] = c[degree];
-        for (int m = degree - 1; m >= 0; --m)
-          for (int q = 0; q < kBlock; ++q) acc[q] = acc[q] * t[n + q] + c[m];
-        for (int q = 0; q < kBlock; ++q) out[n + q] = acc[q];
+#if defined(__AVX2__) && defined(__FMA__)
+      // Four independent chains of four nodes hide the latency of the multiply-adds.
+      for (; n + 16 <= count; n += 16) {
+        __m256d acc[4], tt[4];
+        for (int q = 0; q < 4; ++q) acc[q] = _mm256_set1_pd(c[degree]), tt[q] = _mm256_loadu_pd(t + n + 4 * q);
+        for (int m = degree - 1; m >= 0; --m) {
+          const __m256d cm = _mm256_set1_pd(c[m]);
+          for (int q = 0; q < 4; ++q) acc[q] = _mm256_fmadd_pd(acc[q], tt[q], cm);
+        }
+        for (int q = 0; q < 4; ++q) _mm256_storeu_pd(out + n + 4 * q, acc[q]);
       }
+      for (; n < count; ++n) {
+        double v = c[degree];
+        for (int m = degree - 1; m >= 0; --m) v = std::fma(v, t[n], c[m]);
+        out[n] = v;
+      }
+#else
       for (; n < count; ++n) {
         double v = c[degree];
         for (int m = degree - 1; m >= 0; --m) v = v * t[n] + c[m];
         out[n] = v;
       }
+#endif
       return;
     }
     if (line_) {  // the zero polynomial
@@ -353,6 +364,9 @@ class VertexPlacer {
         bracket[static_cast<size_t>(q)] = IllinoisBracket(x.fa, x.fb);
         ++running;
       }
+#if defined(__AVX2__) && defined(__FMA__)
+      if (running > 0) evaluations += illinois_lanes_avx(C, degree, t0, bracket, active, s);
+#else
       for (int it = 0; it < steps_ && running > 0; ++it) {
         double f[kLanes], t[kLanes];
         for (int q = 0; q < kLanes; ++q) t[q] = t0[q] + s[q], f[q] = C[static_cast<size_t>(degree) * kLanes + static_cast<size_t>(q)];
@@ -366,9 +380,79 @@ class VertexPlacer {
           if (done) active[q] = false, --running;
         }
       }
+#endif
       for (int q = 0; q < lanes; ++q) out[b + static_cast<size_t>(q)] = point(in[b + static_cast<size_t>(q)], s[q]);
     }
   }
+
+#if defined(__AVX2__) && defined(__FMA__)
+  // The lockstep iteration above, four lanes per vector: IllinoisBracket::next with masks
+  // instead of branches, the same operations in the same order, so vertices are bit-identical
+  // to the scalar loop's. Returns the evaluations of active lanes.
+  long long illinois_lanes_avx(const double* C, int degree, const double* t0,
+                               const std::array<IllinoisBracket, kLanes>& bracket,
+                               const bool* active, double* s) const {
+    static_assert(kLanes % 4 == 0);
+    long long evaluations = 0;
+    for (int g = 0; g < kLanes; g += 4) {
+      double lo_[4], hi_[4], flo_[4], fhi_[4], last_[4], act_[4];
+      for (int q = 0; q < 4; ++q) {
+        const IllinoisBracket& br = bracket[static_cast<size_t>(g + q)];
+        lo_[q] = br.lo, hi_[q] = br.hi, flo_[q] = br.f_lo, fhi_[q] = br.f_hi;
+        last_[q] = br.last_side;
+        act_[q] = active[g + q] ? -1.0 : 0.0;  // a set sign bit marks an active lane
+      }
+      __m256d lo = _mm256_loadu_pd(lo_), hi = _mm256_loadu_pd(hi_);
+      __m256d flo = _mm256_loadu_pd(flo_), fhi = _mm256_loadu_pd(fhi_);
+      __m256d last = _mm256_loadu_pd(last_), sv = _mm256_loadu_pd(s + g);
+      __m256d act = _mm256_cmp_pd(_mm256_loadu_pd(act_), _mm256_setzero_pd(), _CMP_LT_OQ);
+      const __m256d tg = _mm256_loadu_pd(t0 + g);
+      const __m256d zero = _mm256_setzero_pd(), half = _mm256_set1_pd(0.5);
+      const __m256d one = _mm256_set1_pd(1.0), minus_one = _mm256_set1_pd(-1.0);
+      const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
+      auto finite = [&](__m256d x) { return _mm256_cmp_pd(_mm256_sub_pd(x, x), zero, _CMP_EQ_OQ); };
+      for (int it = 0; it < steps_; ++it) {
+        const int mask = _mm256_movemask_pd(act);
+        if (!mask) break;
+        evaluations += std::popcount(static_cast<unsigned>(mask));
+        const __m256d t = _mm256_add_pd(tg, sv);
+        __m256d f = _mm256_loadu_pd(C + static_cast<size_t>(degree) * kLanes + static_cast<size_t>(g));
+        for (int m = degree - 1; m >= 0; --m)
+          f = _mm256_fmadd_pd(f, t, _mm256_loadu_pd(C + static_cast<size_t>(m) * kLanes + static_cast<size_t>(g)));
+        // An exact root or a non-finite value ends the lane where it is.
+        const __m256d stop = _mm256_or_pd(_mm256_cmp_pd(f, zero, _CMP_EQ_OQ),
+                                          _mm256_andnot_pd(finite(f), act));
+        const __m256d step = _mm256_andnot_pd(stop, act);
+        // Which end s replaces: the one whose value has f's sign (is_positive alike).
+        const __m256d same = _mm256_xor_pd(
+            _mm256_xor_pd(_mm256_cmp_pd(f, zero, _CMP_NLT_UQ), _mm256_cmp_pd(fhi, zero, _CMP_NLT_UQ)),
+            _mm256_castsi256_pd(_mm256_set1_epi64x(-1)));
+        const __m256d up = _mm256_and_pd(step, same), down = _mm256_andnot_pd(same, step);
+        const __m256d halve_lo = _mm256_and_pd(up, _mm256_cmp_pd(last, one, _CMP_EQ_OQ));
+        const __m256d halve_hi = _mm256_and_pd(down, _mm256_cmp_pd(last, minus_one, _CMP_EQ_OQ));
+        flo = _mm256_blendv_pd(flo, _mm256_mul_pd(flo, half), halve_lo);
+        fhi = _mm256_blendv_pd(fhi, _mm256_mul_pd(fhi, half), halve_hi);
+        hi = _mm256_blendv_pd(hi, sv, up), fhi = _mm256_blendv_pd(fhi, f, up);
+        lo = _mm256_blendv_pd(lo, sv, down), flo = _mm256_blendv_pd(flo, f, down);
+        last = _mm256_blendv_pd(_mm256_blendv_pd(last, minus_one, down), one, up);
+        __m256d n = _mm256_sub_pd(hi, _mm256_div_pd(_mm256_mul_pd(fhi, _mm256_sub_pd(hi, lo)),
+                                                    _mm256_sub_pd(fhi, flo)));
+        const __m256d outside = _mm256_or_pd(
+            _mm256_andnot_pd(finite(n), step),
+            _mm256_or_pd(_mm256_cmp_pd(n, _mm256_min_pd(lo, hi), _CMP_LT_OQ),
+                         _mm256_cmp_pd(n, _mm256_max_pd(lo, hi), _CMP_GT_OQ)));
+        n = _mm256_blendv_pd(n, _mm256_mul_pd(half, _mm256_add_pd(lo, hi)), outside);
+        const __m256d done = _mm256_or_pd(
+            _mm256_cmp_pd(_mm256_and_pd(_mm256_sub_pd(n, sv), abs_mask), _mm256_set1_pd(1e-13), _CMP_LE_OQ),
+            _mm256_cmp_pd(_mm256_and_pd(_mm256_sub_pd(hi, lo), abs_mask), _mm256_set1_pd(1e-15), _CMP_LE_OQ));
+        sv = _mm256_blendv_pd(sv, n, step);
+        act = _mm256_andnot_pd(_mm256_or_pd(stop, _mm256_and_pd(done, step)), act);
+      }
+      _mm256_storeu_pd(s + g, sv);
+    }
+    return evaluations;
+  }
+#endif
 
   void place_batched(std::span<const Crossing> in, Vec3* out, long long& evaluations) {
     const size_t n = in.size();
@@ -449,13 +533,18 @@ void triangulate_cycle(const std::uint8_t* edges, int n, const Vec3* pos, Emit&&
     emit(edges[0], edges[1], edges[2]);
     return;
   }
-  auto quality = [&](int a, int b, int c) {
-    const Vec3& pa = pos[edges[a]];
-    const Vec3& pb = pos[edges[b]];
-    const Vec3& pc = pos[edges[c]];
-    // The square of the quality up to a constant factor: it orders triangles alike.
-    const double area2 = (pb - pa).cross(pc - pa).squaredNorm();
-    const double sum = (pb - pa).squaredNorm() + (pc - pb).squaredNorm() + (pa - pc).squaredNorm();
+  // Squared distances between the cycle's points, computed once: every triangle's quality
+  // comes from its three sides.
+  double d2[12][12];
+  for (int a = 0; a < n; ++a)
+    for (int b = a + 1; b < n; ++b) d2[a][b] = (pos[edges[b]] - pos[edges[a]]).squaredNorm();
+  // The square of the quality up to a constant factor (it orders triangles alike): with sides
+  // u = b − a, v = c − a, |u × v|² = |u|²|v|² − (u·v)² and 2 u·v = |u|² + |v|² − |c − b|².
+  auto quality = [&](int a, int b, int c) {  // a < b < c
+    const double u = d2[a][b], v = d2[a][c], w = d2[b][c];
+    const double dot = 0.5 * (u + v - w);
+    const double area2 = std::max(0.0, u * v - dot * dot);
+    const double sum = u + v + w;
     return sum > 0 ? area2 / (sum * sum) : 0.0;
   };
   auto allowed = [&](int a, int b) {
@@ -469,6 +558,9 @@ void triangulate_cycle(const std::uint8_t* edges, int n, const Vec3* pos, Emit&&
     else emit(edges[0], edges[1], edges[3]), emit(edges[1], edges[2], edges[3]);
     return;
   }
+  bool ok[12][12];
+  for (int a = 0; a < n; ++a)
+    for (int b = a + 1; b < n; ++b) ok[a][b] = allowed(a, b);
   double best[12][12];
   int split[12][12];
   for (int len = 2; len < n; ++len)
@@ -477,8 +569,7 @@ void triangulate_cycle(const std::uint8_t* edges, int n, const Vec3* pos, Emit&&
       best[a][b] = -2;
       split[a][b] = -1;
       for (int m = a + 1; m < b; ++m) {
-        double s = quality(a, m, b);
-        if (!allowed(a, m) || !allowed(m, b)) s = -1;
+        double s = ok[a][m] && ok[m][b] ? quality(a, m, b) : -1;
         if (m - a > 1) s = std::min(s, best[a][m]);
         if (b - m > 1) s = std::min(s, best[m][b]);
         if (s > best[a][b]) best[a][b] = s, split[a][b] = m;
