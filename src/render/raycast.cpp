@@ -18,6 +18,18 @@ namespace {
 constexpr int kN = RootFinder::kMaxDegree + 1;
 // |∇F| below this fraction of the magnitude of its terms counts as ∇F = 0 (see intersect).
 constexpr double kRelativeGradientFloor = 1e-6;
+// ∇F from the row's expansions is used when it exceeds that floor by this factor and the
+// bound on its own rounding error by kRowGradientAccuracy (see intersect). That bound is a
+// worst case, orders of magnitude above the actual error: the reference scenes shade the
+// same as with ∇F from F's own terms.
+constexpr double kRowGradientMargin = 1e3;
+constexpr double kRowGradientAccuracy = 1e3;
+
+constexpr double square(double x) { return x * x; }
+/// lo < x < ∞ (false for NaN).
+inline bool in_open_range(double x, double lo) {
+  return x > lo && x < std::numeric_limits<double>::infinity();
+}
 
 /// Number of monomials in x, y, z of degree ≤ D.
 constexpr int monomial_count(int D) { return (D + 1) * (D + 2) * (D + 3) / 6; }
@@ -75,6 +87,36 @@ double restrict_in_row(const double* row, const double* band_coeffs, int d_, dou
   }
   for (int k = d - 1; k >= 0; --k) band = band * x + band_coeffs[k];
   return band;
+}
+
+/// The derivatives of G at t·(base + s·step) along the ray (a), the row's step (b) and the
+/// row's plane normal (c) (see SurfaceRayCaster::Impl::row_gradient) from the ray's
+/// polynomial f, the row's derivative in s and the row's ∇G·n, and the derivative of the
+/// rounding band at x (e); unrolled when D > 0.
+template <int D>
+void row_derivatives(const double* f, const double* row_ds, const double* normal_row,
+                     const double* band_coeffs, int d_, double s, double t, double x,
+                     double* abce) {
+  const int d = D > 0 ? D : d_;
+  double a = 0, b = 0, c = 0, e = 0;
+  for (int k = d; k >= 1; --k) {
+    a = a * t + k * f[k];
+    e = e * x + k * band_coeffs[k];
+    const double* r = row_ds + k * (k - 1) / 2;
+    double v = r[k - 1];
+    for (int j = k - 2; j >= 0; --j) v = v * s + r[j];
+    b = b * t + v;
+  }
+  for (int k = d - 1; k >= 0; --k) {
+    const double* r = normal_row + k * (k + 1) / 2;
+    double v = r[k];
+    for (int j = k - 1; j >= 0; --j) v = v * s + r[j];
+    c = c * t + v;
+  }
+  abce[0] = a;
+  abce[1] = b;
+  abce[2] = c;
+  abce[3] = e;
 }
 
 /// A monomial of the partial derivatives of F: its position in a MonomialTable and its
@@ -199,7 +241,6 @@ struct SurfaceRayCaster::Impl {
   std::vector<GradientTerm> derivative;  // the monomials of the derivatives, in order
   std::vector<double> gradient_bound;  // [k]: Σ |coefficient| over degree k of all three
   std::vector<double> powers;          // scratch: monomials of a hit point
-  std::vector<Monomial> translated;    // G(p) = F(eye + p)
   // With bounds[k] the sum of the coefficients of degree k of |F| translated by |eye|,
   // bounds[k]·max|d_i|^k ≥ |G_k(d)| for every direction d and bounds the rounding error scale
   // of G_k. The rounding band of a ray is rounding_band(bounds, t1·max|d_i|), a polynomial in
@@ -208,11 +249,36 @@ struct SurfaceRayCaster::Impl {
   RootFinder finder;
   std::array<double, kN> coeffs{};
 
+  // For the rows: every monomial of degree ≤ degree (row_monomials), as a polynomial in s at
+  // base + s·step, its deg + 1 coefficients at mono_poly[mono_offset[m]]; G's terms and
+  // ∇G = (∂G/∂x, ∂G/∂y, ∂G/∂z) (one polynomial with vector coefficients, degree − 1) by
+  // their monomials' positions.
+  MonomialTable row_monomials{0};
+  std::vector<int> mono_offset;
+  std::vector<double> mono_poly;
+  struct RowTerm {
+    int position, degree;
+    double c;
+  };
+  struct PartialsTerm {
+    int position, degree;
+    Vec3 c;
+  };
+  std::vector<RowTerm> row_terms;
+  std::vector<PartialsTerm> translated_gradient;
+
   // The current row: directions base + s·step.
   Vec3 base = Vec3::UnitX(), step = Vec3::Zero();
   // Exact path: G_k(base + s·step) = Σ_j row[k(k+1)/2 + j] s^j.
   std::array<double, kN * (kN + 1) / 2> row{};
-  std::vector<double> axis_powers;  // scratch of begin_row: (base_a + s·step_a)^e in s
+  // Normals along the row (see row_gradient): the derivative in s of row, ∂G_k/∂s =
+  // Σ_j row_ds[k(k−1)/2 + j] s^j (k ≥ 1); the normal of the row's plane, n = base × step; and
+  // the homogeneous parts of ∇G·n, (∇G·n)_k(base + s·step) = Σ_j normal_row[k(k+1)/2 + j] s^j.
+  std::array<double, kN * (kN + 1) / 2> row_ds{};
+  std::array<double, kN * (kN + 1) / 2> normal_row{};
+  Vec3 row_normal = Vec3::Zero();
+  double row_dot = 0, row_ss = 0, row_inverse_nn = 0;  // base·step, |step|², 1 / |n|²
+  bool has_row_normals = false;  // false for a row of one ray (step = 0)
   // The clip along the row's rays (as Clip::ray_interval, with its terms expanded in s).
   struct SphereRow {
     double a0, a1, a2;  // |d|² = a0 + 2 a1 s + a2 s²
@@ -243,7 +309,32 @@ struct SurfaceRayCaster::Impl {
     if (exact) {
       const Polynomial poly = field.polynomial();
       degree = std::max(poly.degree(), 0);
-      translated = poly.translated(eye).terms();
+      {
+        // G(p) = F(eye + p).
+        const std::vector<Monomial> translated = poly.translated(eye).terms();
+        row_monomials = MonomialTable(degree);
+        const MonomialTable& table = row_monomials;
+        // The table's graded order: (total + 1)(total + 2)/2 monomials of each degree.
+        std::vector<int> degree_of;
+        int offset = 0;
+        for (int total = 0; total <= degree; ++total)
+          for (int m = 0; m < (total + 1) * (total + 2) / 2; ++m) {
+            degree_of.push_back(total);
+            mono_offset.push_back(offset);
+            offset += total + 1;
+          }
+        mono_poly.assign(static_cast<size_t>(offset), 0.0);
+        std::vector<Vec3> dense(table.size(), Vec3::Zero());
+        for (const Monomial& m : translated) {
+          row_terms.push_back({table.at(m.i, m.j, m.k), m.degree(), m.c});
+          if (m.i > 0) dense[static_cast<size_t>(table.at(m.i - 1, m.j, m.k))].x() = m.i * m.c;
+          if (m.j > 0) dense[static_cast<size_t>(table.at(m.i, m.j - 1, m.k))].y() = m.j * m.c;
+          if (m.k > 0) dense[static_cast<size_t>(table.at(m.i, m.j, m.k - 1))].z() = m.k * m.c;
+        }
+        for (size_t m = 0; m < dense.size(); ++m)
+          if (!dense[m].isZero())
+            translated_gradient.push_back({static_cast<int>(m), degree_of[m], dense[m]});
+      }
       derivative_monomials = MonomialTable(std::max(degree - 1, 0));
       gradient_bound.assign(static_cast<size_t>(derivative_monomials.D + 1), 0.0);
       // Polynomial's terms are unique, so each derivative gets each monomial at most once.
@@ -273,7 +364,6 @@ struct SurfaceRayCaster::Impl {
         unit[static_cast<size_t>(k)] = 0;
       }
       powers.assign(derivative_monomials.size(), 0.0);
-      axis_powers.assign(static_cast<size_t>(3 * (degree + 1) * (degree + 1)), 0.0);
     } else {
       intervals = std::make_unique<detail::IntervalEvaluator>(field);
     }
@@ -335,37 +425,89 @@ struct SurfaceRayCaster::Impl {
   void expand_row() {
     const int n = degree + 1;
     const bool flat = step.isZero();
-    auto power = [&](int axis, int e) {
-      return &axis_powers[static_cast<size_t>((axis * n + e) * n)];
-    };
-    for (int a = 0; a < 3; ++a) {
-      double* p0 = power(a, 0);
-      p0[0] = 1;
-      for (int e = 1; e < n; ++e) {
-        const double* prev = power(a, e - 1);
-        double* p = power(a, e);
-        const int len = flat ? 1 : e + 1;
-        for (int j = 0; j < len; ++j)
-          p[j] = (j < e ? prev[j] * base[a] : 0.0) + (j > 0 ? prev[j - 1] * step[a] : 0.0);
+    // Each monomial as a polynomial in s: its parent's times (base_a + s·step_a), so every
+    // monomial costs deg + 1 multiply-adds, and each term of G or ∇G·n then deg + 1 more.
+    const int* parent = row_monomials.parent.data();
+    const int* axis = row_monomials.axis.data();
+    const int* offset = mono_offset.data();
+    double* poly = mono_poly.data();
+    poly[0] = 1;
+    // Graded order: the monomials of degree k start at k(k+1)(k+2)/6 (`next` for k + 1).
+    for (int m = 1, k = 1, next = 4; m < static_cast<int>(row_monomials.size()); ++m) {
+      if (m == next) {
+        ++k;
+        next += (k + 1) * (k + 2) / 2;
       }
+      const double* p = poly + offset[parent[m]];
+      double* q = poly + offset[m];
+      const double b = base[axis[m]], st = step[axis[m]];
+      q[0] = p[0] * b;
+      if (flat) continue;  // a single ray needs the constant coefficients only
+      for (int j = 1; j < k; ++j) q[j] = p[j] * b + p[j - 1] * st;
+      q[k] = p[k - 1] * st;
     }
+    auto add_term = [&](int position, int k, double c, double* out) {
+      const double* p = poly + offset[position];
+      out += k * (k + 1) / 2;
+      for (int j = 0; j <= (flat ? 0 : k); ++j) out[j] += c * p[j];
+    };
     std::fill_n(row.begin(), n * (n + 1) / 2, 0.0);
-    double xy[kN], xyz[kN];
-    for (const Monomial& m : translated) {
-      const int k = m.degree();
-      const int li = flat ? 1 : m.i + 1, lj = flat ? 1 : m.j + 1, ll = flat ? 1 : m.k + 1;
-      const double* px = power(0, m.i);
-      const double* py = power(1, m.j);
-      const double* pz = power(2, m.k);
-      std::fill_n(xy, li + lj - 1, 0.0);
-      for (int a = 0; a < li; ++a)
-        for (int b = 0; b < lj; ++b) xy[a + b] += px[a] * py[b];
-      std::fill_n(xyz, li + lj + ll - 2, 0.0);
-      for (int a = 0; a < li + lj - 1; ++a)
-        for (int b = 0; b < ll; ++b) xyz[a + b] += xy[a] * pz[b];
-      double* out = &row[static_cast<size_t>(k * (k + 1) / 2)];
-      for (int j = 0; j < li + lj + ll - 2; ++j) out[j] += m.c * xyz[j];
+    for (const RowTerm& t : row_terms) add_term(t.position, t.degree, t.c, row.data());
+    has_row_normals = !flat;
+    if (!has_row_normals) return;
+    for (int k = 1; k <= degree; ++k)
+      for (int j = 0; j < k; ++j)
+        row_ds[static_cast<size_t>(k * (k - 1) / 2 + j)] =
+            (j + 1) * row[static_cast<size_t>(k * (k + 1) / 2 + j + 1)];
+    row_normal = base.cross(step);
+    row_dot = base.dot(step);
+    row_ss = step.squaredNorm();
+    row_inverse_nn = 1 / row_normal.squaredNorm();
+    std::fill_n(normal_row.begin(), degree * (degree + 1) / 2, 0.0);
+    for (const PartialsTerm& t : translated_gradient)
+      add_term(t.position, t.degree, t.c.dot(row_normal), normal_row.data());
+  }
+
+  /// ∇F at the hit eye + t·(base + s·step) of the current ray from the row's expansions
+  /// (its coefficients must be in `coeffs`): the derivatives along the ray d = base + s·step,
+  /// along step and along n = base × step are polynomials in t whose coefficients are
+  /// polynomials in s, a few dozen multiply-adds instead of evaluating ∇F's terms. They are
+  /// those of G, translated to the eye, so they round on the scale of G's terms: `error`
+  /// receives a bound on the error of the result (scaled like it), from the derivative of the
+  /// rounding band. False for a row of one ray.
+  bool row_gradient(double s, double t, Vec3& g, double& error) const {
+    if (!has_row_normals) return false;
+    const double dx = base.x() + s * step.x(), dy = base.y() + s * step.y(),
+                 dz = base.z() + s * step.z();
+    const double x = t * std::max({std::abs(dx), std::abs(dy), std::abs(dz)});
+    // a = ∇G·d = f'(t); b = ∇G·step = Σ_k t^(k−1) ∂G_k/∂s; c = ∇G·n = Σ_k t^k (∇G·n)_k;
+    // e: the derivative of the rounding band.
+    double abce[4];
+    const double *f = coeffs.data(), *ds_row = row_ds.data(), *h = normal_row.data(),
+                 *bc = band_coeffs.data();
+    switch (degree) {
+      case 1: row_derivatives<1>(f, ds_row, h, bc, degree, s, t, x, abce); break;
+      case 2: row_derivatives<2>(f, ds_row, h, bc, degree, s, t, x, abce); break;
+      case 3: row_derivatives<3>(f, ds_row, h, bc, degree, s, t, x, abce); break;
+      case 4: row_derivatives<4>(f, ds_row, h, bc, degree, s, t, x, abce); break;
+      case 5: row_derivatives<5>(f, ds_row, h, bc, degree, s, t, x, abce); break;
+      case 6: row_derivatives<6>(f, ds_row, h, bc, degree, s, t, x, abce); break;
+      default: row_derivatives<0>(f, ds_row, h, bc, degree, s, t, x, abce); break;
     }
+    const double a = abce[0], b = abce[1], c = abce[2];
+    // With the dual basis of (d, step, n): ∇ = [a (|step|² d − (d·step) step)
+    // + b (|d|² step − (d·step) d) + c n] / |n|², |n|² = |d|²|step|² − (d·step)².
+    // Plain scalars: Eigen's 3-vector expressions cost several times as much here.
+    const double dd = dx * dx + dy * dy + dz * dz, ds = row_dot + s * row_ss;
+    const double p = (a * row_ss - b * ds) * row_inverse_nn,
+                 q = (b * dd - a * ds) * row_inverse_nn, r = c * row_inverse_nn;
+    g = Vec3(p * dx + q * step.x() + r * row_normal.x(), p * dy + q * step.y() + r * row_normal.y(),
+             p * dz + q * step.z() + r * row_normal.z());
+    // Each directional derivative along a unit vector rounds by at most the derivative of the
+    // band; the dual basis of the row's (well-conditioned) basis scales that by about
+    // |d|²|step|² / |n|², which a factor 4 covers.
+    error = 4 * abce[3] * dd * row_ss * row_inverse_nn;
+    return true;
   }
 
   Vec3 direction(double s) const { return base + s * step; }
@@ -497,16 +639,20 @@ struct SurfaceRayCaster::Impl {
     return *t;
   }
 
-  /// ∇F at p from F's own terms (well conditioned near the surface, unlike the translated
-  /// form). Returns a bound on the magnitude of its terms: Σ_k gradient_bound[k] max|p_i|^k.
-  double gradient(const Vec3& p, Vec3& g) {
-    double* mono = powers.data();
-    derivative_monomials.evaluate(p, mono);
-    sparse_gradient(derivative, mono, g.data());
+  /// A bound on the magnitude of the terms of ∇F at p: Σ_k gradient_bound[k] max|p_i|^k.
+  double gradient_scale(const Vec3& p) const {
     const double m = p.cwiseAbs().maxCoeff();
     double bound = 0;
     for (size_t k = gradient_bound.size(); k-- > 0;) bound = bound * m + gradient_bound[k];
     return bound;
+  }
+
+  /// ∇F at p from F's own terms (well conditioned near the surface, unlike the translated
+  /// form).
+  void gradient(const Vec3& p, Vec3& g) {
+    double* mono = powers.data();
+    derivative_monomials.evaluate(p, mono);
+    sparse_gradient(derivative, mono, g.data());
   }
 
   bool intersect_in_row(double s, SurfaceHit& hit, const RootGuess& guess) {
@@ -520,8 +666,20 @@ struct SurfaceRayCaster::Impl {
     if (exact) {
       // ∇F lost to cancellation (a node, or a squared surface where ∇F = 2g∇g is tiny at the
       // root) has a meaningless direction: treat it as vanishing.
-      const double floor = kRelativeGradientFloor * gradient(hit.point, g);
-      hit.singular = !(g.allFinite() && g.squaredNorm() > floor * floor);
+      const double floor = kRelativeGradientFloor * gradient_scale(hit.point);
+      // The row's expansions give ∇F cheaply; it is used where it is far from vanishing and
+      // far above the bound on its own rounding (a relative error below 1e-3 in that worst
+      // case, below 1e-9 in practice) and the decision below is the same. Elsewhere
+      // (near nodes, on squared surfaces, for single rays) ∇F comes from F's own terms.
+      double error = 0;
+      if (row_gradient(s, t, g, error) &&
+          in_open_range(g.squaredNorm(), std::max(square(kRowGradientMargin * floor),
+                                                  square(kRowGradientAccuracy * error)))) {
+        hit.singular = false;
+      } else {
+        gradient(hit.point, g);
+        hit.singular = !(g.allFinite() && g.squaredNorm() > floor * floor);
+      }
     } else {
       evaluator.value_gradient(hit.point, g);
       hit.singular = !(g.allFinite() && g.squaredNorm() > 0);

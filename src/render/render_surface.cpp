@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -71,8 +72,9 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
   std::vector<double> offsets;  // of the samples within a pixel, along x and along y
   for (int i = 0; i < samples; ++i) offsets.push_back((i + 0.5) / samples);
   Image image(options.width, options.height);
-  Image background(1, 1);  // the background's bytes, copied into pixels no ray hits
-  detail::store_linear(background, 0, 0, options.background);
+  const detail::GammaTable& gamma = detail::gamma_table();
+  std::uint8_t background[3];  // the background's bytes, copied into pixels no ray hits
+  gamma.store(background, options.background);
   const bool finished = detail::for_each_tile(
       options.width, options.height, options.width, kBandRows, threads, stop, options.progress,
       [&](int x0, int y0, int x1, int y1, int worker) {
@@ -115,16 +117,21 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
           w.rays += columns;
           std::swap(w.above, w.current);
         }
-        for (int y = y0; y < y1; ++y)
-          for (int x = x0; x < x1; ++x) {
+        for (int y = y0; y < y1; ++y) {
+          std::uint8_t* out = image.pixel(x0, y);
+          for (int x = x0; x < x1; ++x, out += 3) {
             const size_t pixel = static_cast<size_t>((y - y0) * width + (x - x0));
-            if (const int n = w.hit_samples[pixel]; n > 0)
-              detail::store_linear(
-                  image, x, y,
-                  (w.sums[pixel] + (samples * samples - n) * options.background) * weight);
-            else
-              std::copy_n(background.rgb.data(), 3, image.pixel(x, y));
+            if (const int n = w.hit_samples[pixel]; n > 0) {
+              gamma.store(out, (w.sums[pixel] + (samples * samples - n) * options.background) *
+                                   weight);
+            } else {
+              // Byte by byte: a 3-byte copy compiles to a call of memcpy.
+              out[0] = background[0];
+              out[1] = background[1];
+              out[2] = background[2];
+            }
           }
+        }
       });
   if (!finished) return {};
   if (stats) {

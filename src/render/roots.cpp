@@ -188,7 +188,10 @@ ZS_NO_VECTORIZE double polish_even_root(const double* g, int d_, double u_root, 
   // A simple root leaves the band within about band / |g'|: the first step goes twice as
   // far, so a simple root costs one evaluation. An even root's neighbouring extremum lies
   // within sqrt(band / g''), which this step reaches or the doubling steps do.
-  step = std::clamp(2 * band / std::abs(slope), step, 1e-3);
+  // (The division is skipped when its result would be clamped to `step`: the usual simple
+  // root, where the band is far narrower than the tolerance.)
+  const double reach = 2 * band;
+  if (!(reach <= step * std::abs(slope))) step = std::clamp(reach / std::abs(slope), step, 1e-3);
   // g' keeps its sign within |g'| / curvature of the root: when that reaches well past where
   // the search below would stop (g leaves the band within about 2·step, with room for the
   // doubling), the search would meet no extremum and return u_root (up to the tolerance).

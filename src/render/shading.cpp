@@ -38,52 +38,16 @@ Shader::Lit Shader::light_up(const Material& m) const {
   Lit lit;
   lit.ambient = m.ambient * m.diffuse;
   for (const WorldLight& l : lights) {
-    lit.diffuse.push_back(l.color.cwiseProduct(m.diffuse));
-    lit.specular.push_back(m.specular > 0 ? Color(m.specular * l.color) : Color::Zero());
+    const Color diffuse = l.color.cwiseProduct(m.diffuse);
+    const Color specular = m.specular > 0 ? Color(m.specular * l.color) : Color::Zero();
+    lit.terms.push_back({{l.direction.x(), l.direction.y(), l.direction.z()},
+                         {diffuse.x(), diffuse.y(), diffuse.z()},
+                         {specular.x(), specular.y(), specular.z()}});
   }
   lit.shininess = m.shininess;
   if (m.shininess >= 0 && m.shininess <= 1024 && m.shininess == std::floor(m.shininess))
     lit.exponent = static_cast<int>(m.shininess);
   return lit;
-}
-
-Color Shader::shade(const Vec3& n, const Vec3& dir, bool is_front) const {
-  const Lit& m = is_front ? lit_front_ : lit_back_;
-  // Plain scalars: Eigen's 3-vector dot products and sums cost several times as much here.
-  const double nx = n.x(), ny = n.y(), nz = n.z();
-  const double dx = dir.x(), dy = dir.y(), dz = dir.z();
-  double r = m.ambient.x(), g = m.ambient.y(), b = m.ambient.z();
-  // The reflection 2(n·l)n − l seen from the eye: its dot with −dir is l·dir − 2(n·l)(n·dir).
-  const double nd = nx * dx + ny * dy + nz * dz;
-  for (size_t i = 0; i < lights.size(); ++i) {
-    const Vec3& l = lights[i].direction;
-    const double ndl = nx * l.x() + ny * l.y() + nz * l.z();
-    if (ndl <= 0) continue;
-    const Color& diffuse = m.diffuse[i];
-    r += ndl * diffuse.x();
-    g += ndl * diffuse.y();
-    b += ndl * diffuse.z();
-    const double rv = l.x() * dx + l.y() * dy + l.z() * dz - 2 * ndl * nd;
-    if (rv <= 0) continue;
-    double highlight;
-    if (m.exponent >= 0) {
-      // Whole exponents (the usual case) by repeated squaring: several times faster than
-      // std::pow, which matters at three lights per pixel.
-      highlight = 1;
-      double power = rv;
-      for (int e = m.exponent; e != 0; e >>= 1) {
-        if (e & 1) highlight *= power;
-        power *= power;
-      }
-    } else {
-      highlight = std::pow(rv, m.shininess);
-    }
-    const Color& specular = m.specular[i];
-    r += highlight * specular.x();
-    g += highlight * specular.y();
-    b += highlight * specular.z();
-  }
-  return Color(r, g, b);
 }
 
 const Camera& camera_of(const Surface& surface, const RenderOptions& options) {
@@ -151,32 +115,24 @@ bool for_each_tile(int width, int height, int tile_width, int tile_height, int t
   return true;
 }
 
-void store_linear(Image& image, int x, int y, const Color& c) {
-  // Level L is the output for linear values in [((L - 0.5)/255)^2.2, ((L + 0.5)/255)^2.2).
-  // A table over 4096 equal bins gives the level at each bin's start; a value then moves up
-  // by the thresholds it passes (a few only in the darkest bins, where levels are dense).
-  struct Tables {
-    std::array<double, 256> threshold{};  // threshold[L]: lowest value of level L + 1
-    std::array<std::uint8_t, 4097> start{};
-    Tables() {
-      for (int l = 0; l < 255; ++l)
-        threshold[static_cast<size_t>(l)] = std::pow((l + 0.5) / 255.0, 2.2);
-      threshold[255] = std::numeric_limits<double>::infinity();
-      int level = 0;
-      for (int i = 0; i <= 4096; ++i) {
-        while (i / 4096.0 >= threshold[static_cast<size_t>(level)]) ++level;
-        start[static_cast<size_t>(i)] = static_cast<std::uint8_t>(level);
-      }
-    }
-  };
-  static const Tables t;
-  std::uint8_t* p = image.pixel(x, y);
-  for (int k = 0; k < 3; ++k) {
-    const double v = std::clamp(c[k], 0.0, 1.0);  // NaN-free: shading never makes NaN
-    int level = t.start[static_cast<size_t>(v * 4096.0)];
-    while (v >= t.threshold[static_cast<size_t>(level)]) ++level;
-    p[k] = static_cast<std::uint8_t>(level);
+GammaTable::GammaTable() {
+  for (int l = 0; l < 255; ++l)
+    threshold[static_cast<size_t>(l)] = std::pow((l + 0.5) / 255.0, 2.2);
+  threshold[255] = std::numeric_limits<double>::infinity();
+  int level = 0;
+  for (int i = 0; i <= 4096; ++i) {
+    while (i / 4096.0 >= threshold[static_cast<size_t>(level)]) ++level;
+    start[static_cast<size_t>(i)] = static_cast<std::uint8_t>(level);
   }
+}
+
+const GammaTable& gamma_table() {
+  static const GammaTable table;
+  return table;
+}
+
+void store_linear(Image& image, int x, int y, const Color& c) {
+  gamma_table().store(image.pixel(x, y), c);
 }
 
 std::vector<Vec2> sample_offsets(int samples) {

@@ -2,11 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
 
 #include "zeroset/error.h"
+#include "zeroset/expr/field.h"
 #include "zeroset/expr/polynomial.h"
 #include "zeroset/render/view.h"
 #include "zeroset/surface/catalog.h"
@@ -292,6 +294,61 @@ TEST_P(CatalogRays, RowRaysAgreeWithDenseReferenceWhateverTheGuess) {
   EXPECT_GT(guided, hits / 2);
   EXPECT_GT(misled, 100);
   EXPECT_GT(guided_roots, hits / 4) << "the neighbours' guesses should mostly be good";
+}
+
+/// Rows of rays take their normals from the row's expansions (G translated to the eye) where
+/// ∇F is far from vanishing: they must agree with ∇F evaluated from the field at the hit.
+TEST_P(CatalogRays, RowNormalsAgreeWithTheFieldsGradient) {
+  const Surface surface = make_surface(*find_catalog_entry(GetParam()));
+  Evaluator field(surface.field);
+  const Box3 box = surface.bounds();
+  const double radius = surface.scene_radius();
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1), unit(0, 1);
+  auto random_unit = [&] {
+    Vec3 v;
+    do v = Vec3(u(rng), u(rng), u(rng));
+    while (v.squaredNorm() > 1 || v.squaredNorm() < 1e-6);
+    return v.normalized();
+  };
+  int hits = 0, singular = 0;
+  double worst = 0;
+  constexpr int kEyes = 10, kRowsPerEye = 5, kRaysPerRow = 120;
+  for (int e = 0; e < kEyes; ++e) {
+    View view;
+    view.eye = box.center() + radius * (2.5 + 2 * std::abs(u(rng))) * random_unit();
+    view.target = box.center() + 0.2 * radius * random_unit();
+    view.forward = (view.target - view.eye).normalized();
+    view.right = view.forward.cross(random_unit()).normalized();
+    view.up = view.right.cross(view.forward);
+    view.tan_half_fov = 1.1 * radius / (view.target - view.eye).norm();
+    view.width = view.height = kRaysPerRow;
+    SurfaceRayCaster caster(surface, view.eye);
+    for (int r = 0; r < kRowsPerEye; ++r) {
+      Vec3 base, step;
+      view.row(kRaysPerRow * unit(rng), base, step);
+      caster.begin_row(base, step);
+      for (int i = 0; i < kRaysPerRow; ++i) {
+        SurfaceHit hit;
+        if (!caster.intersect_in_row(i + 0.5, hit)) continue;
+        if (hit.singular) {
+          ++singular;
+          continue;
+        }
+        Vec3 g;
+        field.value_gradient(hit.point, g);
+        // Near a node ∇F turns quickly: compare only where it is well above its rounding.
+        if (!(g.norm() > 1e-6)) continue;
+        const Vec3 d = base + (i + 0.5) * step;
+        const Vec3 expected = (g.dot(d) > 0 ? -1.0 : 1.0) * g.normalized();
+        worst = std::max(worst, (hit.normal - expected).norm());
+        ++hits;
+      }
+    }
+  }
+  EXPECT_GT(hits, kEyes * kRowsPerEye * kRaysPerRow / 20);
+  EXPECT_LT(singular, hits / 100);
+  EXPECT_LT(worst, 1e-7) << "over " << hits << " hits";
 }
 
 INSTANTIATE_TEST_SUITE_P(Catalog, CatalogRays,

@@ -61,7 +61,8 @@ class SurfaceRayCaster {
   bool intersect(const Vec3& dir, SurfaceHit& hit);
 
   /// Starts a row of rays with directions base + s·step (s real; base + s·step nonzero for
-  /// the s used): expands the restriction of F to the row, O(terms · degree²) once.
+  /// the s used): expands the restriction of F and of its gradient to the row, once, at
+  /// O(degree) per monomial of degree ≤ degree and per term of F and ∇F.
   void begin_row(const Vec3& base, const Vec3& step);
   /// The rays of the current row with s outside [s_min, s_max] miss the clip volume (a
   /// conservative range from its spheres; infinite without them, empty when no ray meets it).
