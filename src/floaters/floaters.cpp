@@ -13,6 +13,9 @@
 #include <numbers>
 #include <numeric>
 #include <optional>
+#include <tuple>
+#include <type_traits>
+#include <utility>
 
 #include "critical_detail.h"
 #include "neighbour_filter_detail.h"
@@ -73,6 +76,9 @@ constexpr double kMaxStepScene = 0.1;
 constexpr double kAreaPerFloater = 2.0;
 // A given σ̂ is kept at least this fraction of the scene radius (below, squares underflow).
 constexpr double kMinNominal = 1e-9;
+// Binary exponents of a nonnegative double (with its sign bit 0): the residual histogram's bins.
+constexpr std::size_t kOctaves = 2048;
+std::size_t octave_of(double r) { return std::bit_cast<std::uint64_t>(r) >> 52; }
 
 int resolve_threads(int requested) {
 #ifdef _OPENMP
@@ -161,43 +167,94 @@ void validate(const FloaterOptions& o) {
   check(o.threads >= 0, "threads", o.threads, "must not be negative");
 }
 
-// The terms of m pairs (i, j) (ALGORITHMS A.1–A.2 and the scaled form, see
-// FloaterOptions::scaled_repulsion), element by element: from r_ij, |r_ij|², σ_i, 1/(2σ_i²),
-// σ_j, α·w_ij and σ_max^j, the energy term E_ij, |r|²·E_ij, the force r_ij times its
-// coefficient (in place of r_ij) and the grading limit σ_max^j + g·|r|. A pair beyond reach
-// 3·max(σ_i, σ_j) (the filters keep a few) adds exactly nothing: no energy or force, and an
-// infinite limit. Branch-free, and the arrays cannot overlap, so the compiler vectorises it;
-// each element is computed the same way whether it does or not.
+// What the gather pass reads of a floater, in hash slot order: one cache line each, as
+// neighbours are visited in an order the slots only roughly follow.
+struct alignas(64) Neighbour {
+  double x, y, z;
+  double sigma;
+  double smax;        // σ_max^j
+  double nx, ny, nz;  // unit normal, or 0 (pinned on a node, or ∇F = 0)
+};
+static_assert(sizeof(Neighbour) == detail::kRecordFields * sizeof(double));
+
+// The constants of the pair terms (the switch is a double: a select on a bool stops the
+// compiler from vectorising the loop).
+struct PairConstants {
+  double alpha;       // α
+  double cos_weight;  // 1: E_ij weighted by |cos(∇F_i, ∇F_j)|; 0: not
+  double grading;     // g
+};
+
+// The terms of one pair: E_ij, |r|²·E_ij, the force along r_ij and the grading limit.
+struct PairTerms {
+  double e, de, fx, fy, fz, lim;
+};
+
+// The terms of the pair of floaters i and j with offset r_ij = (dx, dy, dz), |r_ij|² = d2, radii
+// σ_i = si and σ_j = sj, fission radius σ_max^j = pm, |n_i·n_j| = cosine for their unit normals
+// and `no_normal` 1 when either has none, else 0 (ALGORITHMS A.1–A.2, B and the scaled form, see
+// FloaterOptions::scaled_repulsion). A pair beyond reach 3·max(σ_i, σ_j) (the filters keep a
+// few) adds exactly nothing: no energy or force, and an infinite limit. Branch-free, so loops
+// calling it vectorise; each element is computed the same way whether they do or not.
 template <bool kScaled>
-ZS_VECTOR_CLONES void pair_terms(std::size_t m, double grading, double* __restrict dxs,
-                                 double* __restrict dys, double* __restrict dzs,
-                                 const double* __restrict d2s, const double* __restrict sis,
-                                 const double* __restrict invs, const double* __restrict sjs,
-                                 const double* __restrict aws, const double* __restrict pms,
-                                 double* __restrict es, double* __restrict des,
-                                 double* __restrict lims) {
+inline __attribute__((always_inline)) PairTerms pair_term(double dx, double dy, double dz,
+                                                          double d2, double si, double sj,
+                                                          double pm, double cosine,
+                                                          double no_normal, PairConstants k) {
+  // w_ij = |cos(∇F_i, ∇F_j)|, or 1 when either has no normal (then the cosine is exactly 0).
+  const double w = k.cos_weight > 0 ? cosine + no_normal : 1.0;
+  const bool within = d2 < std::max(9 * si * si, 9 * sj * sj);
+  const double aw = within ? k.alpha * w : 0.0;
+  const double u = d2 * (1 / (2 * (si * si)));  // |r|²/2σ_i²: E_ij is cut off at u = 9/2
+  // Scaled: x = |r|²/σ_ij² with σ_ij = (σ_i + σ_j)/2; A.2: x = |r|²/σ_j² (the E_ji term).
+  const double inv = kScaled ? 2 / (si + sj) : 1 / sj;
+  const double x = d2 * inv * inv;
+  const double amplitude = kScaled ? 2 * si * inv : si * si * inv * inv;
+  // Both terms are finite for every listed pair; beyond its own cutoff each is dropped.
+  const double eij = aw * detail::exp_cutoff(-u) * (1 - u * (2.0 / 9));
+  const double pair = amplitude * aw * detail::exp_cutoff(-0.5 * x) * (1 - x * (1.0 / 9));
+  const double e = u < 4.5 ? eij : 0.0;
+  const double f = x < 9 ? pair : 0.0;
+  const double coef = kScaled ? f : f + e;
+  const double limit = pm + k.grading * std::sqrt(d2);
+  return {e,         d2 * e,
+          coef * dx, coef * dy,
+          coef * dz, within ? limit : std::numeric_limits<double>::infinity()};
+}
+
+// The terms of m pairs, element by element, from floater i's position, radius and normal
+// (arrays *i) and floater j's record fields (arrays *j, pm the fission radius σ_max^j); the
+// arrays cannot overlap, so the compiler vectorises the loop. Returns how many pairs are
+// (nearly) coincident, |r_ij|² < 10⁻¹⁸σ_i²: they feel no force along r = 0, so their terms are
+// to be computed again with a separating offset.
+template <bool kScaled>
+ZS_VECTOR_CLONES std::size_t pair_terms(
+    std::size_t m, PairConstants k, const double* __restrict xi, const double* __restrict yi,
+    const double* __restrict zi, const double* __restrict si, const double* __restrict nxi,
+    const double* __restrict nyi, const double* __restrict nzi, const double* __restrict xj,
+    const double* __restrict yj, const double* __restrict zj, const double* __restrict sj,
+    const double* __restrict pm, const double* __restrict nxj, const double* __restrict nyj,
+    const double* __restrict nzj, double* __restrict es, double* __restrict des,
+    double* __restrict fxs, double* __restrict fys, double* __restrict fzs,
+    double* __restrict lims) {
+  std::size_t coincident = 0;
   for (std::size_t q = 0; q < m; ++q) {
-    const double d2 = d2s[q], si = sis[q], sj = sjs[q];
-    const bool within = d2 < std::max(9 * si * si, 9 * sj * sj);
-    const double aw = within ? aws[q] : 0.0;
-    const double u = d2 * invs[q];  // |r|²/2σ_i²: E_ij is cut off at u = 9/2 (|r| = 3σ_i)
-    // Scaled: x = |r|²/σ_ij² with σ_ij = (σ_i + σ_j)/2; A.2: x = |r|²/σ_j² (the E_ji term).
-    const double inv = kScaled ? 2 / (si + sj) : 1 / sj;
-    const double x = d2 * inv * inv;
-    const double amplitude = kScaled ? 2 * si * inv : si * si * inv * inv;
-    // Both terms are finite for every listed pair; beyond its own cutoff each is dropped.
-    const double eij = aw * detail::exp_cutoff(-u) * (1 - u * (2.0 / 9));
-    const double pair = amplitude * aw * detail::exp_cutoff(-0.5 * x) * (1 - x * (1.0 / 9));
-    const double e = u < 4.5 ? eij : 0.0;
-    const double f = x < 9 ? pair : 0.0;
-    const double coef = kScaled ? f : f + e;
-    es[q] = e;
-    des[q] = d2 * e;
-    dxs[q] = coef * dxs[q];
-    dys[q] = coef * dys[q];
-    dzs[q] = coef * dzs[q];
-    lims[q] = within ? pms[q] + grading * std::sqrt(d2) : std::numeric_limits<double>::infinity();
+    const double dx = xi[q] - xj[q], dy = yi[q] - yj[q], dz = zi[q] - zj[q];
+    const double d2 = dx * dx + dy * dy + dz * dz;
+    coincident += d2 < 1e-18 * (si[q] * si[q]);
+    const double cosine = std::abs(nxi[q] * nxj[q] + nyi[q] * nyj[q] + nzi[q] * nzj[q]);
+    const bool free_i = nxi[q] == 0 && nyi[q] == 0 && nzi[q] == 0;
+    const bool free_j = nxj[q] == 0 && nyj[q] == 0 && nzj[q] == 0;
+    const PairTerms t = pair_term<kScaled>(dx, dy, dz, d2, si[q], sj[q], pm[q], cosine,
+                                           free_i || free_j ? 1.0 : 0.0, k);
+    es[q] = t.e;
+    des[q] = t.de;
+    fxs[q] = t.fx;
+    fys[q] = t.fy;
+    fzs[q] = t.fz;
+    lims[q] = t.lim;
   }
+  return coincident;
 }
 
 }  // namespace
@@ -256,29 +313,33 @@ struct FloaterSystem::Impl {
   // Per-step scratch.
   std::vector<double> energy, denergy, graded, fq, new_sigma;
   std::vector<Vec3> desired, new_pos;
-  // Fates judged in move(), carried out in decide_fates().
+  std::vector<double> speed_sq;         // (|ṗ_i|/σ_i)²
+  std::vector<std::uint8_t> near_flag;  // |ṗ_i| < γσ_i
+  // Fates judged in move_one(), carried out in decide_fates().
   enum FateFlag : std::uint8_t { kStray = 1, kFission = 2, kDeath = 4 };
   std::vector<std::uint8_t> fate;
   std::vector<std::uint32_t> gone;
   std::vector<double> chunk_speed;  // per chunk of kChunk floaters: Σ (|ṗ_i|/σ_i)²
   std::vector<std::size_t> chunk_near;  // and the count near equilibrium
-  std::vector<double> residuals, median_octave;  // residual_stats() scratch
-  // What the gather pass reads of a neighbour, in hash slot order: one cache line each, as
-  // neighbours are visited in an order the slots only roughly follow.
-  struct alignas(64) Packed {
-    double x, y, z;
-    double sigma;
-    double smax;        // σ_max^j
-    double nx, ny, nz;  // unit normal, or 0 (pinned on a node, or ∇F = 0)
-  };
-  std::vector<Packed> packed;
-  std::vector<std::uint8_t> free_normal;  // 1 where the packed normal is 0
+  // residual_stats(): residuals, and their binary exponents counted per thread
+  // (evaluate_all()), the largest per thread, and the residuals in the median's octave.
+  std::vector<double> residuals, thread_largest, median_octave;
+  std::vector<std::array<std::size_t, kOctaves>> octave_counts;
+  // The largest σ_i, and the largest coordinate of a floater relative to the box centre, at
+  // the last evaluate_all() (node snapping, which moves floaters after it, widens the latter);
+  // per thread while they are found.
+  double largest_sigma = 0, largest_extent = 0;
+  std::vector<double> thread_sigma, thread_extent;
+  std::vector<Neighbour> packed;  // in slot order
+  double prefilter_scale = 0;     // single-precision coordinates are scaled by it
   std::vector<std::uint64_t> pid;
   std::vector<float> fx, fy, fz, fcut;  // the prefilter's coordinates and thresholds
   const detail::FilterPath filter = detail::best_filter_path();
   detail::SpatialHash hash;
 
   std::vector<Evaluator> evaluators;
+  // Per thread: the perimeter points of curvature_estimates() and their F and ∇F.
+  std::vector<std::array<std::vector<double>, 7>> perimeter;
   int threads = 1;
   mutable std::vector<Vec3> shown_normals;
   mutable bool shown_normals_valid = false;
@@ -322,6 +383,7 @@ struct FloaterSystem::Impl {
   void ensure_evaluators() {
     threads = resolve_threads(opt.threads);
     while (static_cast<int>(evaluators.size()) < threads) evaluators.emplace_back(surface.field);
+    perimeter.resize(evaluators.size());
   }
 
   double sigma_max() const { return opt.max_radius_factor * sigma_hat; }
@@ -380,26 +442,30 @@ struct FloaterSystem::Impl {
     unit.resize(n);
   }
 
+  // out[s] = v[order[s]]: a worksharing loop inside the caller's parallel region (nowait: each
+  // array has its own output).
   template <class T>
-  void permute(std::vector<T>& v, std::span<const std::uint32_t> order) const {
-    std::vector<T> out(v.size());
-#pragma omp parallel for schedule(static) num_threads(threads) if (order.size() >= kParallelMin)
+  static void permute_into(const std::vector<T>& v, std::vector<T>& out,
+                           std::span<const std::uint32_t> order) {
+#pragma omp for schedule(static) nowait
     for (std::int64_t s = 0; s < static_cast<std::int64_t>(order.size()); ++s)
       out[static_cast<std::size_t>(s)] = v[order[static_cast<std::size_t>(s)]];
-    v.swap(out);
   }
 
+  // Reorders every floater's state by `order` (new index → old index), in one parallel region.
   void permute_state(std::span<const std::uint32_t> order) {
-    permute(pos, order);
-    permute(sigma, order);
-    permute(id, order);
-    permute(mu, order);
-    permute(smax, order);
-    permute(age, order);
-    permute(pinned, order);
-    permute(value, order);
-    permute(gnorm, order);
-    permute(unit, order);
+    auto state = std::tie(pos, sigma, id, mu, smax, age, pinned, value, gnorm, unit);
+    auto out = std::apply(
+        [](const auto&... v) { return std::make_tuple(std::decay_t<decltype(v)>(v.size())...); },
+        state);
+    constexpr std::size_t kArrays = std::tuple_size_v<decltype(state)>;
+#pragma omp parallel num_threads(threads) if (order.size() >= kParallelMin)
+    [&]<std::size_t... k>(std::index_sequence<k...>) {
+      (permute_into(std::get<k>(state), std::get<k>(out), order), ...);
+    }(std::make_index_sequence<kArrays>{});
+    [&]<std::size_t... k>(std::index_sequence<k...>) {
+      (std::get<k>(state).swap(std::get<k>(out)), ...);
+    }(std::make_index_sequence<kArrays>{});
   }
 
   // ---- seeding ------------------------------------------------------------------------------
@@ -425,9 +491,19 @@ struct FloaterSystem::Impl {
 
   // ---- field evaluation ---------------------------------------------------------------------
 
-  // F and ∇F at every floater, batched in fixed chunks.
+  // F and ∇F at every floater, batched in fixed chunks; and, for residual_stats(), the residual
+  // |F|/|∇F| of each floater not held on a node, counted by binary exponent per thread, and the
+  // largest residual per thread; and the extent of the floaters for build_neighbours().
   void evaluate_all() {
     const std::size_t n = size();
+    const auto team = static_cast<std::size_t>(threads);
+    residuals.resize(n);
+    octave_counts.resize(team);
+    for (auto& counts : octave_counts) counts.fill(0);
+    thread_largest.assign(team, 0.0);
+    thread_sigma.assign(team, 0.0);
+    thread_extent.assign(team, 0.0);
+    const Vec3 centre = box.center();
     parallel_chunks(n, [&](std::size_t b, std::size_t e, Evaluator& ev) {
       std::array<double, kChunk> x, y, z, f, gx, gy, gz;
       const std::size_t m = e - b;
@@ -445,7 +521,28 @@ struct FloaterSystem::Impl {
         gnorm[b + k] = len;
         unit[b + k] = (len > 0 && std::isfinite(len)) ? Vec3(g / len) : Vec3(Vec3::Zero());
       }
+      const auto t = static_cast<std::size_t>(thread_index());
+      auto& counts = octave_counts[t];
+      double largest = thread_largest[t];
+      for (std::size_t i = b; i < e; ++i) {
+        if (pinned[i]) continue;
+        const double r = residual_of(value[i], gnorm[i]);
+        residuals[i] = r;
+        ++counts[octave_of(r)];
+        largest = std::max(largest, r);
+      }
+      thread_largest[t] = largest;
+      double sigma_bound = thread_sigma[t], extent_bound = thread_extent[t];
+      for (std::size_t i = b; i < e; ++i) {
+        sigma_bound = std::max(sigma_bound, sigma[i]);
+        extent_bound = std::max(extent_bound, (pos[i] - centre).cwiseAbs().maxCoeff());
+      }
+      thread_sigma[t] = sigma_bound;
+      thread_extent[t] = extent_bound;
     });
+    // Maxima do not depend on which thread saw which floater.
+    largest_sigma = *std::max_element(thread_sigma.begin(), thread_sigma.end());
+    largest_extent = *std::max_element(thread_extent.begin(), thread_extent.end());
     shown_normals_valid = false;
   }
 
@@ -564,6 +661,7 @@ struct FloaterSystem::Impl {
       pos[i] = *node;
       pinned[i] = 1;
       held.push_back(*node);
+      largest_extent = std::max(largest_extent, (*node - box.center()).cwiseAbs().maxCoeff());
     }
   }
 
@@ -585,7 +683,9 @@ struct FloaterSystem::Impl {
   void curvature_estimates(std::size_t b, std::size_t e, int samples, Evaluator& ev,
                            std::vector<double>& alpha) {
     const std::size_t m = (e - b) * static_cast<std::size_t>(samples);
-    std::vector<double> x(m), y(m), z(m), f(m), gx(m), gy(m), gz(m);
+    // Kept per thread from call to call: every entry used is written first.
+    auto& [x, y, z, f, gx, gy, gz] = perimeter[static_cast<std::size_t>(thread_index())];
+    for (auto* v : {&x, &y, &z, &f, &gx, &gy, &gz}) v->resize(m);
     // Stratified angles θ_j = 2π(j + phase)/samples: every direction around the floater gets
     // looked at. Each is the previous one turned by 2π/samples (one sine and cosine per
     // floater instead of one per sample).
@@ -642,19 +742,14 @@ struct FloaterSystem::Impl {
 
   // ---- the step -----------------------------------------------------------------------------
 
-  // Builds the hash over the current positions and the packed neighbour data in slot order.
+  // Builds the hash over the current positions and sizes the neighbour data in slot order (it is
+  // filled by pack_slot() in repulsion_and_move()'s parallel region).
   void build_neighbours() {
     const std::size_t n = size();
     // The largest σ, and the largest coordinate relative to the box centre (for the
-    // prefilter's scale below); maxima do not depend on the order of reduction.
-    const Vec3 centre = box.center();
-    double largest = 0, extent = 0;
-#pragma omp parallel for schedule(static) num_threads(threads) if (n >= kParallelMin) \
-    reduction(max : largest, extent)
-    for (std::int64_t i = 0; i < static_cast<std::int64_t>(n); ++i) {
-      largest = std::max(largest, sigma[static_cast<std::size_t>(i)]);
-      extent = std::max(extent, (pos[static_cast<std::size_t>(i)] - centre).cwiseAbs().maxCoeff());
-    }
+    // prefilter's scale below), as evaluate_all() found them.
+    const double largest = largest_sigma;
+    double extent = largest_extent;
     // Cells as large as the largest reach 3σ: a floater's neighbours lie in the 3×3×3 cells
     // around its own. (Smaller cells hold fewer candidates; measured on the Kummer scene, the
     // extra ranges and the larger grid cost as much as they save.)
@@ -664,7 +759,6 @@ struct FloaterSystem::Impl {
       hash.build(pos, box, 3 * largest, threads);
     }
     packed.resize(n);
-    free_normal.resize(n);
     pid.resize(n);
     // The filter reads whole groups of slots past a range's end: padding keeps that in bounds.
     for (auto* v : {&fx, &fy, &fz, &fcut}) {
@@ -675,22 +769,31 @@ struct FloaterSystem::Impl {
     // [−1, 1] (see detail::prefilter_threshold). An infinite coordinate makes the scale 0, and
     // then every candidate passes to the exact test (a NaN one never passes either test).
     extent = std::max(extent, 3 * largest);
-    const double scale = extent > 0 && std::isfinite(extent) ? 1 / extent : 0;
-    const auto order = hash.order();
-#pragma omp parallel for schedule(static) num_threads(threads) if (n >= kParallelMin)
-    for (std::int64_t signed_slot = 0; signed_slot < static_cast<std::int64_t>(n); ++signed_slot) {
-      const auto s = static_cast<std::size_t>(signed_slot);
-      const std::uint32_t i = order[s];
-      // A floater on a node has no tangent plane: it repels every sheet through the node.
-      const Vec3 n = pinned[i] ? Vec3::Zero() : unit[i];
-      packed[s] = {pos[i].x(), pos[i].y(), pos[i].z(), sigma[i], smax[i], n.x(), n.y(), n.z()};
-      free_normal[s] = n.squaredNorm() == 0;
-      pid[s] = id[i];
-      fx[s] = static_cast<float>((pos[i].x() - centre.x()) * scale);
-      fy[s] = static_cast<float>((pos[i].y() - centre.y()) * scale);
-      fz[s] = static_cast<float>((pos[i].z() - centre.z()) * scale);
-      fcut[s] = detail::prefilter_threshold(3 * sigma[i] * scale);
-    }
+    prefilter_scale = extent > 0 && std::isfinite(extent) ? 1 / extent : 0;
+  }
+
+  // The neighbour data of the floater at slot s (build_neighbours() sized the arrays).
+  void pack_slot(std::size_t s) {
+    const std::uint32_t i = hash.order()[s];
+    const Vec3 centre = box.center();
+    const double scale = prefilter_scale;
+    // A floater on a node has no tangent plane: it repels every sheet through the node.
+    const Vec3 n = pinned[i] ? Vec3::Zero() : unit[i];
+    packed[s] = {pos[i].x(), pos[i].y(), pos[i].z(), sigma[i], smax[i], n.x(), n.y(), n.z()};
+    pid[s] = id[i];
+    fx[s] = static_cast<float>((pos[i].x() - centre.x()) * scale);
+    fy[s] = static_cast<float>((pos[i].y() - centre.y()) * scale);
+    fz[s] = static_cast<float>((pos[i].z() - centre.z()) * scale);
+    fcut[s] = detail::prefilter_threshold(3 * sigma[i] * scale);
+  }
+
+  // The constants of move_one() in this step.
+  struct MoveConstants {
+    double dt, e_hat, max_scene_step, lo, hi;
+  };
+  MoveConstants move_constants() const {
+    return {opt.dt, desired_energy(), kMaxStepScene * scene_radius, kMinRadius * sigma_hat,
+            kMaxRadius * sigma_max()};
   }
 
   // Pair terms are computed in batches of about this many pairs, over several floaters: long
@@ -705,10 +808,13 @@ struct FloaterSystem::Impl {
     std::vector<std::uint32_t> slot;
     std::vector<float> x, y, z, cut;
     std::vector<std::uint32_t> near;  // indices into the above one floater's test kept
-    // The batch of pairs: offset r_ij (then the force along it), |r_ij|², σ_i, 1/(2σ_i²), σ_j,
-    // α·w_ij, σ_max^j; then the pair's energy term, its σ-derivative part and grading limit.
-    // Each floater's pairs are consecutive, in slot order.
-    std::vector<double> dx, dy, dz, d2, si, inv, sj, aw, pm, e, de, lim;
+    // The batch of pairs: the slot of j; i's position, radius and normal; j's record fields
+    // (detail::gather_records); then the pair's energy term, its σ-derivative part, the force
+    // along r_ij and the grading limit. Each floater's pairs are consecutive, in slot order.
+    std::vector<std::uint32_t> other;
+    std::vector<double> xi, yi, zi, si, nxi, nyi, nzi;
+    std::array<std::vector<double>, detail::kRecordFields> record;
+    std::vector<double> e, de, fx, fy, fz, lim;
     std::size_t pairs = 0;
     struct Owner {
       std::uint32_t slot, index, first, last;  // a floater and its pairs [first, last)
@@ -722,11 +828,15 @@ struct FloaterSystem::Impl {
       for (auto* v : {&x, &y, &z, &cut}) v->resize(size);
     }
     void reserve_pairs(std::size_t count) {
-      if (dx.size() >= count) return;
-      for (auto* v : {&dx, &dy, &dz, &d2, &si, &inv, &sj, &aw, &pm, &e, &de, &lim})
-        v->resize(std::max(count, kPairBatch));
+      if (e.size() >= count) return;
+      count = std::max(count, kPairBatch);
+      other.resize(count);
+      for (auto* v : {&xi, &yi, &zi, &si, &nxi, &nyi, &nzi, &e, &de, &fx, &fy, &fz, &lim})
+        v->resize(count);
+      for (auto& v : record) v.resize(count);
     }
   };
+  std::vector<Scratch> scratch;  // one per thread, kept from step to step
 
   // Gather pass (ALGORITHMS A.1–A.3, B): for floater i, E_i = Σ_j E_ij, ∂E_i/∂σ_i and the
   // desired velocity P_i = Σ_j r_ij (E_ij + (σ_i/σ_j)² E_ji) (or its scaled form). Each
@@ -736,18 +846,30 @@ struct FloaterSystem::Impl {
   // j (one relaxation sweep per step). Without it, where μ_i jumps (α_i drops from ~1 to ~0
   // once a floater's perimeter reaches across a node) the density wanted on either side
   // differs by more than fission and death tolerate (a factor 1/δ), and they fight forever.
-  void repulsion() {
+  // Each floater moves (move_one()) as soon as its sums are complete, in the same parallel
+  // region: its move reads nothing of other floaters, so there is no need to wait for them.
+  void repulsion_and_move() {
     const std::size_t n = size();
-    energy.resize(n);
-    denergy.resize(n);
-    graded.resize(n);
+    for (auto* v : {&energy, &denergy, &graded, &new_sigma, &speed_sq}) v->resize(n);
     desired.resize(n);
+    new_pos.resize(n);
+    fate.resize(n);
+    near_flag.resize(n);
+    const std::size_t chunks = (n + kChunk - 1) / kChunk;
+    chunk_speed.resize(chunks);
+    chunk_near.resize(chunks);
+    scratch.resize(static_cast<std::size_t>(threads));
+    const MoveConstants k = move_constants();
     const auto runs = hash.runs();
     const auto order = hash.order();
 #pragma omp parallel num_threads(threads) if (n >= kParallelMin)
     {
-      Scratch c;
-#pragma omp for schedule(dynamic, 16)
+      Scratch& c = scratch[static_cast<std::size_t>(thread_index())];
+      Evaluator& ev = evaluators[static_cast<std::size_t>(thread_index())];
+#pragma omp for schedule(static)
+      for (std::int64_t slot = 0; slot < static_cast<std::int64_t>(n); ++slot)
+        pack_slot(static_cast<std::size_t>(slot));
+#pragma omp for schedule(dynamic, 16) nowait
       for (std::int64_t r = 0; r < static_cast<std::int64_t>(runs.size()); ++r) {
         const auto& run = runs[static_cast<std::size_t>(r)];
         const std::uint32_t candidates = gather_block(run, c);
@@ -756,11 +878,25 @@ struct FloaterSystem::Impl {
           const std::size_t kept =
               detail::filter_near(filter, {&all, 1}, c.x.data(), c.y.data(), c.z.data(),
                                   c.cut.data(), fx[s], fy[s], fz[s], fcut[s], c.near.data());
-          if (c.pairs + kept > kPairBatch) sum_pairs(c);
+          if (c.pairs + kept > kPairBatch) sum_pairs_and_move(c, ev, k);
           list_pairs(s, order[s], kept, c);
         }
       }
-      sum_pairs(c);
+      sum_pairs_and_move(c, ev, k);
+#pragma omp barrier
+      // Summed per chunk in index order: the same on any number of threads.
+#pragma omp for schedule(static)
+      for (std::int64_t chunk = 0; chunk < static_cast<std::int64_t>(chunks); ++chunk) {
+        const std::size_t b = static_cast<std::size_t>(chunk) * kChunk;
+        double sq = 0;
+        std::size_t near = 0;
+        for (std::size_t i = b; i < std::min(n, b + kChunk); ++i) {
+          sq += speed_sq[i];
+          near += near_flag[i];
+        }
+        chunk_speed[static_cast<std::size_t>(chunk)] = sq;
+        chunk_near[static_cast<std::size_t>(chunk)] = near;
+      }
     }
     smax.swap(graded);
   }
@@ -804,81 +940,101 @@ struct FloaterSystem::Impl {
   // Adds the pairs of floater i (at slot s) to the batch in c: the `kept` candidates listed
   // in c.near other than i itself. pair_terms() tests each exactly, in double precision.
   void list_pairs(std::uint32_t s, std::uint32_t i, std::size_t kept, Scratch& c) const {
-    const double alpha = opt.repulsion;
-    const Packed& me = packed[s];
-    const double xi = me.x, yi = me.y, zi = me.z, si = me.sigma;
-    const bool weigh = opt.cos_weight && !free_normal[s];
-    const double si2 = si * si, inv_i = 1 / (2 * si2);
     c.reserve_pairs(c.pairs + kept);
     const std::size_t first = c.pairs;
     std::size_t m = first;
     for (std::size_t q = 0; q < kept; ++q) {
       const std::uint32_t t = c.slot[c.near[q]];
-      const Packed& other = packed[t];
-      double dx = xi - other.x, dy = yi - other.y, dz = zi - other.z;
-      double d2 = dx * dx + dy * dy + dz * dz;
-      const double sj = other.sigma;
-      if (d2 < 1e-18 * si2 && t != s) {
-        // Coincident floaters feel no force along r = 0; separate them along a direction
-        // both derive from their ids, with opposite signs.
-        const std::uint64_t lo = std::min(pid[s], pid[t]), hi = std::max(pid[s], pid[t]);
-        const std::uint64_t h = detail::mix64(lo * 0x9e3779b97f4a7c15ULL ^ hi);
-        const double sign = pid[s] < pid[t] ? 1.0 : -1.0;
-        const double a = 2 * std::numbers::pi * static_cast<double>(h >> 11) * 0x1.0p-53;
-        dx = sign * 1e-3 * si * std::cos(a);
-        dy = sign * 1e-3 * si * std::sin(a);
-        dz = 0;
-        d2 = dx * dx + dy * dy;
-      }
-      // w_ij = |cos(∇F_i, ∇F_j)|, or 1 when either has no normal (then n_j = 0).
-      const double w =
-          weigh ? std::abs(me.nx * other.nx + me.ny * other.ny + me.nz * other.nz) +
-                      static_cast<double>(free_normal[t])
-                : 1.0;
-      c.dx[m] = dx;
-      c.dy[m] = dy;
-      c.dz[m] = dz;
-      c.d2[m] = d2;
-      c.si[m] = si;
-      c.inv[m] = inv_i;
-      c.sj[m] = sj;
-      c.aw[m] = alpha * w;
-      c.pm[m] = other.smax;
+      c.other[m] = t;
       m += t != s;
+    }
+    const Neighbour& me = packed[s];
+    for (std::size_t q = first; q < m; ++q) {
+      c.xi[q] = me.x;
+      c.yi[q] = me.y;
+      c.zi[q] = me.z;
+      c.si[q] = me.sigma;
+      c.nxi[q] = me.nx;
+      c.nyi[q] = me.ny;
+      c.nzi[q] = me.nz;
     }
     c.owners.push_back({s, i, static_cast<std::uint32_t>(first), static_cast<std::uint32_t>(m)});
     c.pairs = m;
   }
 
   // The pair terms of the batch in c, and from them each listed floater's E_i, ∂E_i/∂σ_i,
-  // desired velocity and graded fission radius, each summed over its pairs in order; empties
-  // the batch.
-  void sum_pairs(Scratch& c) {
-    const double grading = opt.radius_grading;
-    (opt.scaled_repulsion ? pair_terms<true> : pair_terms<false>)(
-        c.pairs, grading, c.dx.data(), c.dy.data(), c.dz.data(), c.d2.data(), c.si.data(),
-        c.inv.data(), c.sj.data(), c.aw.data(), c.pm.data(), c.e.data(), c.de.data(),
-        c.lim.data());
+  // desired velocity and graded fission radius, each summed over its pairs in order; then the
+  // floater moves (move_one()). Empties the batch.
+  void sum_pairs_and_move(Scratch& c, Evaluator& ev, const MoveConstants& mc) {
+    const PairConstants k{opt.repulsion, opt.cos_weight ? 1.0 : 0.0, opt.radius_grading};
+    std::array<double*, detail::kRecordFields> fields;
+    for (std::size_t f = 0; f < fields.size(); ++f) fields[f] = c.record[f].data();
+    detail::gather_records(filter, c.pairs, c.other.data(),
+                           reinterpret_cast<const double*>(packed.data()), fields.data());
+    const auto& r = c.record;  // x, y, z, sigma, smax, nx, ny, nz, as in Neighbour
+    const auto terms = opt.scaled_repulsion ? pair_terms<true> : pair_terms<false>;
+    const std::size_t coincident =
+        terms(c.pairs, k, c.xi.data(), c.yi.data(), c.zi.data(), c.si.data(), c.nxi.data(),
+              c.nyi.data(), c.nzi.data(), r[0].data(), r[1].data(), r[2].data(), r[3].data(),
+              r[4].data(), r[5].data(), r[6].data(), r[7].data(), c.e.data(), c.de.data(),
+              c.fx.data(), c.fy.data(), c.fz.data(), c.lim.data());
+    if (coincident > 0) separate_coincident(c, k);
     for (const Scratch::Owner& o : c.owners) {
       double e_sum = 0, de_sum = 0, vx = 0, vy = 0, vz = 0;
       double limit = mu[o.index] * sigma_max();
       for (std::size_t q = o.first; q < o.last; ++q) {
         e_sum += c.e[q];
         de_sum += c.de[q];
-        vx += c.dx[q];
-        vy += c.dy[q];
-        vz += c.dz[q];
+        vx += c.fx[q];
+        vy += c.fy[q];
+        vz += c.fz[q];
       }
-      if (grading > 0)
+      if (k.grading > 0)
         for (std::size_t q = o.first; q < o.last; ++q) limit = std::min(limit, c.lim[q]);
       const double si = packed[o.slot].sigma;
       energy[o.index] = e_sum;
       denergy[o.index] = de_sum / (si * si * si);
       desired[o.index] = Vec3(vx, vy, vz);
       graded[o.index] = limit;
+      move_one(o.index, limit, ev, mc);
     }
     c.pairs = 0;
     c.owners.clear();
+  }
+
+  // Coincident floaters feel no force along r = 0: the terms of such a pair are computed
+  // again with a tiny offset along a direction both derive from their ids, with opposite
+  // signs, so they separate.
+  void separate_coincident(Scratch& c, PairConstants k) const {
+    for (const Scratch::Owner& o : c.owners)
+      for (std::size_t q = o.first; q < o.last; ++q) {
+        const std::uint32_t s = o.slot, t = c.other[q];
+        const Neighbour &a = packed[s], &b = packed[t];
+        const double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z, si = a.sigma;
+        if (!(dx * dx + dy * dy + dz * dz < 1e-18 * (si * si))) continue;
+        const std::uint64_t lo = std::min(pid[s], pid[t]), hi = std::max(pid[s], pid[t]);
+        const std::uint64_t h = detail::mix64(lo * 0x9e3779b97f4a7c15ULL ^ hi);
+        const double sign = pid[s] < pid[t] ? 1.0 : -1.0;
+        const double angle = 2 * std::numbers::pi * static_cast<double>(h >> 11) * 0x1.0p-53;
+        const double ox = sign * 1e-3 * si * std::cos(angle);
+        const double oy = sign * 1e-3 * si * std::sin(angle);
+        const double cosine = std::abs(a.nx * b.nx + a.ny * b.ny + a.nz * b.nz);
+        const bool free_a = a.nx == 0 && a.ny == 0 && a.nz == 0;
+        const bool free_b = b.nx == 0 && b.ny == 0 && b.nz == 0;
+        const double no_normal = free_a || free_b ? 1.0 : 0.0;
+        const PairTerms r =
+            opt.scaled_repulsion
+                ? pair_term<true>(ox, oy, 0, ox * ox + oy * oy, si, b.sigma, b.smax, cosine,
+                                  no_normal, k)
+                : pair_term<false>(ox, oy, 0, ox * ox + oy * oy, si, b.sigma, b.smax, cosine,
+                                   no_normal, k);
+        c.e[q] = r.e;
+        c.de[q] = r.de;
+        c.fx[q] = r.fx;
+        c.fy[q] = r.fy;
+        c.fz[q] = r.fz;
+        c.lim[q] = r.lim;
+      }
   }
 
   // F_q·q̇ at every floater (exact parameter derivatives).
@@ -896,74 +1052,61 @@ struct FloaterSystem::Impl {
     });
   }
 
-  // ALGORITHMS A.3–A.6: radius adaptation, constrained velocity with the φF and F_q·q̇ terms,
-  // bounded Euler step, clip projection; then each floater's fate (judge()) and, per chunk,
-  // the sums behind StepStats::rms_speed and near_equilibrium.
-  void move() {
-    const std::size_t n = size();
-    new_pos.resize(n);
-    new_sigma.resize(n);
-    fate.resize(n);
-    const std::size_t chunks = (n + kChunk - 1) / kChunk;
-    chunk_speed.assign(chunks, 0);
-    chunk_near.assign(chunks, 0);
-    const double dt = opt.dt, e_hat = desired_energy();
-    const double max_scene_step = kMaxStepScene * scene_radius;
-    const double lo = kMinRadius * sigma_hat, hi = kMaxRadius * sigma_max();
-    parallel_chunks(n, [&](std::size_t b, std::size_t e, Evaluator& ev) {
-      double speed_sq = 0;
-      std::size_t near_eq = 0;
-      for (std::size_t i = b; i < e; ++i) {
-        const double s = sigma[i];
-        const double rate =
-            -opt.radius_rate * (energy[i] - e_hat) / (denergy[i] + opt.radius_damping);
-        new_sigma[i] = std::clamp(std::clamp(s + dt * rate, 0.5 * s, 2 * s), lo, hi);
-        Vec3 p = pos[i];
-        bool outside = false;
-        if (!pinned[i]) {
-          // Constrained velocity ṗ = P − [(F_x·P + F_q·q̇ + φF)/(F_x·F_x)] F_x, split into the
-          // tangential part of P and the pull along the unit normal. Where ∇F vanishes (or F
-          // is not finite) there is no normal: the floater moves by repulsion alone, and the
-          // pull resumes as soon as it leaves the critical point.
-          Vec3 tangential = desired[i];
-          Vec3 normal_move = Vec3::Zero();
-          const Vec3& nrm = unit[i];
-          if (nrm.squaredNorm() > 0 && std::isfinite(value[i])) {
-            tangential -= nrm.dot(tangential) * nrm;
-            double pull = -(opt.feedback * value[i] + fq[i]) / gnorm[i] * dt;
-            if (!std::isfinite(pull)) pull = std::copysign(max_scene_step, pull);
-            normal_move = std::clamp(pull, -max_scene_step, max_scene_step) * nrm;
-          }
-          Vec3 tangential_move = dt * tangential;
-          const double limit = std::min(opt.max_step_fraction * s, max_scene_step);
-          const double len = tangential_move.norm();
-          if (len > limit) tangential_move *= limit / len;
-          p += tangential_move + normal_move;
-          if (opt.clip_projection) {
-            const Vec3 projected = surface.clip.project(p);
-            if (projected != p) p = onto_boundary_curve(ev, projected, s);
-          } else {
-            outside = !surface.clip.contains(p);
-          }
-        }
-        const double speed = (p - pos[i]).norm() / dt;
-        new_pos[i] = p;
-        fate[i] = judge(i, new_sigma[i], speed, outside);
-        if (age[i] < std::numeric_limits<std::uint32_t>::max()) ++age[i];
-        const double v = speed / new_sigma[i];
-        speed_sq += v * v;
-        near_eq += speed < opt.equilibrium_speed * new_sigma[i];
+  // ALGORITHMS A.3–A.6 for floater i once its energy, ∂E_i/∂σ_i, desired velocity and graded
+  // fission radius `local_max` are known: radius adaptation, constrained velocity with the φF
+  // and F_q·q̇ terms, bounded Euler step, clip projection; then its fate (judge()) and its
+  // squared speed in radii per time unit and whether it is near equilibrium (for
+  // StepStats::rms_speed and near_equilibrium). Reads and writes floater i's entries only.
+  void move_one(std::size_t i, double local_max, Evaluator& ev, const MoveConstants& k) {
+    const double dt = k.dt, max_scene_step = k.max_scene_step;
+    const double s = sigma[i];
+    const double rate =
+        -opt.radius_rate * (energy[i] - k.e_hat) / (denergy[i] + opt.radius_damping);
+    new_sigma[i] = std::clamp(std::clamp(s + dt * rate, 0.5 * s, 2 * s), k.lo, k.hi);
+    Vec3 p = pos[i];
+    bool outside = false;
+    if (!pinned[i]) {
+      // Constrained velocity ṗ = P − [(F_x·P + F_q·q̇ + φF)/(F_x·F_x)] F_x, split into the
+      // tangential part of P and the pull along the unit normal. Where ∇F vanishes (or F is
+      // not finite) there is no normal: the floater moves by repulsion alone, and the pull
+      // resumes as soon as it leaves the critical point.
+      Vec3 tangential = desired[i];
+      Vec3 normal_move = Vec3::Zero();
+      const Vec3& nrm = unit[i];
+      if (nrm.squaredNorm() > 0 && std::isfinite(value[i])) {
+        tangential -= nrm.dot(tangential) * nrm;
+        double pull = -(opt.feedback * value[i] + fq[i]) / gnorm[i] * dt;
+        if (!std::isfinite(pull)) pull = std::copysign(max_scene_step, pull);
+        normal_move = std::clamp(pull, -max_scene_step, max_scene_step) * nrm;
       }
-      chunk_speed[b / kChunk] = speed_sq;
-      chunk_near[b / kChunk] = near_eq;
-    });
+      Vec3 tangential_move = dt * tangential;
+      const double limit = std::min(opt.max_step_fraction * s, max_scene_step);
+      const double len = tangential_move.norm();
+      if (len > limit) tangential_move *= limit / len;
+      p += tangential_move + normal_move;
+      if (opt.clip_projection) {
+        const Vec3 projected = surface.clip.project(p);
+        if (projected != p) p = onto_boundary_curve(ev, projected, s);
+      } else {
+        outside = !surface.clip.contains(p);
+      }
+    }
+    const double speed = (p - pos[i]).norm() / dt;
+    new_pos[i] = p;
+    fate[i] = judge(i, new_sigma[i], local_max, speed, outside);
+    if (age[i] < std::numeric_limits<std::uint32_t>::max()) ++age[i];
+    const double v = speed / new_sigma[i];
+    speed_sq[i] = v * v;
+    near_flag[i] = speed < opt.equilibrium_speed * new_sigma[i];
   }
 
-  // What happens to floater i after its move (radius s, speed |ṗ|), ALGORITHMS A.7: a stray is
+  // What happens to floater i after its move (radius s, fission radius local_max, speed |ṗ|),
+  // ALGORITHMS A.7: a stray is
   // removed; a floater near equilibrium may fission, or else die by the randomised density
   // rule. Whether a fission happens also depends on the population, so decide_fates() settles
   // that, serially. Pure: safe to call in parallel.
-  std::uint8_t judge(std::size_t i, double s, double speed, bool outside) const {
+  std::uint8_t judge(std::size_t i, double s, double local_max, double speed,
+                     bool outside) const {
     const bool near_eq = speed < opt.equilibrium_speed * s;
     const double residual = residual_of(value[i], gnorm[i]);
     const bool stray =
@@ -972,7 +1115,6 @@ struct FloaterSystem::Impl {
                         (residual > sigma_hat && (near_eq || age[i] > kStrayAge))));
     if (stray) return kStray;
     if (!near_eq) return 0;
-    const double local_max = smax[i];
     const double local_nominal = std::min(sigma_hat, local_max);
     std::uint8_t f = 0;
     if (s > local_max ||
@@ -1093,8 +1235,7 @@ struct FloaterSystem::Impl {
     }
     build_neighbours();
     parameter_terms(qdot);
-    repulsion();
-    move();
+    repulsion_and_move();
 
     // Summed in chunk order: the same on any number of threads.
     double sq = 0;
@@ -1142,34 +1283,24 @@ struct FloaterSystem::Impl {
   }
 
   // Median and largest |F|/|∇F| over the floaters not held on nodes (there F and ∇F both vanish
-  // and the ratio means nothing). The median without sorting them all: nonnegative doubles
-  // order like their bit patterns, so a histogram of binary exponents (counted in parallel)
-  // finds the octave that holds the median, and only that octave is partially sorted.
+  // and the ratio means nothing), from what evaluate_all() counted. The median without sorting
+  // them all: nonnegative doubles order like their bit patterns, so the histogram of binary
+  // exponents finds the octave that holds the median, and only that octave is partially
+  // sorted. Counts and maxima do not depend on which thread saw which floater.
   void residual_stats(StepStats& st) {
-    const std::size_t n = size();
-    constexpr std::size_t kOctaves = 2048;
-    auto octave = [](double r) { return std::bit_cast<std::uint64_t>(r) >> 52; };
-    residuals.resize(n);
     std::array<std::size_t, kOctaves> counts{};
-    std::size_t* count = counts.data();
     double largest = 0;
-#pragma omp parallel for schedule(static) num_threads(threads) if (n >= kParallelMin) \
-    reduction(+ : count[:kOctaves]) reduction(max : largest)
-    for (std::int64_t signed_i = 0; signed_i < static_cast<std::int64_t>(n); ++signed_i) {
-      const auto i = static_cast<std::size_t>(signed_i);
-      if (pinned[i]) continue;
-      const double r = residual_of(value[i], gnorm[i]);
-      residuals[i] = r;
-      ++count[octave(r)];
-      largest = std::max(largest, r);
+    for (std::size_t t = 0; t < octave_counts.size(); ++t) {
+      for (std::size_t o = 0; o < kOctaves; ++o) counts[o] += octave_counts[t][o];
+      largest = std::max(largest, thread_largest[t]);
     }
     const std::size_t listed = std::accumulate(counts.begin(), counts.end(), std::size_t{0});
     if (listed == 0) return;
     std::size_t rank = listed / 2, o = 0;
     for (; rank >= counts[o]; ++o) rank -= counts[o];
     median_octave.clear();
-    for (std::size_t i = 0; i < n; ++i)
-      if (!pinned[i] && octave(residuals[i]) == o) median_octave.push_back(residuals[i]);
+    for (std::size_t i = 0; i < size(); ++i)
+      if (!pinned[i] && octave_of(residuals[i]) == o) median_octave.push_back(residuals[i]);
     const auto mid = median_octave.begin() + static_cast<std::ptrdiff_t>(rank);
     std::nth_element(median_octave.begin(), mid, median_octave.end());
     st.median_residual = *mid;

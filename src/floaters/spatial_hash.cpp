@@ -55,17 +55,26 @@ void SpatialHash::build(std::span<const Vec3> points, const Box3& box, double ce
   start_.resize(buckets + 1);
   key_in_.resize(points.size());
   bucket_in_.resize(points.size());
+  // Keys, counts and prefix sums in one parallel region (its threads wake once).
   const int team = n >= kParallelMin ? std::max(threads, 1) : 1;
-#pragma omp parallel for schedule(static) num_threads(team)
-  for (std::int64_t i = 0; i < n; ++i) {
-    const auto k = static_cast<std::size_t>(i);
-    const auto c = cell_of(points[k]);
-    key_in_[k] = pack(c[0], c[1], c[2]);
-    bucket_in_[k] = static_cast<std::uint32_t>(bucket_index(key_in_[k]));
+  std::vector<std::uint32_t> totals(static_cast<std::size_t>(team) + 1, 0);
+#pragma omp parallel num_threads(team)
+  {
+#pragma omp for schedule(static)
+    for (std::int64_t i = 0; i < n; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      const auto c = cell_of(points[k]);
+      key_in_[k] = pack(c[0], c[1], c[2]);
+      bucket_in_[k] = static_cast<std::uint32_t>(bucket_index(key_in_[k]));
+    }
+#pragma omp single
+    {
+      std::fill(start_.begin(), start_.end(), 0);
+      for (std::uint32_t b : bucket_in_) ++start_[b];
+    }
+    prefix_sums(totals);
   }
-  std::fill(start_.begin(), start_.end(), 0);
-  for (std::uint32_t b : bucket_in_) ++start_[b];
-  prefix_sums(team);
+  start_[buckets] = buckets > 0 ? start_[buckets - 1] : 0;
   for (std::size_t i = points.size(); i-- > 0;) {
     const std::uint32_t slot = --start_[bucket_in_[i]];
     order_[slot] = static_cast<std::uint32_t>(i);
@@ -100,31 +109,28 @@ void SpatialHash::build(std::span<const Vec3> points, const Box3& box, double ce
   }
 }
 
-void SpatialHash::prefix_sums(int team) {
-  // In place over the bucket counts start_[0, buckets); start_[buckets] becomes the total. A
-  // grid may have several buckets per point, so the sums run in `team` contiguous parts: each
+void SpatialHash::prefix_sums(std::vector<std::uint32_t>& totals) {
+  // In place over the bucket counts start_[0, buckets). A grid may have several buckets per
+  // point, so the sums run in contiguous parts, one per thread of the enclosing region: each
   // part's total first, then each part adds the totals before it (integers: the same result
-  // whatever the team).
+  // whatever the team). totals has one entry more than the team.
   const std::size_t buckets = start_.size() - 1;
-  std::vector<std::uint32_t> totals(static_cast<std::size_t>(team) + 1, 0);
-#pragma omp parallel num_threads(team)
-  {
 #ifdef _OPENMP
-    const auto part = static_cast<std::size_t>(omp_get_thread_num());
-    const auto parts = static_cast<std::size_t>(omp_get_num_threads());
+  const auto part = static_cast<std::size_t>(omp_get_thread_num());
+  const auto parts = static_cast<std::size_t>(omp_get_num_threads());
 #else
-    const std::size_t part = 0, parts = 1;
+  const std::size_t part = 0, parts = 1;
 #endif
-    const std::size_t begin = buckets * part / parts, end = buckets * (part + 1) / parts;
+  const std::size_t begin = buckets * part / parts, end = buckets * (part + 1) / parts;
+  if (part + 1 < parts) {  // the last part's total is never needed
     std::uint32_t sum = 0;
     for (std::size_t b = begin; b < end; ++b) sum += start_[b];
     totals[part + 1] = sum;
-#pragma omp barrier
-    std::uint32_t offset = 0;
-    for (std::size_t k = 0; k <= part; ++k) offset += totals[k];
-    for (std::size_t b = begin; b < end; ++b) start_[b] = offset += start_[b];
   }
-  start_[buckets] = buckets > 0 ? start_[buckets - 1] : 0;
+#pragma omp barrier
+  std::uint32_t offset = 0;
+  for (std::size_t k = 0; k <= part; ++k) offset += totals[k];
+  for (std::size_t b = begin; b < end; ++b) start_[b] = offset += start_[b];
 }
 
 std::pair<std::uint32_t, std::uint32_t> SpatialHash::cell_range(std::uint64_t key) const {

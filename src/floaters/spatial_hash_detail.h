@@ -69,8 +69,9 @@ class SpatialHash {
             static_cast<std::int64_t>(key >> (2 * kBits))};
   }
   std::uint64_t bucket_index(std::uint64_t key) const;
-  // Turns the bucket counts in start_ into each bucket's end slot, in parallel parts.
-  void prefix_sums(int team);
+  // Turns the bucket counts in start_ into each bucket's end slot, in parallel parts: called by
+  // every thread of a parallel region (or outside one), with `totals` one longer than the team.
+  void prefix_sums(std::vector<std::uint32_t>& totals);
   std::pair<std::uint32_t, std::uint32_t> bucket(std::uint64_t key) const {
     const std::uint64_t b = bucket_index(key);
     return {start_[b], start_[b + 1]};
