@@ -8,6 +8,10 @@
 #include <utility>
 #include <vector>
 
+#if defined(__AVX2__) && defined(__FMA__)
+#include <immintrin.h>
+#endif
+
 #include "interval_detail.h"
 #include "zeroset/error.h"
 #include "zeroset/expr/polynomial.h"
@@ -26,6 +30,10 @@ constexpr double kRowGradientMargin = 1e3;
 constexpr double kRowGradientAccuracy = 1e3;
 
 constexpr double square(double x) { return x * x; }
+/// |v|², with fused multiply-adds in the order the packets use.
+inline double squared_norm(double x, double y, double z) {
+  return std::fma(z, z, std::fma(y, y, x * x));
+}
 /// lo < x < ∞ (false for NaN).
 inline bool in_open_range(double x, double lo) {
   return x > lo && x < std::numeric_limits<double>::infinity();
@@ -82,12 +90,41 @@ double restrict_in_row(const double* row, const double* band_coeffs, int d_, dou
   double band = band_coeffs[d];
   for (int k = 0, offset = 0; k <= d; offset += ++k) {
     double v = row[offset + k];
-    for (int j = k - 1; j >= 0; --j) v = v * s + row[offset + j];
+    for (int j = k - 1; j >= 0; --j) v = std::fma(v, s, row[offset + j]);
     coeffs[k] = v;
   }
-  for (int k = d - 1; k >= 0; --k) band = band * x + band_coeffs[k];
+  for (int k = d - 1; k >= 0; --k) band = std::fma(band, x, band_coeffs[k]);
   return band;
 }
+
+#if defined(__AVX2__) && defined(__FMA__)
+/// restrict_in_row and shift_to_unit for four rays at once, lane by lane the same operations
+/// (so the same bits) as the scalar code: coeffs[k] and g[k] hold the four rays' k-th
+/// coefficients. Lanes whose clip is empty compute garbage that is never used.
+/// `row` and `band_coeffs` are restrict_in_row's, each coefficient in four lanes.
+template <int D>
+inline __m256d restrict_and_shift4(const double (*row)[4], const double (*band_coeffs)[4],
+                                   __m256d s, __m256d x, __m256d t0, __m256d t1,
+                                   __m256d* coeffs, __m256d* g) {
+  __m256d band = _mm256_load_pd(band_coeffs[D]);
+  for (int k = 0, offset = 0; k <= D; offset += ++k) {
+    __m256d v = _mm256_load_pd(row[offset + k]);
+    for (int j = k - 1; j >= 0; --j) v = _mm256_fmadd_pd(v, s, _mm256_load_pd(row[offset + j]));
+    coeffs[k] = v;
+    g[k] = v;
+  }
+  for (int k = D - 1; k >= 0; --k) band = _mm256_fmadd_pd(band, x, _mm256_load_pd(band_coeffs[k]));
+  for (int i = 0; i < D; ++i)
+    for (int k = D - 1; k >= i; --k) g[k] = _mm256_fmadd_pd(t0, g[k + 1], g[k]);
+  const __m256d w = _mm256_sub_pd(t1, t0);
+  __m256d wk = w;
+  for (int k = 1; k <= D; ++k) {
+    g[k] = _mm256_mul_pd(g[k], wk);
+    wk = _mm256_mul_pd(wk, w);
+  }
+  return band;
+}
+#endif
 
 /// The derivatives of G at t·(base + s·step) along the ray (a), the row's step (b) and the
 /// row's plane normal (c) (see SurfaceRayCaster::Impl::row_gradient) from the ray's
@@ -100,18 +137,18 @@ void row_derivatives(const double* f, const double* row_ds, const double* normal
   const int d = D > 0 ? D : d_;
   double a = 0, b = 0, c = 0, e = 0;
   for (int k = d; k >= 1; --k) {
-    a = a * t + k * f[k];
-    e = e * x + k * band_coeffs[k];
+    a = std::fma(a, t, k * f[k]);
+    e = std::fma(e, x, k * band_coeffs[k]);
     const double* r = row_ds + k * (k - 1) / 2;
     double v = r[k - 1];
-    for (int j = k - 2; j >= 0; --j) v = v * s + r[j];
-    b = b * t + v;
+    for (int j = k - 2; j >= 0; --j) v = std::fma(v, s, r[j]);
+    b = std::fma(b, t, v);
   }
   for (int k = d - 1; k >= 0; --k) {
     const double* r = normal_row + k * (k + 1) / 2;
     double v = r[k];
-    for (int j = k - 1; j >= 0; --j) v = v * s + r[j];
-    c = c * t + v;
+    for (int j = k - 1; j >= 0; --j) v = std::fma(v, s, r[j]);
+    c = std::fma(c, t, v);
   }
   abce[0] = a;
   abce[1] = b;
@@ -364,6 +401,14 @@ struct SurfaceRayCaster::Impl {
         unit[static_cast<size_t>(k)] = 0;
       }
       powers.assign(derivative_monomials.size(), 0.0);
+      if (degree <= kPacketDegree) {
+        broadcast(band_coeffs.data(), degree + 1, band4);
+        for (int k = 0; k <= degree; ++k) {
+          const double v = k * band_coeffs[static_cast<size_t>(k)];
+          broadcast(&v, 1, k_band4 + k);
+        }
+        broadcast(gradient_bound.data(), static_cast<int>(gradient_bound.size()), gradient_bound4);
+      }
     } else {
       intervals = std::make_unique<detail::IntervalEvaluator>(field);
     }
@@ -372,6 +417,9 @@ struct SurfaceRayCaster::Impl {
   }
 
   void begin_row(const Vec3& row_base, const Vec3& row_step) {
+    packet_size = 0;
+    packet_ready = false;
+    packet_hit_bits = packet_done_bits = 0;
     base = row_base;
     step = row_step;
     for (size_t i = 0; i < sphere_rows.size(); ++i) {
@@ -453,6 +501,8 @@ struct SurfaceRayCaster::Impl {
     };
     std::fill_n(row.begin(), n * (n + 1) / 2, 0.0);
     for (const RowTerm& t : row_terms) add_term(t.position, t.degree, t.c, row.data());
+    const bool packets = degree <= kPacketDegree;
+    if (packets) broadcast(row.data(), n * (n + 1) / 2, row4);
     has_row_normals = !flat;
     if (!has_row_normals) return;
     for (int k = 1; k <= degree; ++k)
@@ -466,6 +516,10 @@ struct SurfaceRayCaster::Impl {
     std::fill_n(normal_row.begin(), degree * (degree + 1) / 2, 0.0);
     for (const PartialsTerm& t : translated_gradient)
       add_term(t.position, t.degree, t.c.dot(row_normal), normal_row.data());
+    if (packets) {
+      broadcast(row_ds.data(), degree * (degree + 1) / 2, row_ds4);
+      broadcast(normal_row.data(), degree * (degree + 1) / 2, normal_row4);
+    }
   }
 
   /// ∇F at the hit eye + t·(base + s·step) of the current ray from the row's expansions
@@ -477,13 +531,14 @@ struct SurfaceRayCaster::Impl {
   /// rounding band. False for a row of one ray.
   bool row_gradient(double s, double t, Vec3& g, double& error) const {
     if (!has_row_normals) return false;
-    const double dx = base.x() + s * step.x(), dy = base.y() + s * step.y(),
-                 dz = base.z() + s * step.z();
+    // Fused multiply-adds in the order complete4 uses, so that both give the same bits.
+    const double dx = std::fma(s, step.x(), base.x()), dy = std::fma(s, step.y(), base.y()),
+                 dz = std::fma(s, step.z(), base.z());
     const double x = t * std::max({std::abs(dx), std::abs(dy), std::abs(dz)});
     // a = ∇G·d = f'(t); b = ∇G·step = Σ_k t^(k−1) ∂G_k/∂s; c = ∇G·n = Σ_k t^k (∇G·n)_k;
     // e: the derivative of the rounding band.
     double abce[4];
-    const double *f = coeffs.data(), *ds_row = row_ds.data(), *h = normal_row.data(),
+    const double *f = ray_coeffs, *ds_row = row_ds.data(), *h = normal_row.data(),
                  *bc = band_coeffs.data();
     switch (degree) {
       case 1: row_derivatives<1>(f, ds_row, h, bc, degree, s, t, x, abce); break;
@@ -498,11 +553,12 @@ struct SurfaceRayCaster::Impl {
     // With the dual basis of (d, step, n): ∇ = [a (|step|² d − (d·step) step)
     // + b (|d|² step − (d·step) d) + c n] / |n|², |n|² = |d|²|step|² − (d·step)².
     // Plain scalars: Eigen's 3-vector expressions cost several times as much here.
-    const double dd = dx * dx + dy * dy + dz * dz, ds = row_dot + s * row_ss;
-    const double p = (a * row_ss - b * ds) * row_inverse_nn,
-                 q = (b * dd - a * ds) * row_inverse_nn, r = c * row_inverse_nn;
-    g = Vec3(p * dx + q * step.x() + r * row_normal.x(), p * dy + q * step.y() + r * row_normal.y(),
-             p * dz + q * step.z() + r * row_normal.z());
+    const double dd = squared_norm(dx, dy, dz), ds = std::fma(s, row_ss, row_dot);
+    const double p = std::fma(a, row_ss, -(b * ds)) * row_inverse_nn,
+                 q = std::fma(b, dd, -(a * ds)) * row_inverse_nn, r = c * row_inverse_nn;
+    g = Vec3(std::fma(r, row_normal.x(), std::fma(q, step.x(), p * dx)),
+             std::fma(r, row_normal.y(), std::fma(q, step.y(), p * dy)),
+             std::fma(r, row_normal.z(), std::fma(q, step.z(), p * dz)));
     // Each directional derivative along a unit vector rounds by at most the derivative of the
     // band; the dual basis of the row's (well-conditioned) basis scales that by about
     // |d|²|step|² / |n|², which a factor 4 covers.
@@ -517,10 +573,11 @@ struct SurfaceRayCaster::Impl {
   bool clip(double s, double& t0, double& t1) const {
     t0 = 0;
     t1 = std::numeric_limits<double>::infinity();
+    // Fused multiply-adds in the order prepare4 uses, so that both give the same bits.
     for (const SphereRow& r : sphere_rows) {
-      const double a = r.a0 + s * (2 * r.a1 + s * r.a2);
-      const double b = r.b0 + s * r.b1;
-      const double disc = b * b - a * r.c;
+      const double a = std::fma(s, std::fma(s, r.a2, 2 * r.a1), r.a0);
+      const double b = std::fma(s, r.b1, r.b0);
+      const double disc = std::fma(b, b, -(a * r.c));
       if (disc < 0) return false;
       const double sq = std::sqrt(disc);
       const double qv = -(b + std::copysign(sq, b));
@@ -530,7 +587,7 @@ struct SurfaceRayCaster::Impl {
       t1 = std::min(t1, r1);
     }
     for (const PlaneRow& r : plane_rows) {
-      const double nd = r.n0 + s * r.n1;
+      const double nd = std::fma(s, r.n1, r.n0);
       if (nd == 0) {
         if (r.g > 0) return false;
         continue;
@@ -550,10 +607,11 @@ struct SurfaceRayCaster::Impl {
     // A monomial of degree k in the direction's components is at most max|d_i|^k. The
     // expansion in s rounds relative to (|base_i| + |s||step_i|)^k instead, but its error
     // stays far below the band (under 2% for the catalog's scenes across whole pictures).
-    const double x = t1 * direction(s).cwiseAbs().maxCoeff();
+    const double x = t1 * max_abs_direction(s);
     const double* r = row.data();
     const double* b = band_coeffs.data();
     double* c = coeffs.data();
+    ray_coeffs = c;
     switch (degree) {
       case 1: band = restrict_in_row<1>(r, b, degree, s, x, c); break;
       case 2: band = restrict_in_row<2>(r, b, degree, s, x, c); break;
@@ -565,6 +623,331 @@ struct SurfaceRayCaster::Impl {
     }
     return finder.find_first_root(std::span<const double>(c, static_cast<size_t>(degree + 1)),
                                   t0, t1, band, guess);
+  }
+
+  /// max_i |base_i + s·step_i|, with fused multiply-adds as in prepare4.
+  double max_abs_direction(double s) const {
+    return std::max({std::abs(std::fma(s, step.x(), base.x())),
+                     std::abs(std::fma(s, step.y(), base.y())),
+                     std::abs(std::fma(s, step.z(), base.z()))});
+  }
+
+  // A packet: four rays of the row (prepare_in_row). With AVX2 their straight-line parts are
+  // done four at a time, bit for bit what the scalar code computes for each ray: the set-up
+  // (clip, restriction, rounding band, shift to the clipped interval) by prepare4, and the
+  // normals of their hits (packet_hits) by complete4. The isolation stays per ray.
+  // packet_g[i]: lane i's g (see shift_to_unit); packet_ck[k][i]: the k-th coefficient of lane
+  // i's f. The lanes' hits: parameters, sides and whether each ray was cast
+  // and hit (packet_hit_bits); hits completed at once (rays not set up here) in packet_done.
+  std::array<double, 4> packet_s{};
+  std::array<double, 4> packet_t0{}, packet_t1{}, packet_band{};
+  std::array<bool, 4> packet_inside{};
+  int packet_full_bits = 0;  // lanes whose f has a nonzero leading coefficient
+  int packet_size = 0;       // 4 after prepare_in_row, else 0
+  int packet_next = 0;       // the lane packet_lane tries first
+  bool packet_ready = false;  // the lanes are set up by prepare4
+  alignas(32) double packet_g[4][kN];
+  alignas(32) double packet_ck[kN][4];
+  const double* ray_coeffs = coeffs.data();  // the current ray's f (see row_gradient)
+  int cast_lane = -1;  // the packet's lane the last cast took, or -1
+  // The row's coefficients that the packets use, each in all four lanes (loaded with the
+  // multiply-adds rather than broadcast in each packet): row, row_ds, normal_row, the band's
+  // and k·band_coeffs[k], gradient_bound.
+  static constexpr int kPacketDegree = 6;
+  static constexpr int kPacketRow = (kPacketDegree + 1) * (kPacketDegree + 2) / 2;
+  alignas(32) double row4[kPacketRow][4];
+  alignas(32) double row_ds4[kPacketRow][4];
+  alignas(32) double normal_row4[kPacketRow][4];
+  alignas(32) double band4[kPacketDegree + 1][4];
+  alignas(32) double k_band4[kPacketDegree + 1][4];
+  alignas(32) double gradient_bound4[kPacketDegree][4];
+
+  static void broadcast(const double* v, int n, double (*out)[4]) {
+    for (int i = 0; i < n; ++i) out[i][0] = out[i][1] = out[i][2] = out[i][3] = v[i];
+  }
+  /// f of the packet's lane i, gathered into `coeffs`.
+  const double* lane_coeffs(int i) {
+    for (int k = 0; k <= degree; ++k)
+      coeffs[static_cast<size_t>(k)] = packet_ck[k][static_cast<size_t>(i)];
+    return coeffs.data();
+  }
+  alignas(32) std::array<double, 4> packet_t{}, packet_side{};
+  int packet_hit_bits = 0, packet_done_bits = 0;
+  std::array<SurfaceHit, 4> packet_done;
+
+  void prepare(std::span<const double> s) {
+    packet_size = 0;
+    packet_ready = false;
+    packet_hit_bits = packet_done_bits = 0;
+    if (s.size() != 4) return;
+    std::copy(s.begin(), s.end(), packet_s.begin());
+    packet_size = 4;
+    packet_next = 0;
+#if defined(__AVX2__) && defined(__FMA__)
+    if (!exact) return;
+    switch (degree) {
+      case 1: prepare4<1>(s.data()); break;
+      case 2: prepare4<2>(s.data()); break;
+      case 3: prepare4<3>(s.data()); break;
+      case 4: prepare4<4>(s.data()); break;
+      case 5: prepare4<5>(s.data()); break;
+      case 6: prepare4<6>(s.data()); break;
+      default: break;  // degrees above 6 are set up ray by ray
+    }
+#endif
+  }
+
+  /// first_hit_in_row: cast, and keep the hit for packet_hits when s is in the packet.
+  double first_hit_in_row(double s, const RootGuess& guess) {
+    int side = 0;
+    const double t = cast(s, guess, side);
+    const int lane = packet_ready ? cast_lane : packet_lane(s);
+    if (lane < 0) return t;
+    packet_next = lane + 1;
+    if (std::isnan(t)) return t;
+    const size_t i = static_cast<size_t>(lane);
+    packet_hit_bits |= 1 << lane;
+    if (packet_ready) {
+      packet_t[i] = t;
+      packet_side[i] = side;
+    } else {
+      // The ray's polynomial is not kept past the next ray: complete the hit now.
+      complete(s, t, side, packet_done[i]);
+      packet_done_bits |= 1 << lane;
+    }
+    return t;
+  }
+
+  /// The hits of the packet's rays that first_hit_in_row found (bit i: lane i hit).
+  int packet_hits(SurfaceHit (&hits)[4]) {
+    int remaining = packet_hit_bits & ~packet_done_bits;
+#if defined(__AVX2__) && defined(__FMA__)
+    if (remaining != 0 && packet_ready && has_row_normals) {
+      switch (degree) {
+        case 1: remaining &= ~complete4<1>(remaining, hits); break;
+        case 2: remaining &= ~complete4<2>(remaining, hits); break;
+        case 3: remaining &= ~complete4<3>(remaining, hits); break;
+        case 4: remaining &= ~complete4<4>(remaining, hits); break;
+        case 5: remaining &= ~complete4<5>(remaining, hits); break;
+        case 6: remaining &= ~complete4<6>(remaining, hits); break;
+        default: break;
+      }
+    }
+#endif
+    for (int i = 0; i < 4; ++i) {
+      const size_t lane = static_cast<size_t>(i);
+      if ((packet_done_bits >> i) & 1) hits[i] = packet_done[lane];
+      if (!((remaining >> i) & 1)) continue;
+      // Where the row's gradient is not used: ∇F from F's terms, as for single rays.
+      ray_coeffs = lane_coeffs(i);
+      complete(packet_s[lane], packet_t[lane], static_cast<int>(packet_side[lane]), hits[i]);
+    }
+    const int bits = packet_hit_bits;
+    packet_hit_bits = packet_done_bits = 0;
+    return bits;
+  }
+
+#if defined(__AVX2__) && defined(__FMA__)
+  template <int D>
+  void prepare4(const double* sv) {
+    const __m256d S = _mm256_loadu_pd(sv);
+    const __m256d zero = _mm256_setzero_pd(), sign = _mm256_set1_pd(-0.0);
+    __m256d t0 = zero, t1 = _mm256_set1_pd(std::numeric_limits<double>::infinity());
+    __m256d miss = zero;  // all bits set in the lanes that miss
+    for (const SphereRow& r : sphere_rows) {
+      const __m256d c = _mm256_set1_pd(r.c);
+      const __m256d a =
+          _mm256_fmadd_pd(S, _mm256_fmadd_pd(S, _mm256_set1_pd(r.a2), _mm256_set1_pd(2 * r.a1)),
+                          _mm256_set1_pd(r.a0));
+      const __m256d b = _mm256_fmadd_pd(S, _mm256_set1_pd(r.b1), _mm256_set1_pd(r.b0));
+      const __m256d disc = _mm256_fmsub_pd(b, b, _mm256_mul_pd(a, c));
+      miss = _mm256_or_pd(miss, _mm256_cmp_pd(disc, zero, _CMP_LT_OQ));
+      const __m256d sq = _mm256_sqrt_pd(disc);
+      const __m256d signed_sq = _mm256_or_pd(_mm256_andnot_pd(sign, sq), _mm256_and_pd(sign, b));
+      const __m256d qv = _mm256_xor_pd(sign, _mm256_add_pd(b, signed_sq));
+      const __m256d r0 = _mm256_div_pd(qv, a);
+      const __m256d r1 = _mm256_blendv_pd(_mm256_div_pd(_mm256_xor_pd(sign, b), a),
+                                          _mm256_div_pd(c, qv),
+                                          _mm256_cmp_pd(qv, zero, _CMP_NEQ_UQ));
+      // As std::swap when r0 > r1 and std::max(t0, ·), std::min(t1, ·), NaNs included.
+      t0 = _mm256_max_pd(_mm256_min_pd(r1, r0), t0);
+      t1 = _mm256_min_pd(_mm256_max_pd(r0, r1), t1);
+    }
+    for (const PlaneRow& r : plane_rows) {
+      const __m256d nd = _mm256_fmadd_pd(S, _mm256_set1_pd(r.n1), _mm256_set1_pd(r.n0));
+      const __m256d parallel = _mm256_cmp_pd(nd, zero, _CMP_EQ_OQ);
+      if (r.g > 0) miss = _mm256_or_pd(miss, parallel);
+      const __m256d t = _mm256_div_pd(_mm256_set1_pd(-r.g), nd);
+      const __m256d exits = _mm256_cmp_pd(nd, zero, _CMP_GT_OQ);
+      t1 = _mm256_blendv_pd(t1, _mm256_min_pd(t, t1), exits);
+      t0 = _mm256_blendv_pd(_mm256_max_pd(t, t0), t0, _mm256_or_pd(exits, parallel));
+    }
+    const __m256d inside = _mm256_andnot_pd(miss, _mm256_cmp_pd(t0, t1, _CMP_LT_OQ));
+    const int inside_bits = _mm256_movemask_pd(inside);
+    for (int i = 0; i < 4; ++i) packet_inside[static_cast<size_t>(i)] = (inside_bits >> i) & 1;
+    packet_ready = true;
+    if (inside_bits == 0) return;
+    const __m256d ax = _mm256_andnot_pd(
+        sign, _mm256_fmadd_pd(S, _mm256_set1_pd(step.x()), _mm256_set1_pd(base.x())));
+    const __m256d ay = _mm256_andnot_pd(
+        sign, _mm256_fmadd_pd(S, _mm256_set1_pd(step.y()), _mm256_set1_pd(base.y())));
+    const __m256d az = _mm256_andnot_pd(
+        sign, _mm256_fmadd_pd(S, _mm256_set1_pd(step.z()), _mm256_set1_pd(base.z())));
+    const __m256d x = _mm256_mul_pd(t1, _mm256_max_pd(_mm256_max_pd(ax, ay), az));
+    __m256d c[D + 1], g[D + 1];
+    const __m256d band = restrict_and_shift4<D>(row4, band4, S, x, t0, t1, c, g);
+    _mm256_storeu_pd(packet_t0.data(), t0);
+    _mm256_storeu_pd(packet_t1.data(), t1);
+    _mm256_storeu_pd(packet_band.data(), band);
+    store_lanes<D>(g, packet_g);
+    for (int k = 0; k <= D; ++k) _mm256_store_pd(packet_ck[k], c[k]);
+    packet_full_bits = _mm256_movemask_pd(_mm256_cmp_pd(c[D], _mm256_setzero_pd(), _CMP_NEQ_UQ));
+  }
+
+  /// complete for the lanes in `bits` where the row's gradient is used, four at once with
+  /// the same operations; returns the lanes done.
+  template <int D>
+  int complete4(int bits, SurfaceHit (&hits)[4]) const {
+    const __m256d sign = _mm256_set1_pd(-0.0), zero = _mm256_setzero_pd();
+    const __m256d S = _mm256_loadu_pd(packet_s.data()), T = _mm256_load_pd(packet_t.data());
+    const __m256d dx = _mm256_fmadd_pd(S, _mm256_set1_pd(step.x()), _mm256_set1_pd(base.x()));
+    const __m256d dy = _mm256_fmadd_pd(S, _mm256_set1_pd(step.y()), _mm256_set1_pd(base.y()));
+    const __m256d dz = _mm256_fmadd_pd(S, _mm256_set1_pd(step.z()), _mm256_set1_pd(base.z()));
+    const __m256d px = _mm256_fmadd_pd(T, dx, _mm256_set1_pd(eye.x()));
+    const __m256d py = _mm256_fmadd_pd(T, dy, _mm256_set1_pd(eye.y()));
+    const __m256d pz = _mm256_fmadd_pd(T, dz, _mm256_set1_pd(eye.z()));
+    // gradient_scale and the floor of kRelativeGradientFloor.
+    const __m256d m = _mm256_max_pd(
+        _mm256_max_pd(_mm256_andnot_pd(sign, px), _mm256_andnot_pd(sign, py)),
+        _mm256_andnot_pd(sign, pz));
+    __m256d bound = zero;
+    for (size_t k = gradient_bound.size(); k-- > 0;)
+      bound = _mm256_fmadd_pd(bound, m, _mm256_load_pd(gradient_bound4[k]));
+    const __m256d floor = _mm256_mul_pd(_mm256_set1_pd(kRelativeGradientFloor), bound);
+    // row_derivatives and row_gradient.
+    const __m256d x = _mm256_mul_pd(
+        T, _mm256_max_pd(
+               _mm256_max_pd(_mm256_andnot_pd(sign, dx), _mm256_andnot_pd(sign, dy)),
+               _mm256_andnot_pd(sign, dz)));
+    __m256d a = zero, b = zero, c = zero, e = zero;
+    for (int k = D; k >= 1; --k) {
+      a = _mm256_fmadd_pd(a, T, _mm256_mul_pd(_mm256_set1_pd(k), _mm256_load_pd(packet_ck[k])));
+      e = _mm256_fmadd_pd(e, x, _mm256_load_pd(k_band4[k]));
+      const double(*r)[4] = row_ds4 + k * (k - 1) / 2;
+      __m256d v = _mm256_load_pd(r[k - 1]);
+      for (int j = k - 2; j >= 0; --j) v = _mm256_fmadd_pd(v, S, _mm256_load_pd(r[j]));
+      b = _mm256_fmadd_pd(b, T, v);
+    }
+    for (int k = D - 1; k >= 0; --k) {
+      const double(*r)[4] = normal_row4 + k * (k + 1) / 2;
+      __m256d v = _mm256_load_pd(r[k]);
+      for (int j = k - 1; j >= 0; --j) v = _mm256_fmadd_pd(v, S, _mm256_load_pd(r[j]));
+      c = _mm256_fmadd_pd(c, T, v);
+    }
+    const __m256d ss = _mm256_set1_pd(row_ss), inn = _mm256_set1_pd(row_inverse_nn);
+    const __m256d dd = _mm256_fmadd_pd(dz, dz, _mm256_fmadd_pd(dy, dy, _mm256_mul_pd(dx, dx)));
+    const __m256d ds = _mm256_fmadd_pd(S, ss, _mm256_set1_pd(row_dot));
+    const __m256d p = _mm256_mul_pd(_mm256_fmsub_pd(a, ss, _mm256_mul_pd(b, ds)), inn);
+    const __m256d q = _mm256_mul_pd(_mm256_fmsub_pd(b, dd, _mm256_mul_pd(a, ds)), inn);
+    const __m256d r = _mm256_mul_pd(c, inn);
+    const __m256d gx = _mm256_fmadd_pd(r, _mm256_set1_pd(row_normal.x()),
+                                       _mm256_fmadd_pd(q, _mm256_set1_pd(step.x()),
+                                                       _mm256_mul_pd(p, dx)));
+    const __m256d gy = _mm256_fmadd_pd(r, _mm256_set1_pd(row_normal.y()),
+                                       _mm256_fmadd_pd(q, _mm256_set1_pd(step.y()),
+                                                       _mm256_mul_pd(p, dy)));
+    const __m256d gz = _mm256_fmadd_pd(r, _mm256_set1_pd(row_normal.z()),
+                                       _mm256_fmadd_pd(q, _mm256_set1_pd(step.z()),
+                                                       _mm256_mul_pd(p, dz)));
+    const __m256d error = _mm256_mul_pd(
+        _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(4.0), e), dd), ss), inn);
+    // complete's test: in_open_range(|g|², max(square(margin·floor), square(accuracy·error))).
+    const __m256d g2 = _mm256_fmadd_pd(gz, gz, _mm256_fmadd_pd(gy, gy, _mm256_mul_pd(gx, gx)));
+    const __m256d mf = _mm256_mul_pd(_mm256_set1_pd(kRowGradientMargin), floor);
+    const __m256d ae = _mm256_mul_pd(_mm256_set1_pd(kRowGradientAccuracy), error);
+    const __m256d lo = _mm256_max_pd(_mm256_mul_pd(ae, ae), _mm256_mul_pd(mf, mf));
+    const __m256d accept = _mm256_and_pd(
+        _mm256_cmp_pd(g2, lo, _CMP_GT_OQ),
+        _mm256_cmp_pd(g2, _mm256_set1_pd(std::numeric_limits<double>::infinity()), _CMP_LT_OQ));
+    const int done = _mm256_movemask_pd(accept) & bits;
+    if (done == 0) return 0;
+    const __m256d gd = _mm256_fmadd_pd(gz, dz, _mm256_fmadd_pd(gy, dy, _mm256_mul_pd(gx, dx)));
+    const __m256d k = _mm256_div_pd(
+        _mm256_blendv_pd(_mm256_set1_pd(1.0), _mm256_set1_pd(-1.0),
+                         _mm256_cmp_pd(gd, zero, _CMP_GT_OQ)),
+        _mm256_sqrt_pd(g2));
+    const __m256d side = _mm256_load_pd(packet_side.data());
+    const __m256d front = _mm256_blendv_pd(_mm256_cmp_pd(gd, zero, _CMP_LT_OQ),
+                                           _mm256_cmp_pd(side, zero, _CMP_GT_OQ),
+                                           _mm256_cmp_pd(side, zero, _CMP_NEQ_OQ));
+    const int front_bits = _mm256_movemask_pd(front);
+    alignas(32) double out[6][4];
+    _mm256_store_pd(out[0], px);
+    _mm256_store_pd(out[1], py);
+    _mm256_store_pd(out[2], pz);
+    _mm256_store_pd(out[3], _mm256_mul_pd(k, gx));
+    _mm256_store_pd(out[4], _mm256_mul_pd(k, gy));
+    _mm256_store_pd(out[5], _mm256_mul_pd(k, gz));
+    for (int i = 0; i < 4; ++i) {
+      if (!((done >> i) & 1)) continue;
+      SurfaceHit& h = hits[i];
+      h.t = packet_t[static_cast<size_t>(i)];
+      h.point = Vec3(out[0][i], out[1][i], out[2][i]);
+      h.normal = Vec3(out[3][i], out[4][i], out[5][i]);
+      h.front = (front_bits >> i) & 1;
+      h.singular = false;
+    }
+    return done;
+  }
+
+  /// out[i][k] = v[k][i]: four coefficients at a time by a 4×4 transpose, the rest by lane.
+  template <int D>
+  static void store_lanes(const __m256d* v, double (*out)[kN]) {
+    int k = 0;
+    for (; k + 3 <= D; k += 4) {
+      const __m256d a = _mm256_unpacklo_pd(v[k], v[k + 1]), b = _mm256_unpackhi_pd(v[k], v[k + 1]);
+      const __m256d c = _mm256_unpacklo_pd(v[k + 2], v[k + 3]),
+                    d = _mm256_unpackhi_pd(v[k + 2], v[k + 3]);
+      _mm256_storeu_pd(out[0] + k, _mm256_permute2f128_pd(a, c, 0x20));
+      _mm256_storeu_pd(out[1] + k, _mm256_permute2f128_pd(b, d, 0x20));
+      _mm256_storeu_pd(out[2] + k, _mm256_permute2f128_pd(a, c, 0x31));
+      _mm256_storeu_pd(out[3] + k, _mm256_permute2f128_pd(b, d, 0x31));
+    }
+    for (; k <= D; ++k) {
+      const __m128d lo = _mm256_castpd256_pd128(v[k]), hi = _mm256_extractf128_pd(v[k], 1);
+      _mm_storel_pd(out[0] + k, lo);
+      _mm_storeh_pd(out[1] + k, lo);
+      _mm_storel_pd(out[2] + k, hi);
+      _mm_storeh_pd(out[3] + k, hi);
+    }
+  }
+#endif
+
+  /// The lane of the packet that holds the ray at s, or −1. Rays come in order, so the lane
+  /// after the last one found is tried first.
+  int packet_lane(double s) {
+    if (packet_next < packet_size && packet_s[static_cast<size_t>(packet_next)] == s)
+      return packet_next;
+    for (int i = 0; i < packet_size; ++i)
+      if (packet_s[static_cast<size_t>(i)] == s) {
+        packet_next = i;
+        return i;
+      }
+    return -1;
+  }
+
+  /// exact_hit for a ray of the packet (lane i), after the clip said it is inside.
+  double packet_hit(int i, const RootGuess& guess, double& band) {
+    const size_t lane = static_cast<size_t>(i);
+    band = packet_band[lane];
+    // A vanishing leading coefficient lowers the degree: the general entry trims it.
+    if (!((packet_full_bits >> i) & 1))
+      return finder.find_first_root(
+          std::span<const double>(lane_coeffs(i), static_cast<size_t>(degree + 1)),
+          packet_t0[lane], packet_t1[lane], band, guess);
+    return finder.find_first_root_on_unit(
+        std::span<const double>(packet_g[lane], static_cast<size_t>(degree + 1)),
+        packet_t0[lane], packet_t1[lane], band, guess);
   }
 
   double value_on_ray(const Vec3& dir, double t) { return evaluator.value(eye + t * dir); }
@@ -621,6 +1004,15 @@ struct SurfaceRayCaster::Impl {
   /// starts on (+1, −1, 0 when F vanishes there).
   double cast(double s, const RootGuess& guess, int& side) {
     constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+    cast_lane = packet_ready ? packet_lane(s) : -1;
+    if (const int lane = cast_lane; lane >= 0) {
+      if (!packet_inside[static_cast<size_t>(lane)]) return kNone;
+      double band = 0;
+      const double t = packet_hit(lane, guess, band);
+      const double v = finder.start_value();
+      side = std::abs(v) <= band ? 0 : (v > 0 ? 1 : -1);
+      return t;
+    }
     double t0 = 0, t1 = 0;
     if (!clip(s, t0, t1)) return kNone;
     if (exact) {
@@ -643,7 +1035,7 @@ struct SurfaceRayCaster::Impl {
   double gradient_scale(const Vec3& p) const {
     const double m = p.cwiseAbs().maxCoeff();
     double bound = 0;
-    for (size_t k = gradient_bound.size(); k-- > 0;) bound = bound * m + gradient_bound[k];
+    for (size_t k = gradient_bound.size(); k-- > 0;) bound = std::fma(bound, m, gradient_bound[k]);
     return bound;
   }
 
@@ -659,9 +1051,19 @@ struct SurfaceRayCaster::Impl {
     int side = 0;
     const double t = cast(s, guess, side);
     if (std::isnan(t)) return false;
-    const Vec3 dir = direction(s);
+    if (cast_lane >= 0) ray_coeffs = lane_coeffs(cast_lane);
+    complete(s, t, side, hit);
+    return true;
+  }
+
+  /// The row's ray at s hits at t (side as from cast; the ray's polynomial at ray_coeffs):
+  /// its point, normal and side. Fused multiply-adds where complete4 uses them.
+  void complete(double s, double t, int side, SurfaceHit& hit) {
+    const double dx = std::fma(s, step.x(), base.x()), dy = std::fma(s, step.y(), base.y()),
+                 dz = std::fma(s, step.z(), base.z());
+    const Vec3 dir(dx, dy, dz);
     hit.t = t;
-    hit.point = eye + t * dir;
+    hit.point = Vec3(std::fma(t, dx, eye.x()), std::fma(t, dy, eye.y()), std::fma(t, dz, eye.z()));
     Vec3 g;
     if (exact) {
       // ∇F lost to cancellation (a node, or a squared surface where ∇F = 2g∇g is tiny at the
@@ -673,8 +1075,9 @@ struct SurfaceRayCaster::Impl {
       // (near nodes, on squared surfaces, for single rays) ∇F comes from F's own terms.
       double error = 0;
       if (row_gradient(s, t, g, error) &&
-          in_open_range(g.squaredNorm(), std::max(square(kRowGradientMargin * floor),
-                                                  square(kRowGradientAccuracy * error)))) {
+          in_open_range(squared_norm(g.x(), g.y(), g.z()),
+                        std::max(square(kRowGradientMargin * floor),
+                                 square(kRowGradientAccuracy * error)))) {
         hit.singular = false;
       } else {
         gradient(hit.point, g);
@@ -687,10 +1090,10 @@ struct SurfaceRayCaster::Impl {
     if (hit.singular) g = fallback_normal(hit.point, dir);
     // Which side the eye is on: the sign F has along the ray before the hit, or, for a hit
     // at the clip entry, the gradient's direction.
-    const double gd = g.dot(dir);
+    const double gd = std::fma(g.z(), dz, std::fma(g.y(), dy, g.x() * dx));
     hit.front = side != 0 ? side > 0 : gd < 0;
-    hit.normal = (gd > 0 ? -1 : 1) / g.norm() * g;
-    return true;
+    const double k = (gd > 0 ? -1 : 1) / std::sqrt(squared_norm(g.x(), g.y(), g.z()));
+    hit.normal = Vec3(k * g.x(), k * g.y(), k * g.z());
   }
 
   /// Where ∇F = 0 (a node, or every point of a squared surface such as (x²+y²+z²−1)²): the
@@ -736,6 +1139,12 @@ void SurfaceRayCaster::row_extent(double& s_min, double& s_max) const {
   s_min = impl_->s_min;
   s_max = impl_->s_max;
 }
+void SurfaceRayCaster::prepare_in_row(std::span<const double> s) { impl_->prepare(s); }
+bool SurfaceRayCaster::first_hit_in_row(double s, const RootGuess& guess, double& t) {
+  t = impl_->first_hit_in_row(s, guess);
+  return !std::isnan(t);
+}
+int SurfaceRayCaster::packet_hits(SurfaceHit (&hits)[4]) { return impl_->packet_hits(hits); }
 bool SurfaceRayCaster::intersect_in_row(double s, SurfaceHit& hit, const RootGuess& guess) {
   return impl_->intersect_in_row(s, hit, guess);
 }

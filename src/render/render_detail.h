@@ -32,6 +32,15 @@ struct Shader {
   /// Colour of a point with unit normal `n` (facing the viewer) seen along unit ray `dir`.
   /// Inline: it runs once per hit, and a call costs a noticeable part of it.
   Color shade(const Vec3& n, const Vec3& dir, bool is_front) const;
+  /// shade(n, ray.normalized(), is_front) with the ray's direction normalized here, the
+  /// form the ray caster's rows use.
+  Color shade_ray(const Vec3& n, const Vec3& ray, bool is_front) const;
+
+  /// Four hits shaded together: n[k][i] and ray[k][i] are component k of hit i's normal and
+  /// ray direction (any length), out[i] its colour. With AVX2 four hits per instruction; the
+  /// same bits as shade_ray hit by hit.
+  void shade_rays4(const double (&n)[3][4], const double (&ray)[3][4], const bool (&is_front)[4],
+                   Color (&out)[4]) const;
 
  private:
   /// A material under the lights: its ambient colour and, per light, the light's direction
@@ -51,6 +60,8 @@ struct Shader {
   Lit light_up(const Material& m) const;
 };
 
+// The dot products and sums below are written as fused multiply-adds in a fixed order, the
+// order shade_rays4 uses, so that the scalar and the vector code give the same bits.
 inline Color Shader::shade(const Vec3& n, const Vec3& dir, bool is_front) const {
   const Lit& m = is_front ? lit_front_ : lit_back_;
   // Plain scalars: Eigen's 3-vector dot products and sums cost several times as much here.
@@ -58,14 +69,15 @@ inline Color Shader::shade(const Vec3& n, const Vec3& dir, bool is_front) const 
   const double dx = dir.x(), dy = dir.y(), dz = dir.z();
   double r = m.ambient.x(), g = m.ambient.y(), b = m.ambient.z();
   // The reflection 2(n·l)n − l seen from the eye: its dot with −dir is l·dir − 2(n·l)(n·dir).
-  const double nd = nx * dx + ny * dy + nz * dz;
+  const double nd = std::fma(nz, dz, std::fma(ny, dy, nx * dx));
   for (const Lit::Term& t : m.terms) {
-    const double ndl = nx * t.l[0] + ny * t.l[1] + nz * t.l[2];
+    const double ndl = std::fma(nz, t.l[2], std::fma(ny, t.l[1], nx * t.l[0]));
     if (ndl <= 0) continue;
-    r += ndl * t.diffuse[0];
-    g += ndl * t.diffuse[1];
-    b += ndl * t.diffuse[2];
-    const double rv = t.l[0] * dx + t.l[1] * dy + t.l[2] * dz - 2 * ndl * nd;
+    r = std::fma(ndl, t.diffuse[0], r);
+    g = std::fma(ndl, t.diffuse[1], g);
+    b = std::fma(ndl, t.diffuse[2], b);
+    const double rv =
+        std::fma(-2 * ndl, nd, std::fma(t.l[2], dz, std::fma(t.l[1], dy, t.l[0] * dx)));
     if (rv <= 0) continue;
     double highlight;
     if (m.exponent >= 0) {
@@ -80,11 +92,17 @@ inline Color Shader::shade(const Vec3& n, const Vec3& dir, bool is_front) const 
     } else {
       highlight = std::pow(rv, m.shininess);
     }
-    r += highlight * t.specular[0];
-    g += highlight * t.specular[1];
-    b += highlight * t.specular[2];
+    r = std::fma(highlight, t.specular[0], r);
+    g = std::fma(highlight, t.specular[1], g);
+    b = std::fma(highlight, t.specular[2], b);
   }
   return Color(r, g, b);
+}
+
+inline Color Shader::shade_ray(const Vec3& n, const Vec3& ray, bool is_front) const {
+  const double length = std::sqrt(std::fma(ray.z(), ray.z(), std::fma(ray.y(), ray.y(),
+                                                                      ray.x() * ray.x())));
+  return shade(n, Vec3(ray.x() / length, ray.y() / length, ray.z() / length), is_front);
 }
 
 /// The camera of a render: the option's, else the surface's.

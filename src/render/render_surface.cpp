@@ -37,6 +37,15 @@ RootGuess guess_from_neighbours(double left, double left2, double up, double up_
   return g;
 }
 
+/// Hits of a row waiting to be shaded four at a time (Shader::shade_rays4): normals and ray
+/// directions component by component, sides, and the pixel (in the band's row) of each.
+struct ShadeQueue {
+  double n[3][4], ray[3][4];
+  bool front[4];
+  int pixel[4];
+  int size = 0;
+};
+
 }  // namespace
 
 Image render_surface(const Surface& surface, const RenderOptions& options, RenderStats* stats,
@@ -86,8 +95,9 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
         w.current.assign(static_cast<size_t>(columns), kNoHit);
         w.sums.resize(static_cast<size_t>(width * (y1 - y0)));  // set by a pixel's first hit
         w.hit_samples.assign(w.sums.size(), 0);
-        SurfaceHit hit;
         Vec3 base, step;
+        ShadeQueue queue;
+        SurfaceHit hits[4];  // of a packet of rays
         for (int r = 0; r < rows; ++r) {
           const int row_of_pixels = r / samples;
           view.row(y0 + row_of_pixels + offsets[static_cast<size_t>(r % samples)], base, step);
@@ -98,22 +108,68 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
           const double* up = w.above.data();
           Color* sums = &w.sums[static_cast<size_t>(row_of_pixels * width)];
           int* hit_samples = &w.hit_samples[static_cast<size_t>(row_of_pixels * width)];
+          // A pixel's colour is the sum of its samples' colours, added in the order cast.
+          auto add = [&](int pixel, const Color& color) {
+            sums[pixel] = hit_samples[pixel]++ == 0 ? color : Color(sums[pixel] + color);
+          };
+          // The rays are cast in packets of four (SurfaceRayCaster::prepare_in_row): each hit
+          // is found at once, since the next ray's guess depends on it, and the packet's
+          // normals and colours are computed together once its rays are cast.
+          int packet_left = 0, packet_column = 0;  // rays left in the packet, its first ray
+          auto finish_packet = [&] {
+            const int bits = caster.packet_hits(hits);
+            for (int k = 0; k < 4; ++k) {
+              if (!((bits >> k) & 1)) continue;
+              const SurfaceHit& h = hits[k];
+              const int column = packet_column + k;
+              const double s = x0 + column / samples +
+                               offsets[static_cast<size_t>(column % samples)];
+              ++w.hits;
+              w.singular += h.singular;
+              const int q = queue.size++;
+              for (int j = 0; j < 3; ++j) {
+                queue.n[j][q] = h.normal[j];
+                queue.ray[j][q] = std::fma(s, step[j], base[j]);
+              }
+              queue.front[q] = h.front;
+              queue.pixel[q] = column / samples;
+              if (queue.size == 4) {
+                Color colors[4];
+                shader.shade_rays4(queue.n, queue.ray, queue.front, colors);
+                for (int j = 0; j < 4; ++j) add(queue.pixel[j], colors[j]);
+                queue.size = 0;
+              }
+            }
+          };
           for (int x = x0, c = 0; x < x1; ++x)
             for (int i = 0; i < samples; ++i, ++c) {
               const double s = x + offsets[static_cast<size_t>(i)];
               t[c] = kNoHit;
               if (s < s_min || s > s_max) continue;
+              if (--packet_left <= 0) {
+                finish_packet();
+                double next[4];
+                for (int k = 0; k < 4; ++k) {
+                  const int ck = c + k;
+                  next[k] = x0 + ck / samples + offsets[static_cast<size_t>(ck % samples)];
+                }
+                caster.prepare_in_row(next);
+                packet_left = 4;
+                packet_column = c;
+              }
               const RootGuess guess =
                   guess_from_neighbours(c > 0 ? t[c - 1] : kNoHit, c > 1 ? t[c - 2] : kNoHit,
                                         up[c], c > 0 ? up[c - 1] : kNoHit);
-              if (!caster.intersect_in_row(s, hit, guess)) continue;
-              t[c] = hit.t;
-              ++w.hits;
-              w.singular += hit.singular;
-              const Color color =
-                  shader.shade(hit.normal, (base + s * step).normalized(), hit.front);
-              sums[x - x0] = hit_samples[x - x0]++ == 0 ? color : Color(sums[x - x0] + color);
+              caster.first_hit_in_row(s, guess, t[c]);
             }
+          finish_packet();
+          // The row's last hits, one by one (the same colours as shade_rays4).
+          for (int q = 0; q < queue.size; ++q)
+            add(queue.pixel[q],
+                shader.shade_ray(Vec3(queue.n[0][q], queue.n[1][q], queue.n[2][q]),
+                                 Vec3(queue.ray[0][q], queue.ray[1][q], queue.ray[2][q]),
+                                 queue.front[q]));
+          queue.size = 0;
           w.rays += columns;
           std::swap(w.above, w.current);
         }

@@ -236,26 +236,14 @@ ZS_NO_VECTORIZE double polish_even_root(const double* g, int d_, double u_root, 
   return u_root;
 }
 
-/// The search of RootFinder::first_root for a polynomial of degree d ≥ 1 (fixed when D > 0);
-/// NaN when there is no root.
+/// The search of RootFinder::first_root for g(u) = f(t0 + u (t1 − t0)) of degree d ≥ 1 on
+/// [0, 1] (fixed when D > 0); NaN when there is no root.
 template <int D>
-ZS_NO_VECTORIZE double isolate(const double* coeffs, int d_, double t0, double t1, double band,
+ZS_NO_VECTORIZE double isolate(const double* g, int d_, double t0, double t1, double band,
                                const RootGuess& guess, const RootOptions& options,
-                               RootStats& stats, double& start_value) {
+                               RootStats& stats) {
   const int d = D > 0 ? D : d_;
-  // g(u) = f(t0 + u w), u in [0, 1]: Taylor shift by t0, then scale by powers of w.
   const double w = t1 - t0;
-  double g[kCapacity<D>];
-  g[0] = coeffs[0];  // d ≥ 1: every entry up to g[d] is set here
-  for (int k = 1; k <= d; ++k) g[k] = coeffs[k];
-  for (int i = 0; i < d; ++i)
-    for (int k = d - 1; k >= i; --k) g[k] += t0 * g[k + 1];
-  start_value = g[0];
-  double wk = w;
-  for (int k = 1; k <= d; ++k) {
-    g[k] *= wk;
-    wk *= w;
-  }
 
   const double leaf = std::max(options.tolerance, kMinTolerance);
   const double rtol = std::max(options.refine_tolerance, 0.25 * kMinTolerance);
@@ -398,32 +386,59 @@ double rounding_band(std::span<const double> abs_coeffs, double t_max) {
   return 16.0 * d * std::numeric_limits<double>::epsilon() * s;
 }
 
+void shift_to_unit(std::span<const double> coeffs, double t0, double t1, double* g) {
+  const int d = static_cast<int>(coeffs.size()) - 1;
+  const double w = t1 - t0;
+  for (int k = 0; k <= d; ++k) g[k] = coeffs[static_cast<size_t>(k)];
+  for (int i = 0; i < d; ++i)
+    for (int k = d - 1; k >= i; --k) g[k] = std::fma(t0, g[k + 1], g[k]);
+  double wk = w;
+  for (int k = 1; k <= d; ++k) {
+    g[k] *= wk;
+    wk *= w;
+  }
+}
+
 double RootFinder::find_first_root(std::span<const double> coeffs, double t0, double t1,
                                    double band, const RootGuess& guess) {
-  ++stats_.calls;
   int d = static_cast<int>(coeffs.size()) - 1;
   while (d >= 0 && coeffs[static_cast<size_t>(d)] == 0) --d;
   if (d > kMaxDegree)
     throw InvalidArgument("polynomial degree", std::to_string(d),
                           "ray casting supports degree up to " + std::to_string(kMaxDegree));
-  if (!(t1 >= t0)) return std::numeric_limits<double>::quiet_NaN();
+  if (!(t1 >= t0)) {
+    ++stats_.calls;
+    return std::numeric_limits<double>::quiet_NaN();
+  }
   if (d <= 0) {
+    ++stats_.calls;
     // A constant: the whole interval lies in the zero set when it is (nearly) zero.
     const double c = d < 0 ? 0.0 : coeffs[0];
     start_value_ = c;
     return std::abs(c) <= band ? t0 : std::numeric_limits<double>::quiet_NaN();
   }
+  double g[kN];
+  shift_to_unit(coeffs.first(static_cast<size_t>(d + 1)), t0, t1, g);
+  return find_first_root_on_unit(std::span<const double>(g, static_cast<size_t>(d + 1)), t0, t1,
+                                 band, guess);
+}
 
-  const double* c = coeffs.data();
+double RootFinder::find_first_root_on_unit(std::span<const double> g, double t0, double t1,
+                                           double band, const RootGuess& guess) {
+  ++stats_.calls;
+  const int d = static_cast<int>(g.size()) - 1;
+  ZS_ASSERT(d >= 1 && d <= kMaxDegree && t1 >= t0);
+  start_value_ = g[0];
+  const double* c = g.data();
   switch (d) {
-    case 1: return isolate<1>(c, d, t0, t1, band, guess, options_, stats_, start_value_);
-    case 2: return isolate<2>(c, d, t0, t1, band, guess, options_, stats_, start_value_);
-    case 3: return isolate<3>(c, d, t0, t1, band, guess, options_, stats_, start_value_);
-    case 4: return isolate<4>(c, d, t0, t1, band, guess, options_, stats_, start_value_);
-    case 5: return isolate<5>(c, d, t0, t1, band, guess, options_, stats_, start_value_);
-    case 6: return isolate<6>(c, d, t0, t1, band, guess, options_, stats_, start_value_);
-    case 8: return isolate<8>(c, d, t0, t1, band, guess, options_, stats_, start_value_);
-    default: return isolate<0>(c, d, t0, t1, band, guess, options_, stats_, start_value_);
+    case 1: return isolate<1>(c, d, t0, t1, band, guess, options_, stats_);
+    case 2: return isolate<2>(c, d, t0, t1, band, guess, options_, stats_);
+    case 3: return isolate<3>(c, d, t0, t1, band, guess, options_, stats_);
+    case 4: return isolate<4>(c, d, t0, t1, band, guess, options_, stats_);
+    case 5: return isolate<5>(c, d, t0, t1, band, guess, options_, stats_);
+    case 6: return isolate<6>(c, d, t0, t1, band, guess, options_, stats_);
+    case 8: return isolate<8>(c, d, t0, t1, band, guess, options_, stats_);
+    default: return isolate<0>(c, d, t0, t1, band, guess, options_, stats_);
   }
 }
 

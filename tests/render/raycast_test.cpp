@@ -351,6 +351,86 @@ TEST_P(CatalogRays, RowNormalsAgreeWithTheFieldsGradient) {
   EXPECT_LT(worst, 1e-7) << "over " << hits << " hits";
 }
 
+/// Rays cast in packets of four (prepare_in_row, vectorized where the CPU allows), whether
+/// completed one by one (intersect_in_row) or four at a time (first_hit_in_row, then
+/// packet_hits), must give the same bits as rays cast alone: hit, point, normal, side and
+/// singularity.
+TEST_P(CatalogRays, PacketsCastTheSameAsSingleRays) {
+  const Surface surface = make_surface(*find_catalog_entry(GetParam()));
+  const Box3 box = surface.bounds();
+  const double radius = surface.scene_radius();
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1), unit(0, 1);
+  auto random_unit = [&] {
+    Vec3 v;
+    do v = Vec3(u(rng), u(rng), u(rng));
+    while (v.squaredNorm() > 1 || v.squaredNorm() < 1e-6);
+    return v.normalized();
+  };
+  auto expect_same = [](const SurfaceHit& a, const SurfaceHit& b, int ray) {
+    EXPECT_EQ(a.t, b.t) << "ray " << ray;
+    EXPECT_EQ(a.point, b.point) << "ray " << ray;
+    EXPECT_EQ(a.normal, b.normal) << "ray " << ray;
+    EXPECT_EQ(a.front, b.front) << "ray " << ray;
+    EXPECT_EQ(a.singular, b.singular) << "ray " << ray;
+  };
+  int hits = 0;
+  constexpr int kEyes = 10, kRowsPerEye = 5, kRaysPerRow = 120;
+  for (int e = 0; e < kEyes; ++e) {
+    View view;
+    view.eye = box.center() + radius * (2.5 + 2 * std::abs(u(rng))) * random_unit();
+    view.target = box.center() + 0.2 * radius * random_unit();
+    view.forward = (view.target - view.eye).normalized();
+    view.right = view.forward.cross(random_unit()).normalized();
+    view.up = view.right.cross(view.forward);
+    view.tan_half_fov = 1.1 * radius / (view.target - view.eye).norm();
+    view.width = view.height = kRaysPerRow;
+    SurfaceRayCaster packets(surface, view.eye), deferred(surface, view.eye),
+        single(surface, view.eye);
+    for (int r = 0; r < kRowsPerEye; ++r) {
+      Vec3 base, step;
+      view.row(kRaysPerRow * unit(rng), base, step);
+      packets.begin_row(base, step);
+      deferred.begin_row(base, step);
+      single.begin_row(base, step);
+      double last = NAN;
+      SurfaceHit expected[4];
+      int expected_bits = 0;
+      for (int i = 0; i < kRaysPerRow; ++i) {
+        const double s = i + 0.5;
+        if (i % 4 == 0) {
+          const double next[4] = {s, s + 1, s + 2, s + 3};
+          packets.prepare_in_row(next);
+          deferred.prepare_in_row(next);
+        }
+        RootGuess guess;
+        if (!std::isnan(last)) guess = {last, 1e-3 * last};
+        SurfaceHit a, b;
+        const bool got = packets.intersect_in_row(s, a, guess);
+        ASSERT_EQ(got, single.intersect_in_row(s, b, guess)) << "ray " << i;
+        double t = NAN;
+        ASSERT_EQ(got, deferred.first_hit_in_row(s, guess, t)) << "ray " << i;
+        last = got ? a.t : NAN;
+        if (got) {
+          ++hits;
+          expect_same(a, b, i);
+          EXPECT_EQ(t, b.t);
+          expected[i % 4] = b;
+          expected_bits |= 1 << (i % 4);
+        }
+        if (i % 4 == 3) {
+          SurfaceHit four[4];
+          ASSERT_EQ(deferred.packet_hits(four), expected_bits) << "rays " << i - 3 << "-" << i;
+          for (int k = 0; k < 4; ++k)
+            if ((expected_bits >> k) & 1) expect_same(four[k], expected[k], i - 3 + k);
+          expected_bits = 0;
+        }
+      }
+    }
+  }
+  EXPECT_GT(hits, kEyes * kRowsPerEye * kRaysPerRow / 20);
+}
+
 INSTANTIATE_TEST_SUITE_P(Catalog, CatalogRays,
                          testing::Values("kummer", "cone", "planes", "sphere", "torus", "roman",
                                          "cayley", "clebsch", "barth6", "whitney", "dingdong"));

@@ -14,6 +14,7 @@
 /// refinement.
 #include <memory>
 #include <optional>
+#include <span>
 
 #include "zeroset/render/roots.h"
 #include "zeroset/surface/surface.h"
@@ -67,6 +68,20 @@ class SurfaceRayCaster {
   /// The rays of the current row with s outside [s_min, s_max] miss the clip volume (a
   /// conservative range from its spheres; infinite without them, empty when no ray meets it).
   void row_extent(double& s_min, double& s_max) const;
+  /// Starts a packet of four rays of the row at s[0..3] (nothing when s has another size).
+  /// With AVX2, on the exact path and up to degree 6, their straight-line parts are done four
+  /// rays per instruction: here the clip, each ray's polynomial, its rounding band and its
+  /// shift to the clipped interval; in packet_hits the normals. The root isolation stays per
+  /// ray, in intersect_in_row or first_hit_in_row. Every result is the same, bit for bit, as
+  /// without packets. Valid until the next call or begin_row.
+  void prepare_in_row(std::span<const double> s);
+  /// The parameter t of the first hit of the row's ray at s, as intersect_in_row, without the
+  /// normal: when s is in the packet, the hit is kept for packet_hits. False when it misses.
+  bool first_hit_in_row(double s, const RootGuess& guess, double& t);
+  /// The hits that first_hit_in_row found for the packet's rays since prepare_in_row, the
+  /// same as intersect_in_row gives: bit i of the result is set when hits[i] (the ray at
+  /// s[i]) holds one.
+  int packet_hits(SurfaceHit (&hits)[4]);
   /// The first intersection of the row's ray eye + t·(base + s·step), t ≥ 0, inside the
   /// clip; `hit.t` is in units of that direction's length. `guess`, e.g. from the neighbouring
   /// rays' hits, only speeds up the search (exact path).

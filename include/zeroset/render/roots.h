@@ -70,6 +70,12 @@ class RootFinder {
   double find_first_root(std::span<const double> coeffs, double t0, double t1, double band,
                          const RootGuess& guess = {});
 
+  /// The same search for f already written on [t0, t1] (t0 ≤ t1) in the unit parameter:
+  /// g(u) = f(t0 + u (t1 − t0)) = Σ g[k] u^k, d = g.size() − 1 ≥ 1, f of degree d exactly, as
+  /// made by `shift_to_unit` (callers that set up many rays at once make it themselves).
+  double find_first_root_on_unit(std::span<const double> g, double t0, double t1, double band,
+                                 const RootGuess& guess = {});
+
   /// f(t0) of the last search, as computed by it (the first Bernstein coefficient): tells
   /// which side of the surface the interval starts on at no extra cost.
   double start_value() const { return start_value_; }
@@ -82,6 +88,11 @@ class RootFinder {
   RootStats stats_;
   double start_value_ = 0;
 };
+
+/// g[k], k ≤ d = coeffs.size() − 1: the coefficients of g(u) = f(t0 + u (t1 − t0)) from those
+/// of f (a Taylor shift by t0 with fused multiply-adds, then a scaling by powers of t1 − t0),
+/// the form RootFinder searches. `g` holds coeffs.size() entries. O(d²).
+void shift_to_unit(std::span<const double> coeffs, double t0, double t1, double* g);
 
 /// A bound on the rounding error of f(t) for |t| ≤ t_max, from bounds `abs_coeffs[k]` on the
 /// magnitude of each coefficient (including the error already in them): a small multiple of
