@@ -5,7 +5,7 @@ Every tool renders the same surfaces, clips and picture size (800×800, one ray 
 anti-aliasing) as whole processes, timed from start to exit, each several times; the table
 gives medians. zeroset runs with 2 threads (`--threads 2`) and its `--stats` file also gives
 the time of the ray casting alone (without start-up and PNG encoding). surf
-(`surf-alggeo-nox`, single threaded) gets a script written here from each surface's
+(`surf-alggeo-nox`, which runs three threads and keeps about 1.3 cores busy) gets a script written here from each surface's
 equation; POV-Ray 3.7 gets the scene `zeroset export` writes (`polynomial ... sturm`,
 `clipped_by`) and uses its default threads. Each tool's pictures are kept in the output
 directory so they can be compared. Writes section "render" of docs/benchmarks.md.
@@ -126,10 +126,10 @@ def main():
         f"800×800 pixels, one ray per pixel, whole processes (start-up and image output "
         f"included), median of {args.repeat} runs, as wall / CPU seconds (CPU: user + system "
         f"of all threads); load average {load:.1f} when the run started (other work on the "
-        f"machine slows the 2-thread zeroset more than the 1-thread surf, so also compare the "
+        f"machine slows the 2-thread zeroset more than surf, which keeps about 1.3 cores busy, so also compare the "
         f"CPU columns). zeroset: `zeroset --threads 2 render SURFACE --aa 1` (exact "
         f"polynomial ray casting), with the median wall time of the ray casting alone from "
-        f"`--stats` (no start-up, no PNG encoding); surf: `surf-alggeo-nox` (1 thread) with a "
+        f"`--stats` (no start-up, no PNG encoding); surf: `surf-alggeo-nox` (its own threads) with a "
         f"script from the same equation; POV-Ray 3.7: the scene of `zeroset export` "
         f"(`polynomial`, `sturm`, `clipped_by`), its default threads.",
         "",
