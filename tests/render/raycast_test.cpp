@@ -141,6 +141,30 @@ class ReferenceCaster {
 
 class CatalogRays : public testing::TestWithParam<const char*> {};
 
+/// A random direction, uniform on the sphere.
+Vec3 random_unit(std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-1, 1);
+  Vec3 v;
+  do v = Vec3(u(rng), u(rng), u(rng));
+  while (v.squaredNorm() > 1 || v.squaredNorm() < 1e-6);
+  return v.normalized();
+}
+
+/// A random camera for the row tests: the eye 2.5 to 4.5 scene radii from the centre, looking
+/// near it, `size` × `size` rays.
+View random_view(const Vec3& centre, double radius, int size, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-1, 1);
+  View view;
+  view.eye = centre + radius * (2.5 + 2 * std::abs(u(rng))) * random_unit(rng);
+  view.target = centre + 0.2 * radius * random_unit(rng);
+  view.forward = (view.target - view.eye).normalized();
+  view.right = view.forward.cross(random_unit(rng)).normalized();
+  view.up = view.right.cross(view.forward);
+  view.tan_half_fov = 1.1 * radius / (view.target - view.eye).norm();
+  view.width = view.height = size;
+  return view;
+}
+
 TEST_P(CatalogRays, FirstHitAgreesWithDenseReference) {
   const CatalogEntry* entry = find_catalog_entry(GetParam());
   ASSERT_NE(entry, nullptr);
@@ -152,19 +176,13 @@ TEST_P(CatalogRays, FirstHitAgreesWithDenseReference) {
 
   std::mt19937 rng(20240611);
   std::uniform_real_distribution<double> u(-1, 1);
-  auto random_unit = [&] {
-    Vec3 v;
-    do v = Vec3(u(rng), u(rng), u(rng));
-    while (v.squaredNorm() > 1 || v.squaredNorm() < 1e-6);
-    return v.normalized();
-  };
   int hits = 0, ambiguous = 0, total = 0;
   constexpr int kEyes = 20, kRaysPerEye = 500;
   for (int e = 0; e < kEyes; ++e) {
     // Eyes outside the scene at camera-like distances, and a few inside the clip volume.
-    const Vec3 eye = e % 5 == 4 ? Vec3(box.center() + 0.3 * radius * random_unit())
+    const Vec3 eye = e % 5 == 4 ? Vec3(box.center() + 0.3 * radius * random_unit(rng))
                                 : Vec3(box.center() + radius * (2.5 + 2 * std::abs(u(rng))) *
-                                                          random_unit());
+                                                          random_unit(rng));
     SurfaceRayCaster caster(surface, eye);
     ASSERT_TRUE(caster.is_exact());
     for (int r = 0; r < kRaysPerEye; ++r) {
@@ -213,24 +231,11 @@ TEST_P(CatalogRays, RowRaysAgreeWithDenseReferenceWhateverTheGuess) {
   const double radius = surface.scene_radius();
   std::mt19937 rng(20240612);
   std::uniform_real_distribution<double> u(-1, 1), unit(0, 1);
-  auto random_unit = [&] {
-    Vec3 v;
-    do v = Vec3(u(rng), u(rng), u(rng));
-    while (v.squaredNorm() > 1 || v.squaredNorm() < 1e-6);
-    return v.normalized();
-  };
   int hits = 0, guided = 0, misled = 0, ambiguous = 0;
   long long guided_roots = 0;  // found before the guess's limit
   constexpr int kEyes = 10, kRowsPerEye = 5, kRaysPerRow = 120;
   for (int e = 0; e < kEyes; ++e) {
-    View view;
-    view.eye = box.center() + radius * (2.5 + 2 * std::abs(u(rng))) * random_unit();
-    view.target = box.center() + 0.2 * radius * random_unit();
-    view.forward = (view.target - view.eye).normalized();
-    view.right = view.forward.cross(random_unit()).normalized();
-    view.up = view.right.cross(view.forward);
-    view.tan_half_fov = 1.1 * radius / (view.target - view.eye).norm();
-    view.width = view.height = kRaysPerRow;
+    const View view = random_view(box.center(), radius, kRaysPerRow, rng);
     SurfaceRayCaster caster(surface, view.eye);
     for (int r = 0; r < kRowsPerEye; ++r) {
       Vec3 base, step;
@@ -304,25 +309,12 @@ TEST_P(CatalogRays, RowNormalsAgreeWithTheFieldsGradient) {
   const Box3 box = surface.bounds();
   const double radius = surface.scene_radius();
   std::mt19937 rng(7);
-  std::uniform_real_distribution<double> u(-1, 1), unit(0, 1);
-  auto random_unit = [&] {
-    Vec3 v;
-    do v = Vec3(u(rng), u(rng), u(rng));
-    while (v.squaredNorm() > 1 || v.squaredNorm() < 1e-6);
-    return v.normalized();
-  };
+  std::uniform_real_distribution<double> unit(0, 1);
   int hits = 0, singular = 0;
   double worst = 0;
   constexpr int kEyes = 10, kRowsPerEye = 5, kRaysPerRow = 120;
   for (int e = 0; e < kEyes; ++e) {
-    View view;
-    view.eye = box.center() + radius * (2.5 + 2 * std::abs(u(rng))) * random_unit();
-    view.target = box.center() + 0.2 * radius * random_unit();
-    view.forward = (view.target - view.eye).normalized();
-    view.right = view.forward.cross(random_unit()).normalized();
-    view.up = view.right.cross(view.forward);
-    view.tan_half_fov = 1.1 * radius / (view.target - view.eye).norm();
-    view.width = view.height = kRaysPerRow;
+    const View view = random_view(box.center(), radius, kRaysPerRow, rng);
     SurfaceRayCaster caster(surface, view.eye);
     for (int r = 0; r < kRowsPerEye; ++r) {
       Vec3 base, step;
@@ -360,13 +352,7 @@ TEST_P(CatalogRays, PacketsCastTheSameAsSingleRays) {
   const Box3 box = surface.bounds();
   const double radius = surface.scene_radius();
   std::mt19937 rng(11);
-  std::uniform_real_distribution<double> u(-1, 1), unit(0, 1);
-  auto random_unit = [&] {
-    Vec3 v;
-    do v = Vec3(u(rng), u(rng), u(rng));
-    while (v.squaredNorm() > 1 || v.squaredNorm() < 1e-6);
-    return v.normalized();
-  };
+  std::uniform_real_distribution<double> unit(0, 1);
   auto expect_same = [](const SurfaceHit& a, const SurfaceHit& b, int ray) {
     EXPECT_EQ(a.t, b.t) << "ray " << ray;
     EXPECT_EQ(a.point, b.point) << "ray " << ray;
@@ -377,14 +363,7 @@ TEST_P(CatalogRays, PacketsCastTheSameAsSingleRays) {
   int hits = 0;
   constexpr int kEyes = 10, kRowsPerEye = 5, kRaysPerRow = 120;
   for (int e = 0; e < kEyes; ++e) {
-    View view;
-    view.eye = box.center() + radius * (2.5 + 2 * std::abs(u(rng))) * random_unit();
-    view.target = box.center() + 0.2 * radius * random_unit();
-    view.forward = (view.target - view.eye).normalized();
-    view.right = view.forward.cross(random_unit()).normalized();
-    view.up = view.right.cross(view.forward);
-    view.tan_half_fov = 1.1 * radius / (view.target - view.eye).norm();
-    view.width = view.height = kRaysPerRow;
+    const View view = random_view(box.center(), radius, kRaysPerRow, rng);
     SurfaceRayCaster packets(surface, view.eye), deferred(surface, view.eye),
         single(surface, view.eye);
     for (int r = 0; r < kRowsPerEye; ++r) {
