@@ -59,7 +59,9 @@ TEST(Clip, RayIntervalMatchesContainmentAlongRandomRays) {
       const double t = 10.0 * k / 200;
       const bool inside = c.contains(o + t * d);
       const bool in_interval = hit && t >= t0 - 1e-12 && t <= t1 + 1e-12;
-      if (std::abs(c.value(o + t * d)) > 1e-9) EXPECT_EQ(inside, in_interval) << i << " t=" << t;
+      if (std::abs(c.value(o + t * d)) > 1e-9) {
+        EXPECT_EQ(inside, in_interval) << i << " t=" << t;
+      }
     }
   }
 }
