@@ -41,7 +41,7 @@ TEST(Scene, ResolvesEquationsAndNamesEveryMissingParameter) {
 
 TEST(Scene, UnknownParameterOverrideSaysWhichExist) {
   try {
-    resolve_surface("kummer", {.params = {{"nu", 2.0}}});
+    resolve_surface("kummer", {.params = {{"nu", 2.0}}, .clip_specs = {}});
     ADD_FAILURE();
   } catch (const InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("mu"), std::string::npos) << e.what();
@@ -58,7 +58,7 @@ TEST(Scene, ReportsAMisspelledCatalogName) {
 }
 
 TEST(Scene, RoundTripsThroughAFile) {
-  Scene scene = resolve_scene("torus", {.params = {{"r", 0.3}}});
+  Scene scene = resolve_scene("torus", {.params = {{"r", 0.3}}, .clip_specs = {}});
   scene.surface.camera.azimuth_deg = 12;
   scene.settings["render"] = {{"samples", 3}};
   const std::string path = temp_path("roundtrip.json");
