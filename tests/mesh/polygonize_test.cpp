@@ -117,7 +117,9 @@ TEST(Polygonize, BoxClipCutsAlongItsPlanes) {
   const Mesh m = polygonize(s, {.cells = 30});
   ASSERT_FALSE(m.empty());
   for (size_t v = 0; v < m.positions.size(); ++v) {
-    if (m.is_boundary[v]) EXPECT_LE(std::abs(s.clip.value(m.positions[v])), 1e-9);
+    if (m.is_boundary[v]) {
+      EXPECT_LE(std::abs(s.clip.value(m.positions[v])), 1e-9);
+    }
   }
   EXPECT_EQ(mesh_topology(m).non_manifold_edges, 0u);
 }
