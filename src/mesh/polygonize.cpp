@@ -30,7 +30,6 @@ namespace zeroset {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-using detail::cell_polygons;
 using detail::CellPolygons;
 using detail::kEdgeAxis;
 using detail::kEdgeCorners;
