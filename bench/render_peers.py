@@ -4,11 +4,13 @@
 Every tool renders the same surfaces, clips and picture size (800×800, one ray per pixel, no
 anti-aliasing) as whole processes, timed from start to exit, each several times; the table
 gives medians. zeroset runs with 2 threads (`--threads 2`) and its `--stats` file also gives
-the time of the ray casting alone (without start-up and PNG encoding). surf
-(`surf-alggeo-nox`, which runs three threads and keeps about 1.3 cores busy) gets a script written here from each surface's
-equation; POV-Ray 3.7 gets the scene `zeroset export` writes (`polynomial ... sturm`,
-`clipped_by`) and uses its default threads. Each tool's pictures are kept in the output
-directory so they can be compared. Writes section "render" of docs/benchmarks.md.
+the time of the ray casting alone (without start-up and picture output). surf
+(`surf-alggeo-nox`, which runs three threads and keeps about 1.3 cores busy) gets a script
+written here from each surface's equation and writes a PPM (it has no PNG output), so zeroset
+is timed writing the same PPM, and also writing its usual PNG; POV-Ray 3.7 gets the scene
+`zeroset export` writes (`polynomial ... sturm`, `clipped_by`), uses its default threads and
+writes a PNG, so it is compared with zeroset's PNG run. Each tool's pictures are kept in the
+output directory so they can be compared. Writes section "render" of docs/benchmarks.md.
 
 Usage: /usr/bin/python3 bench/render_peers.py BUILD_DIR [--repeat N] [--out DIR]
 """
@@ -92,12 +94,17 @@ def main():
     rows = []
     for i, (title, spec, radius, equation) in enumerate(SCENES):
         tag = spec[0]
-        png, stats = out / f"{tag}-zeroset.png", out / f"{tag}-zeroset.json"
-        z_cmd = [str(zeroset), "--threads", "2", "-q", "render", *spec, "--size", "800x800",
-                 "--aa", "1", "-o", str(png), "--stats", str(stats)]
+        stats = out / f"{tag}-zeroset.json"
         casting = []
-        t_z = timed(z_cmd, args.repeat,
-                    after_run=lambda: casting.append(json.loads(stats.read_text())["seconds"]))
+
+        def z_timed(picture):
+            cmd = [str(zeroset), "--threads", "2", "-q", "render", *spec, "--size", "800x800",
+                   "--aa", "1", "-o", str(picture), "--stats", str(stats)]
+            return timed(cmd, args.repeat,
+                         after_run=lambda: casting.append(json.loads(stats.read_text())["seconds"]))
+
+        t_z_ppm = z_timed(out / f"{tag}-zeroset.ppm")
+        t_z = z_timed(out / f"{tag}-zeroset.png")
         t_cast = statistics.median(casting)
         t_surf = t_pov = None
         if have_surf:
@@ -110,9 +117,9 @@ def main():
                             str(pov)], check=True)
             t_pov = timed(["povray", "-D", "-V", "+W800", "+H800", f"+I{pov}",
                            f"+O{out / (tag + '-povray.png')}"], args.repeat, cwd=out)
-        rows.append((title, t_z, t_cast, t_surf, t_pov))
-        print(f"{title}: zeroset {t_z}, surf {t_surf}, POV-Ray {t_pov} (wall, CPU seconds)",
-              file=sys.stderr)
+        rows.append((title, t_z_ppm, t_z, t_cast, t_surf, t_pov))
+        print(f"{title}: zeroset PPM {t_z_ppm}, PNG {t_z}, surf {t_surf}, POV-Ray {t_pov} "
+              "(wall, CPU seconds)", file=sys.stderr)
 
     def cell(t):
         return "–" if t is None else f"{t[0]:.3f} / {t[1]:.3f}"
@@ -123,22 +130,27 @@ def main():
     lines = [
         "## Ray tracing (render)",
         "",
-        f"800×800 pixels, one ray per pixel, whole processes (start-up and image output "
+        f"800×800 pixels, one ray per pixel, whole processes (start-up and picture output "
         f"included), median of {args.repeat} runs, as wall / CPU seconds (CPU: user + system "
         f"of all threads); load average {load:.1f} when the run started (other work on the "
-        f"machine slows the 2-thread zeroset more than surf, which keeps about 1.3 cores busy, so also compare the "
-        f"CPU columns). zeroset: `zeroset --threads 2 render SURFACE --aa 1` (exact "
-        f"polynomial ray casting), with the median wall time of the ray casting alone from "
-        f"`--stats` (no start-up, no PNG encoding); surf: `surf-alggeo-nox` (its own threads) with a "
-        f"script from the same equation; POV-Ray 3.7: the scene of `zeroset export` "
-        f"(`polynomial`, `sturm`, `clipped_by`), its default threads.",
+        f"machine slows the 2-thread zeroset more than surf, which keeps about 1.3 cores busy, "
+        f"so also compare the CPU columns). zeroset: `zeroset --threads 2 render SURFACE --aa 1` "
+        f"(exact polynomial ray casting), writing a PPM as surf does (surf has no PNG output) "
+        f"and writing a PNG as POV-Ray does; the casting column is the median wall time of the "
+        f"ray casting alone from `--stats` (no start-up, no picture output). surf: "
+        f"`surf-alggeo-nox` (its own threads) with a script from the same equation; POV-Ray "
+        f"3.7: the scene of `zeroset export` (`polynomial`, `sturm`, `clipped_by`), its default "
+        f"threads.",
         "",
-        "| scene | zeroset | casting only | surf | POV-Ray | surf / zeroset (wall, CPU) "
-        "| POV-Ray / zeroset (wall, CPU) |",
-        "|---|---|---|---|---|---|---|",
+        "| scene | zeroset, PPM | zeroset, PNG | casting only | surf (PPM) | POV-Ray (PNG) "
+        "| surf / zeroset, both PPM (wall, CPU) | surf / zeroset PNG (wall, CPU) "
+        "| POV-Ray / zeroset, both PNG (wall, CPU) |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
-    for title, t_z, t_cast, t_surf, t_pov in rows:
-        lines.append(f"| {title} | {cell(t_z)} | {t_cast:.3f} | {cell(t_surf)} | {cell(t_pov)} "
+    for title, t_z_ppm, t_z, t_cast, t_surf, t_pov in rows:
+        lines.append(f"| {title} | {cell(t_z_ppm)} | {cell(t_z)} | {t_cast:.3f} | {cell(t_surf)} "
+                     f"| {cell(t_pov)} "
+                     f"| {ratio(t_surf, t_z_ppm, 0)}, {ratio(t_surf, t_z_ppm, 1)} "
                      f"| {ratio(t_surf, t_z, 0)}, {ratio(t_surf, t_z, 1)} "
                      f"| {ratio(t_pov, t_z, 0)}, {ratio(t_pov, t_z, 1)} |")
     lines += ["", "Regenerate: `/usr/bin/python3 bench/render_peers.py BUILD_DIR` "

@@ -2,6 +2,7 @@
 #include <fmt/core.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -13,6 +14,7 @@
 #include "common.h"
 #include "zeroset/error.h"
 #include "zeroset/io/atomic_file.h"
+#include "zeroset/io/image.h"
 #include "zeroset/render/pov_export.h"
 #include "zeroset/render/render.h"
 #include "zeroset/render/settings.h"
@@ -130,7 +132,9 @@ bool on_path(const std::string& program) {
 // ---------------------------------------------------------------------------------- render
 void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string& output,
                 const std::string& stats_path) {
-  require_extension(output, "png", "--output");
+  const auto& formats = image_file_extensions();
+  if (std::find(formats.begin(), formats.end(), file_extension(output)) == formats.end())
+    throw InvalidArgument("--output", output, "the file name must end in .png or .ppm");
   check_writable(output);
   if (!stats_path.empty()) check_writable(stats_path);
   const Scene scene = args.resolve();
@@ -141,7 +145,7 @@ void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string
   RenderStats stats;
   const Image image = render_surface(surface, o, &stats);
   progress.finish();
-  write_png(image, output);
+  write_image(image, output);
   const char* method = stats.exact ? "polynomial roots" : "interval arithmetic";
   say(fmt::format("wrote {} ({}x{}, {} rays, {:.2f} s, {})", output, o.width, o.height,
                   stats.rays, stats.seconds, method));
@@ -275,7 +279,7 @@ void register_render_commands(CLI::App& app) {
   {
     auto* cmd = app.add_subcommand(
         "render",
-        "Ray trace a surface into a PNG picture.\n\n"
+        "Ray trace a surface into a picture (PNG, or PPM for pipelines).\n\n"
         "Polynomial surfaces are cast exactly: the equation is restricted to each ray and its\n"
         "first root isolated robustly, so nodes show as sharp double cones and\n"
         "self-intersections as clean curves. Other expressions use interval arithmetic.\n"
@@ -284,14 +288,17 @@ void register_render_commands(CLI::App& app) {
         "  zeroset render kummer --param mu=1.5 -o kummer.png\n"
         "  zeroset render barth6 --size 1200x900 --aa 3 -o barth.png\n"
         "  zeroset render \"x^2 + y^2 - z^2\" --clip sphere:1.5 --camera 30,20 -o cone.png\n"
-        "  zeroset render roman --background '#202020' --stats roman.json -o roman.png");
+        "  zeroset render roman --background '#202020' --stats roman.json -o roman.png\n"
+        "  zeroset render cayley --aa 1 -o cayley.ppm    (uncompressed, for pipelines)");
     auto args = std::make_shared<SurfaceArgs>();
     auto look = std::make_shared<LookArgs>();
     auto output = std::make_shared<std::string>();
     auto stats = std::make_shared<std::string>();
     args->add_to(cmd);
     look->add_to(cmd);
-    cmd->add_option("-o,--output", *output, "Output PNG file")->required()->type_name("FILE");
+    cmd->add_option("-o,--output", *output,
+                    "Output picture: .png, or .ppm (binary netpbm, uncompressed: the fastest "
+                    "to write)")->required()->type_name("FILE");
     cmd->add_option("--stats", *stats, "Write figures (rays, hits, seconds) as JSON to FILE")
         ->type_name("FILE");
     cmd->callback([=] { run_render(*args, *look, *output, *stats); });

@@ -11,6 +11,7 @@
 
 #define STB_IMAGE_IMPLEMENTATION
 #define STBI_ONLY_PNG
+#define STBI_ONLY_PNM
 #include <stb_image.h>
 
 #include "zeroset/error.h"
@@ -141,13 +142,37 @@ void write_png(const Image& image, const std::string& path) {
   });
 }
 
+void write_ppm(const Image& image, const std::string& path) {
+  if (image.width <= 0 || image.height <= 0) throw IoError(path, "image is empty");
+  const std::string header = "P6\n" + std::to_string(image.width) + " " +
+                             std::to_string(image.height) + "\n255\n";
+  write_file_atomically(path, [&](std::ostream& out) {
+    out.write(header.data(), static_cast<std::streamsize>(header.size()));
+    out.write(reinterpret_cast<const char*>(image.rgb.data()),
+              static_cast<std::streamsize>(image.rgb.size()));
+  });
+}
+
+const std::vector<std::string>& image_file_extensions() {
+  static const std::vector<std::string> extensions = {"png", "ppm"};
+  return extensions;
+}
+
+void write_image(const Image& image, const std::string& path) {
+  const std::string ext = file_extension(path);
+  if (ext == "png") return write_png(image, path);
+  if (ext == "ppm") return write_ppm(image, path);
+  throw InvalidArgument("picture file", path, "the name must end in .png or .ppm");
+}
+
 Image read_image(const std::string& path) {
   const std::string bytes = read_text_file(path);
   int w = 0, h = 0, n = 0;
   unsigned char* data =
       stbi_load_from_memory(reinterpret_cast<const unsigned char*>(bytes.data()),
                             static_cast<int>(bytes.size()), &w, &h, &n, 3);
-  if (!data) throw IoError(path, std::string("not a readable PNG: ") + stbi_failure_reason());
+  if (!data)
+    throw IoError(path, std::string("not a readable PNG or PPM: ") + stbi_failure_reason());
   Image img(w, h);
   std::copy(data, data + static_cast<size_t>(w) * h * 3, img.rgb.begin());
   stbi_image_free(data);

@@ -1,11 +1,13 @@
 // The `zeroset` command line as a user meets it: outputs, exit codes, error messages.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <regex>
 
 #include "support/run_command.h"
+#include "zeroset/io/image.h"
 
 namespace zeroset {
 namespace {
@@ -98,6 +100,31 @@ TEST(Cli, InfoReadsASceneFile) {
   const auto r = run_command(zs("info " + path));
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("a = 2"), std::string::npos) << r.output;
+}
+
+TEST(Cli, RenderWritesTheSamePictureAsPngAndAsPpm) {
+  const std::string png = temp_dir() + "/cone.png", ppm = temp_dir() + "/cone.ppm";
+  for (const std::string& out : {png, ppm}) {
+    const auto r = run_command(zs("-q render cone --size 64x48 --aa 1 -o " + out));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  const Image a = read_image(png), b = read_image(ppm);
+  EXPECT_EQ(a.width, 64);
+  EXPECT_EQ(a.height, 48);
+  EXPECT_EQ(b.width, 64);
+  EXPECT_EQ(b.height, 48);
+  EXPECT_EQ(a.rgb, b.rgb);
+  // The cone is drawn: some pixels differ from the white background.
+  EXPECT_NE(std::count(a.rgb.begin(), a.rgb.end(), 255), static_cast<long>(a.rgb.size()));
+}
+
+TEST(Cli, RenderRejectsAnUnknownPictureFormatBeforeWritingAnything) {
+  const std::string out = temp_dir() + "/cone.jpg";
+  std::filesystem::remove(out);
+  const auto r = run_command(zs("render cone --size 64x48 -o " + out));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find(".ppm"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(out));
 }
 
 }  // namespace

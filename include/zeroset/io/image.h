@@ -1,5 +1,5 @@
 #pragma once
-/// 8-bit RGB images and PNG output.
+/// 8-bit RGB images and their files: PNG (compressed) and binary PPM (uncompressed).
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -27,7 +27,17 @@ struct Image {
 /// Writes a PNG (8-bit RGB, zlib level 1) atomically. Large pictures are compressed in bands
 /// on all cores (an 800×800 picture in a few milliseconds). Throws IoError.
 void write_png(const Image& image, const std::string& path);
-/// Reads a PNG (or any format stb_image reads) as RGB. Throws IoError.
+/// Writes a binary PPM (P6, maxval 255; the netpbm format that ffmpeg and most image tools
+/// read) atomically: no compression, so it is the fastest to write (a plain copy of the
+/// pixels). Throws IoError.
+void write_ppm(const Image& image, const std::string& path);
+/// The picture file formats write_image knows, by file extension without the dot: png, ppm.
+const std::vector<std::string>& image_file_extensions();
+/// Writes `image` in the format of the extension of `path` (see image_file_extensions();
+/// case-insensitive). Throws InvalidArgument for another extension, IoError when writing
+/// fails.
+void write_image(const Image& image, const std::string& path);
+/// Reads a PNG or a binary PPM as RGB. Throws IoError.
 Image read_image(const std::string& path);
 
 }  // namespace zeroset
