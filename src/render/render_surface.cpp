@@ -3,9 +3,11 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <span>
 #include <vector>
 
 #include "render_detail.h"
+#include "zeroset/error.h"
 #include "zeroset/render/raycast.h"
 #include "zeroset/render/render.h"
 
@@ -67,8 +69,9 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
   for (int w = 0; w < threads; ++w) casters.emplace_back(surface, view.eye, cast_options);
   struct Worker {
     long long rays = 0, hits = 0, singular = 0;
-    // Hit parameters of the band's previous and current row of rays (NaN: no hit), and per
-    // pixel of the band the sum of the colours of the samples that hit and their number.
+    // Hit parameters of the band's previous and current row of rays (NaN: no hit), each
+    // after two NaN entries (the neighbours left of the first ray), and per pixel of the band
+    // the sum of the colours of the samples that hit and their number.
     std::vector<double> above, current;
     std::vector<Color> sums;
     std::vector<int> hit_samples;
@@ -80,6 +83,16 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
   const double weight = 1.0 / (samples * samples);
   std::vector<double> offsets;  // of the samples within a pixel, along x and along y
   for (int i = 0; i < samples; ++i) offsets.push_back((i + 0.5) / samples);
+  // Every band spans whole rows, so its rays have the same columns: column c is the ray at
+  // s = ray_s[c] (image x), in pixel ray_pixel[c]. Three more positions continue the row for
+  // the packets of four that start near its end.
+  const int columns = options.width * samples;
+  std::vector<double> ray_s;
+  std::vector<int> ray_pixel;
+  for (int c = 0; c < columns + 3; ++c) {
+    ray_s.push_back(c / samples + offsets[static_cast<size_t>(c % samples)]);
+    ray_pixel.push_back(c / samples);
+  }
   Image image(options.width, options.height);
   const detail::GammaTable& gamma = detail::gamma_table();
   std::uint8_t background[3];  // the background's bytes, copied into pixels no ray hits
@@ -87,12 +100,13 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
   const bool finished = detail::for_each_tile(
       options.width, options.height, options.width, kBandRows, threads, stop, options.progress,
       [&](int x0, int y0, int x1, int y1, int worker) {
+        ZS_ASSERT(x0 == 0 && x1 == options.width);
         SurfaceRayCaster& caster = casters[static_cast<size_t>(worker)];
         Worker& w = workers[static_cast<size_t>(worker)];
         // The band's rays form a grid of samples × samples per pixel, cast row by row.
-        const int width = x1 - x0, columns = width * samples, rows = (y1 - y0) * samples;
-        w.above.assign(static_cast<size_t>(columns), kNoHit);
-        w.current.assign(static_cast<size_t>(columns), kNoHit);
+        const int width = x1 - x0, rows = (y1 - y0) * samples;
+        w.above.assign(static_cast<size_t>(columns + 2), kNoHit);
+        w.current.assign(static_cast<size_t>(columns + 2), kNoHit);
         w.sums.resize(static_cast<size_t>(width * (y1 - y0)));  // set by a pixel's first hit
         w.hit_samples.assign(w.sums.size(), 0);
         Vec3 base, step;
@@ -104,8 +118,16 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
           caster.begin_row(base, step);
           double s_min, s_max;  // rays outside miss the clip volume
           caster.row_extent(s_min, s_max);
-          double* t = w.current.data();
-          const double* up = w.above.data();
+          // The columns whose rays may meet it, [begin, end) (ray_s increases).
+          const auto first_ray = ray_s.begin(), last_ray = ray_s.begin() + columns;
+          const int begin =
+              static_cast<int>(std::lower_bound(first_ray, last_ray, s_min) - first_ray);
+          const int end = std::max(
+              begin, static_cast<int>(std::upper_bound(first_ray, last_ray, s_max) - first_ray));
+          double* t = w.current.data() + 2;
+          const double* up = w.above.data() + 2;
+          std::fill(t, t + begin, kNoHit);
+          std::fill(t + end, t + columns, kNoHit);
           Color* sums = &w.sums[static_cast<size_t>(row_of_pixels * width)];
           int* hit_samples = &w.hit_samples[static_cast<size_t>(row_of_pixels * width)];
           // A pixel's colour is the sum of its samples' colours, added in the order cast.
@@ -115,24 +137,21 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
           // The rays are cast in packets of four (SurfaceRayCaster::prepare_in_row): each hit
           // is found at once, since the next ray's guess depends on it, and the packet's
           // normals and colours are computed together once its rays are cast.
-          int packet_left = 0, packet_column = 0;  // rays left in the packet, its first ray
-          auto finish_packet = [&] {
+          auto finish_packet = [&](int first) {
             const int bits = caster.packet_hits(hits);
             for (int k = 0; k < 4; ++k) {
               if (!((bits >> k) & 1)) continue;
               const SurfaceHit& h = hits[k];
-              const int column = packet_column + k;
-              const double s = x0 + column / samples +
-                               offsets[static_cast<size_t>(column % samples)];
+              const size_t column = static_cast<size_t>(first + k);
               ++w.hits;
               w.singular += h.singular;
               const int q = queue.size++;
               for (int j = 0; j < 3; ++j) {
                 queue.n[j][q] = h.normal[j];
-                queue.ray[j][q] = std::fma(s, step[j], base[j]);
+                queue.ray[j][q] = std::fma(ray_s[column], step[j], base[j]);
               }
               queue.front[q] = h.front;
-              queue.pixel[q] = column / samples;
+              queue.pixel[q] = ray_pixel[column];
               if (queue.size == 4) {
                 Color colors[4];
                 shader.shade_rays4(queue.n, queue.ray, queue.front, colors);
@@ -141,28 +160,20 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
               }
             }
           };
-          for (int x = x0, c = 0; x < x1; ++x)
-            for (int i = 0; i < samples; ++i, ++c) {
-              const double s = x + offsets[static_cast<size_t>(i)];
-              t[c] = kNoHit;
-              if (s < s_min || s > s_max) continue;
-              if (--packet_left <= 0) {
-                finish_packet();
-                double next[4];
-                for (int k = 0; k < 4; ++k) {
-                  const int ck = c + k;
-                  next[k] = x0 + ck / samples + offsets[static_cast<size_t>(ck % samples)];
-                }
-                caster.prepare_in_row(next);
-                packet_left = 4;
-                packet_column = c;
+          for (int first = begin; first < end; first += 4) {
+            // The rays the packet proves to miss need no casting.
+            const int misses = caster.prepare_in_row(
+                std::span<const double>(&ray_s[static_cast<size_t>(first)], 4));
+            for (int c = first; c < std::min(first + 4, end); ++c) {
+              if ((misses >> (c - first)) & 1) {
+                t[c] = kNoHit;
+                continue;
               }
-              const RootGuess guess =
-                  guess_from_neighbours(c > 0 ? t[c - 1] : kNoHit, c > 1 ? t[c - 2] : kNoHit,
-                                        up[c], c > 0 ? up[c - 1] : kNoHit);
-              caster.first_hit_in_row(s, guess, t[c]);
+              const RootGuess guess = guess_from_neighbours(t[c - 1], t[c - 2], up[c], up[c - 1]);
+              caster.first_hit_in_row(ray_s[static_cast<size_t>(c)], guess, t[c]);
             }
-          finish_packet();
+            finish_packet(first);
+          }
           // The row's last hits, one by one (the same colours as shade_rays4).
           for (int q = 0; q < queue.size; ++q)
             add(queue.pixel[q],

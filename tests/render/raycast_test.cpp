@@ -346,7 +346,7 @@ TEST_P(CatalogRays, RowNormalsAgreeWithTheFieldsGradient) {
 /// Rays cast in packets of four (prepare_in_row, vectorized where the CPU allows), whether
 /// completed one by one (intersect_in_row) or four at a time (first_hit_in_row, then
 /// packet_hits), must give the same bits as rays cast alone: hit, point, normal, side and
-/// singularity.
+/// singularity. The rays that prepare_in_row reports as misses must miss.
 TEST_P(CatalogRays, PacketsCastTheSameAsSingleRays) {
   const Surface surface = make_surface(*find_catalog_entry(GetParam()));
   const Box3 box = surface.bounds();
@@ -374,13 +374,13 @@ TEST_P(CatalogRays, PacketsCastTheSameAsSingleRays) {
       single.begin_row(base, step);
       double last = NAN;
       SurfaceHit expected[4];
-      int expected_bits = 0;
+      int expected_bits = 0, reported_misses = 0;
       for (int i = 0; i < kRaysPerRow; ++i) {
         const double s = i + 0.5;
         if (i % 4 == 0) {
           const double next[4] = {s, s + 1, s + 2, s + 3};
-          packets.prepare_in_row(next);
-          deferred.prepare_in_row(next);
+          reported_misses = packets.prepare_in_row(next);
+          ASSERT_EQ(deferred.prepare_in_row(next), reported_misses);
         }
         RootGuess guess;
         if (!std::isnan(last)) guess = {last, 1e-3 * last};
@@ -390,6 +390,9 @@ TEST_P(CatalogRays, PacketsCastTheSameAsSingleRays) {
         double t = NAN;
         ASSERT_EQ(got, deferred.first_hit_in_row(s, guess, t)) << "ray " << i;
         last = got ? a.t : NAN;
+        if ((reported_misses >> (i % 4)) & 1) {
+          EXPECT_FALSE(got) << "ray " << i << " was reported to miss";
+        }
         if (got) {
           ++hits;
           expect_same(a, b, i);
@@ -458,6 +461,67 @@ TEST(Raycast, HitsDoubleSphereAlongTangentRay) {
   const std::optional<double> t = caster.first_hit(Vec3(1, 0, 0));
   ASSERT_TRUE(t);
   EXPECT_NEAR(*t, 5.0, 1e-4);  // a quadruple root: accurate to the fourth root of rounding
+}
+
+/// Rows of rays from (-5, 0, 0) that sweep ever more finely across the rays tangent at z =
+/// `tangent_z` to a unit sphere on the x axis: hit or miss is decided by the zero band near
+/// the double root (or the quadruple root of a squared sphere). `packets` decides most misses
+/// four rays at a time; it must decide each ray as `single` does alone, and report only rays
+/// that miss. Counts the hits and misses.
+void sweep_across_tangency(SurfaceRayCaster& packets, SurfaceRayCaster& single, double tangent_z,
+                           int& hits, int& misses) {
+  for (const double scale : {1e-2, 1e-3, 1e-5, 1e-8, 1e-11, 1e-14}) {
+    // Directions (1, 0, z): s < 0 hits, s > 0 misses.
+    const Vec3 base(1, 0, tangent_z), step(0, 0, scale);
+    packets.begin_row(base, step);
+    single.begin_row(base, step);
+    for (int i = -64; i < 64; i += 4) {
+      const double rays[4] = {i + 0.5, i + 1.5, i + 2.5, i + 3.5};
+      const int reported = packets.prepare_in_row(rays);
+      for (int k = 0; k < 4; ++k) {
+        double t = NAN, expected = NAN;
+        const bool got = packets.first_hit_in_row(rays[k], {}, t);
+        ASSERT_EQ(got, single.first_hit_in_row(rays[k], {}, expected))
+            << "scale " << scale << ", s " << rays[k];
+        if (got) {
+          EXPECT_EQ(t, expected) << "scale " << scale << ", s " << rays[k];
+        }
+        if ((reported >> k) & 1) {
+          EXPECT_FALSE(got) << "scale " << scale << ", s " << rays[k];
+        }
+        hits += got;
+        misses += !got;
+      }
+    }
+  }
+}
+
+TEST(Raycast, PacketsCastTheSameAsSingleRaysAcrossTangency) {
+  // Spheres about the origin, where the tangent point is the middle of the clipped segment,
+  // and about (0.5, 0, 0), where it is not; plain and squared.
+  struct Case {
+    const char* equation;
+    double tangent_z;  // 1 / sqrt(distance² − 1), the eye at `distance` from the centre
+  };
+  const Case cases[] = {{"x^2 + y^2 + z^2 - 1", 1 / std::sqrt(24.0)},
+                        {"(x^2 + y^2 + z^2 - 1)^2", 1 / std::sqrt(24.0)},
+                        {"(x - 0.5)^2 + y^2 + z^2 - 1", 1 / std::sqrt(29.25)},
+                        {"((x - 0.5)^2 + y^2 + z^2 - 1)^2", 1 / std::sqrt(29.25)}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.equation);
+    const Surface s = equation_surface(c.equation, 2);
+    const Vec3 eye(-5, 0, 0);
+    SurfaceRayCaster packets(s, eye), single(s, eye);
+    int hits = 0, misses = 0;
+    sweep_across_tangency(packets, single, c.tangent_z, hits, misses);
+    EXPECT_GT(hits, 100);
+    EXPECT_GT(misses, 100);
+    // A tolerance so coarse that the search decides parts before the packets stop splitting.
+    RaycastOptions coarse;
+    coarse.roots.tolerance = 0.3;
+    SurfaceRayCaster coarse_packets(s, eye, coarse), coarse_single(s, eye, coarse);
+    sweep_across_tangency(coarse_packets, coarse_single, c.tangent_z, hits, misses);
+  }
 }
 
 TEST(Raycast, ReportsWhichSideTheEyeIsOn) {

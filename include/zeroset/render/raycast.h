@@ -70,11 +70,14 @@ class SurfaceRayCaster {
   void row_extent(double& s_min, double& s_max) const;
   /// Starts a packet of four rays of the row at s[0..3] (nothing when s has another size).
   /// With AVX2, on the exact path and up to degree 6, their straight-line parts are done four
-  /// rays per instruction: here the clip, each ray's polynomial, its rounding band and its
-  /// shift to the clipped interval; in packet_hits the normals. The root isolation stays per
-  /// ray, in intersect_in_row or first_hit_in_row. Every result is the same, bit for bit, as
-  /// without packets. Valid until the next call or begin_row.
-  void prepare_in_row(std::span<const double> s);
+  /// rays per instruction: here the clip, each ray's polynomial, its rounding band, its
+  /// shift to the clipped interval and the first levels of the root isolation, which prove
+  /// most misses; in packet_hits the normals. The rest of the root isolation stays per ray,
+  /// in intersect_in_row or first_hit_in_row. Every result is the same, bit for bit, as
+  /// without packets. Returns the rays found to miss here (bit i: the ray at s[i]), for
+  /// which first_hit_in_row and intersect_in_row would report no hit, so callers may skip
+  /// them; 0 without AVX2. Valid until the next call or begin_row.
+  int prepare_in_row(std::span<const double> s);
   /// The parameter t of the first hit of the row's ray at s, as intersect_in_row, without the
   /// normal: when s is in the packet, the hit is kept for packet_hits. False when it misses.
   bool first_hit_in_row(double s, const RootGuess& guess, double& t);
