@@ -3,6 +3,7 @@
 // sign configuration of a cube and every resolution of its ambiguous faces, the oriented
 // cycles of edge points that bound the surface inside the cube.
 #include <array>
+#include <bit>
 #include <cstddef>
 #include <cstdint>
 
@@ -29,6 +30,12 @@ struct CellPolygons {
   std::uint8_t cycle_count = 0;
   std::array<std::uint8_t, 4> cycle_length{};
   std::array<std::uint8_t, 12> edges{};  // cycles one after the other, in orientation order
+  // Bit b of chords[s + a], for the cycle whose points start at edges[s]: points a and b of
+  // that cycle may be joined by a triangle side. Neighbours on the cycle always may; other
+  // pairs may not when both points lie on one cube face, since such a diagonal lies in the
+  // face and the neighbouring cube could use it too (a non-manifold edge). Tabulated here
+  // so the triangulation of a cell does not test edge pairs.
+  std::array<std::uint16_t, 12> chords{};
 };
 
 // Faces whose corners alternate in sign (bit f for face f) for a case (bit k: corner k ≥ 0).
@@ -55,12 +62,33 @@ inline constexpr std::array<std::uint16_t, 256> kCrossingEdges = [] {
         mask[static_cast<std::size_t>(c)] = static_cast<std::uint16_t>(mask[static_cast<std::size_t>(c)] | 1u << e);
   return mask;
 }();
+// The table holds, for each case, one entry per resolution of its ambiguous faces (656 in
+// all): case c's entries start at kCaseFirst[c], and the resolution is numbered by the
+// ambiguous faces in increasing order, bit t set when the t-th one joins its positive corners.
+inline constexpr std::array<std::uint16_t, 257> kCaseFirst = [] {
+  std::array<std::uint16_t, 257> first{};
+  for (std::size_t c = 0; c < 256; ++c)
+    first[c + 1] = static_cast<std::uint16_t>(first[c] + (1 << std::popcount(kAmbiguousFaces[c])));
+  return first;
+}();
+inline constexpr int kCellEntries = kCaseFirst[256];
+// The number of a resolution among a case's entries: the bits of `connected` (bit f set when
+// the positive corners of face f are joined) at the case's ambiguous faces, packed.
+constexpr int ambiguous_rank(int cube_case, int connected) {
+  const int amb = kAmbiguousFaces[static_cast<std::size_t>(cube_case)];
+  int rank = 0, t = 0;
+  for (int f = 0; f < 6; ++f)
+    if ((amb >> f) & 1) rank |= ((connected >> f) & 1) << t++;
+  return rank;
+}
+// The whole table (kCellEntries entries), built at compile time.
+const CellPolygons* cell_polygon_table();
 // The cycles for a case; `connected` has bit f set when the positive corners of face f are
 // joined (saddle value ≥ 0). Bits of faces that are not ambiguous are ignored.
-const CellPolygons& cell_polygons(int cube_case, int connected);
-// The whole table, for loops that look up many cells: cell_polygons(c, d) is
-// table[c * 64 + (d & ambiguous_faces(c))].
-const CellPolygons* cell_polygon_table();
+inline const CellPolygons& cell_polygons(int cube_case, int connected) {
+  return cell_polygon_table()[kCaseFirst[static_cast<std::size_t>(cube_case)] +
+                              ambiguous_rank(cube_case, connected)];
+}
 // Bit e2 of kFaceMates[e1] is set when edges e1 and e2 lie on one cube face.
 inline constexpr std::array<std::uint16_t, 12> kFaceMates = [] {
   std::array<std::uint16_t, 12> mates{};
@@ -80,7 +108,9 @@ inline constexpr std::array<std::uint16_t, 12> kFaceMates = [] {
 }();
 
 // True when both edges lie on one cube face (a diagonal between them would lie in that face).
-inline bool edges_share_face(int e1, int e2) { return (kFaceMates[e1] >> e2) & 1; }
+constexpr bool edges_share_face(int e1, int e2) {
+  return (kFaceMates[static_cast<std::size_t>(e1)] >> e2) & 1;
+}
 
 // Asymptotic decider on a face's canonical corner values: true when the positive corners
 // are connected through the face (the bilinear saddle value is ≥ 0).

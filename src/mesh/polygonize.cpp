@@ -5,10 +5,14 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <fmt/core.h>
@@ -117,12 +121,22 @@ bool use_sparse(const Grid& g, const PolygonizeOptions& o) {
          static_cast<double>(o.sparse_auto_nodes);
 }
 
+// a·b + c, fused where the processor has fused multiply-adds. Scalar code that must give the
+// same bits as the vector code next to it uses this, since the vector code fuses.
+inline double madd(double a, double b, double c) {
+#if defined(__FMA__)
+  return std::fma(a, b, c);
+#else
+  return a * b + c;
+#endif
+}
+
 // A polynomial F restricted to the grid lines along one axis. Along the line through grid
 // coordinates (u, v) of the other two axes (in increasing axis order), F is a univariate
 // polynomial in t, the number of cells from the middle node of the whole line: G(t, u, v) =
 // F with the axis coordinate coord(mid) + h·t, expanded once. Its coefficient of t^m is a
-// polynomial in u whose coefficients depend on v alone; those are kept for the last v, since
-// callers walk lines with v fixed (a layer of rows, the edges of one row), so a line then
+// polynomial in u whose coefficients depend on v alone; those are kept for the last v (set_v),
+// since callers walk lines with v fixed (a layer of rows, the edges of one row), so a line then
 // costs one Horner pass in u per coefficient. A node gets the bit-identical value whichever
 // caller (a slab, a brick) evaluates it along this axis with the same u and v.
 class LineRestriction {
@@ -148,24 +162,48 @@ class LineRestriction {
   /// t of grid index `index` along the axis.
   double t_of(long long index) const { return static_cast<double>(index - mid_); }
 
-  /// c[0..degree] of F along the line through (u, v).
-  void coefficients(double u, double v, double* c) {
+  /// Prepares the lines through this v (kept until another v is set).
+  void set_v(double v) {
+    if (have_v_ && v == v_) return;
     const size_t n = static_cast<size_t>(degree_ + 1);
-    if (!have_v_ || v != v_) {
-      v_powers_[0] = 1;
-      for (size_t a = 1; a < n; ++a) v_powers_[a] = v_powers_[a - 1] * v;
-      std::fill(in_u_.begin(), in_u_.end(), 0.0);
-      for (const Term& m : terms_)
-        in_u_[static_cast<size_t>(m.t) * n + static_cast<size_t>(m.u)] +=
-            m.c * v_powers_[static_cast<size_t>(m.v)];
-      v_ = v, have_v_ = true;
-    }
+    v_powers_[0] = 1;
+    for (size_t a = 1; a < n; ++a) v_powers_[a] = v_powers_[a - 1] * v;
+    std::fill(in_u_.begin(), in_u_.end(), 0.0);
+    for (const Term& m : terms_)
+      in_u_[static_cast<size_t>(m.t) * n + static_cast<size_t>(m.u)] +=
+          m.c * v_powers_[static_cast<size_t>(m.v)];
+    v_ = v, have_v_ = true;
+  }
+
+  /// c[m · stride], m = 0..degree: F along the line through (u, v), v the last one set.
+  void coefficients_at(double u, double* c, size_t stride) const {
+    const size_t n = static_cast<size_t>(degree_ + 1);
     for (size_t m = 0; m < n; ++m) {
       const double* d = &in_u_[m * n];
       double sum = d[n - 1 - m];  // u's degree in the t^m coefficient is at most degree − m
-      for (size_t a = n - 1 - m; a-- > 0;) sum = sum * u + d[a];
-      c[m] = sum;
+      for (size_t a = n - 1 - m; a-- > 0;) sum = madd(sum, u, d[a]);
+      c[m * stride] = sum;
     }
+  }
+
+#if defined(__AVX2__) && defined(__FMA__)
+  /// The same for four lines through the last v at once, u's lanes: c[m · stride + lane].
+  /// Each lane gets the bits of the scalar form.
+  void coefficients_at(__m256d u, double* c, size_t stride) const {
+    const size_t n = static_cast<size_t>(degree_ + 1);
+    for (size_t m = 0; m < n; ++m) {
+      const double* d = &in_u_[m * n];
+      __m256d sum = _mm256_broadcast_sd(&d[n - 1 - m]);
+      for (size_t a = n - 1 - m; a-- > 0;) sum = _mm256_fmadd_pd(sum, u, _mm256_broadcast_sd(&d[a]));
+      _mm256_storeu_pd(c + m * stride, sum);
+    }
+  }
+#endif
+
+  /// c[0..degree] of F along the line through (u, v).
+  void coefficients(double u, double v, double* c) {
+    set_v(v);
+    coefficients_at(u, c, 1);
   }
 
  private:
@@ -182,475 +220,7 @@ class LineRestriction {
   bool have_v_ = false;
 };
 
-// Samples F at runs of grid nodes along x: through the line restriction for polynomials
-// (vectorised Horner), otherwise through the field over structure-of-arrays rows.
-class RowSampler {
- public:
-  RowSampler(const Field& field, const Grid& grid, const Polynomial* poly)
-      : eval_(field), grid_(grid) {
-    if (!poly) return;
-    line_.emplace(*poly, grid, 0);
-    coeffs_.resize(static_cast<size_t>(std::max(0, line_->degree()) + 1));
-    t_.resize(static_cast<size_t>(grid_.nx()));
-    for (long long i = 0; i < grid_.nx(); ++i) t_[static_cast<size_t>(i)] = line_->t_of(i);
-  }
-
-  void sample(long long i0, long long count, long long j, long long k, double* out) {
-    if (line_ && line_->degree() >= 0) {
-      line_->coefficients(grid_.coord(1, j), grid_.coord(2, k), coeffs_.data());
-      // Horner's rule on blocks of nodes held in registers; every node sees the same
-      // operations in the same order (fused multiply-adds where the processor has them),
-      // whichever block it falls in, so a node's value does not depend on the run.
-      const int degree = line_->degree();
-      const double* t = &t_[static_cast<size_t>(i0)];
-      const double* c = coeffs_.data();
-      long long n = 0;
-#if defined(__AVX2__) && defined(__FMA__)
-      // Four independent chains of four nodes hide the latency of the multiply-adds.
-      for (; n + 16 <= count; n += 16) {
-        __m256d acc[4], tt[4];
-        for (int q = 0; q < 4; ++q) acc[q] = _mm256_set1_pd(c[degree]), tt[q] = _mm256_loadu_pd(t + n + 4 * q);
-        for (int m = degree - 1; m >= 0; --m) {
-          const __m256d cm = _mm256_set1_pd(c[m]);
-          for (int q = 0; q < 4; ++q) acc[q] = _mm256_fmadd_pd(acc[q], tt[q], cm);
-        }
-        for (int q = 0; q < 4; ++q) _mm256_storeu_pd(out + n + 4 * q, acc[q]);
-      }
-      for (; n < count; ++n) {
-        double v = c[degree];
-        for (int m = degree - 1; m >= 0; --m) v = std::fma(v, t[n], c[m]);
-        out[n] = v;
-      }
-#else
-      for (; n < count; ++n) {
-        double v = c[degree];
-        for (int m = degree - 1; m >= 0; --m) v = v * t[n] + c[m];
-        out[n] = v;
-      }
-#endif
-      return;
-    }
-    if (line_) {  // the zero polynomial
-      std::fill(out, out + count, 0.0);
-      return;
-    }
-    x_.resize(static_cast<size_t>(count));
-    y_.assign(static_cast<size_t>(count), grid_.coord(1, j));
-    z_.assign(static_cast<size_t>(count), grid_.coord(2, k));
-    for (long long n = 0; n < count; ++n) x_[static_cast<size_t>(n)] = grid_.coord(0, i0 + n);
-    eval_.values(x_, y_, z_, std::span<double>(out, static_cast<size_t>(count)));
-  }
-
- private:
-  Evaluator eval_;
-  const Grid& grid_;
-  std::optional<LineRestriction> line_;
-  std::vector<double> coeffs_, t_, x_, y_, z_;
-};
-
 bool is_positive(double v) { return !(v < 0); }  // NaN counts as positive
-
-// One crossing edge: its lower node, axis and the field values at both ends.
-struct Crossing {
-  long long i, j, k;
-  int axis;
-  double fa, fb;
-};
-
-// Where the sign changes on the edge by linear interpolation, as a fraction of the edge.
-double linear_fraction(double fa, double fb) {
-  const double s = fa / (fa - fb);
-  return std::isfinite(s) ? std::clamp(s, 0.0, 1.0) : 0.5;
-}
-
-// The Illinois variant of regula falsi on one edge, in the edge's fraction s ∈ [0, 1]: the
-// bracket [lo, hi] keeps opposite signs, and the end value kept twice in a row is halved so
-// the bracket shrinks from both sides. Robust where the surface touches the edge (a double
-// root), where Newton's method would crawl.
-struct IllinoisBracket {
-  double lo = 0, hi = 1, f_lo = 0, f_hi = 0;
-  int last_side = 0;
-
-  IllinoisBracket() = default;
-  IllinoisBracket(double fa, double fb) : f_lo(fa), f_hi(fb) {}
-
-  /// Takes F at s (not 0) and returns the next s; sets `done` once s no longer moves.
-  double next(double s, double f, bool& done) {
-    if (is_positive(f) == is_positive(f_hi)) {
-      hi = s, f_hi = f;
-      if (last_side == 1) f_lo *= 0.5;
-      last_side = 1;
-    } else {
-      lo = s, f_lo = f;
-      if (last_side == -1) f_hi *= 0.5;
-      last_side = -1;
-    }
-    // Converged, the estimate may round onto the end just set (s): that ends the search,
-    // so only an estimate outside the closed bracket falls back to bisection.
-    double n = hi - f_hi * (hi - lo) / (f_hi - f_lo);
-    if (!std::isfinite(n) || n < std::min(lo, hi) || n > std::max(lo, hi)) n = 0.5 * (lo + hi);
-    done = std::abs(n - s) <= 1e-13 || std::abs(hi - lo) <= 1e-15;
-    return n;
-  }
-};
-
-// Places one vertex on each crossing edge: linear interpolation, then refinement on F
-// restricted to the edge by the Illinois method. Polynomials: F along the edge is a
-// univariate polynomial (its grid line's restriction), so each step is one Horner
-// evaluation. Other fields: all edges of a batch are evaluated together through the
-// field's tape. One per worker.
-class VertexPlacer {
- public:
-  VertexPlacer(const Field& field, const Grid& grid, const Polynomial* poly, int steps)
-      : eval_(field), grid_(grid), steps_(steps) {
-    if (!poly || poly->degree() < 1) return;
-    for (int a = 0; a < 3; ++a) lines_[static_cast<size_t>(a)].emplace(*poly, grid, a);
-    coeffs_.resize(static_cast<size_t>(poly->degree() + 1));
-  }
-
-  /// False when vertices stay at the linear interpolation (no refinement steps).
-  bool refines() const { return steps_ > 0; }
-
-  void place(std::span<const Crossing> in, Vec3* out, long long& evaluations) {
-    if (lines_[0]) place_polynomial(in, out, evaluations);
-    else place_batched(in, out, evaluations);
-  }
-
- private:
-  Vec3 point(const Crossing& c, double s) const {
-    Vec3 p = grid_.node(c.i, c.j, c.k);
-    p[c.axis] += std::clamp(s, 0.0, 1.0) * grid_.h;
-    return p;
-  }
-
-  // Edges go through in blocks of kLanes, refined in lockstep: each step is a chain of
-  // dependent multiply-adds and a division, so independent edges side by side keep the
-  // processor busy (and the Horner loop vectorises across lanes). Finished lanes stay put.
-  static constexpr int kLanes = 8;
-
-  void place_polynomial(std::span<const Crossing> in, Vec3* out, long long& evaluations) {
-    const int degree = lines_[0]->degree();
-    const size_t nc = static_cast<size_t>(degree + 1);
-    lane_coeffs_.resize(nc * kLanes);  // [m · kLanes + lane]
-    double* C = lane_coeffs_.data();
-    long long have[3] = {-1, -1, -1};  // the line whose coefficients are in coeffs_
-    int have_axis = -1;
-    for (size_t b = 0; b < in.size(); b += kLanes) {
-      const int lanes = static_cast<int>(std::min<size_t>(kLanes, in.size() - b));
-      double s[kLanes], t0[kLanes];
-      bool active[kLanes];
-      std::array<IllinoisBracket, kLanes> bracket;
-      int running = 0;
-      for (int q = 0; q < kLanes; ++q) {
-        const Crossing& x = in[b + static_cast<size_t>(q < lanes ? q : 0)];
-        s[q] = linear_fraction(x.fa, x.fb);
-        t0[q] = 0;
-        active[q] = q < lanes && steps_ > 0 && std::isfinite(x.fa) && std::isfinite(x.fb);
-        if (!active[q]) {
-          for (size_t m = 0; m < nc; ++m) C[m * kLanes + static_cast<size_t>(q)] = 0;
-          continue;
-        }
-        // The other two grid indices fix the line; consecutive x edges share it.
-        const long long idx[3] = {x.i, x.j, x.k};
-        const int ua = x.axis == 0 ? 1 : 0, va = x.axis == 2 ? 1 : 2;
-        LineRestriction& line = *lines_[static_cast<size_t>(x.axis)];
-        if (x.axis != have_axis || idx[ua] != have[ua] || idx[va] != have[va]) {
-          line.coefficients(grid_.coord(ua, idx[ua]), grid_.coord(va, idx[va]), coeffs_.data());
-          have[0] = x.i, have[1] = x.j, have[2] = x.k, have_axis = x.axis;
-        }
-        for (size_t m = 0; m < nc; ++m) C[m * kLanes + static_cast<size_t>(q)] = coeffs_[m];
-        t0[q] = line.t_of(idx[x.axis]);
-        bracket[static_cast<size_t>(q)] = IllinoisBracket(x.fa, x.fb);
-        ++running;
-      }
-#if defined(__AVX2__) && defined(__FMA__)
-      if (running > 0) evaluations += illinois_lanes_avx(C, degree, t0, bracket, active, s);
-#else
-      for (int it = 0; it < steps_ && running > 0; ++it) {
-        double f[kLanes], t[kLanes];
-        for (int q = 0; q < kLanes; ++q) t[q] = t0[q] + s[q], f[q] = C[static_cast<size_t>(degree) * kLanes + static_cast<size_t>(q)];
-        for (int m = degree - 1; m >= 0; --m)
-          for (int q = 0; q < kLanes; ++q) f[q] = f[q] * t[q] + C[static_cast<size_t>(m) * kLanes + static_cast<size_t>(q)];
-        for (int q = 0; q < kLanes; ++q) {
-          if (!active[q]) continue;
-          ++evaluations;
-          bool done = f[q] == 0 || !std::isfinite(f[q]);
-          if (!done) s[q] = bracket[static_cast<size_t>(q)].next(s[q], f[q], done);
-          if (done) active[q] = false, --running;
-        }
-      }
-#endif
-      for (int q = 0; q < lanes; ++q) out[b + static_cast<size_t>(q)] = point(in[b + static_cast<size_t>(q)], s[q]);
-    }
-  }
-
-#if defined(__AVX2__) && defined(__FMA__)
-  // The lockstep iteration above, four lanes per vector: IllinoisBracket::next with masks
-  // instead of branches, the same operations in the same order, so vertices are bit-identical
-  // to the scalar loop's. Returns the evaluations of active lanes.
-  long long illinois_lanes_avx(const double* C, int degree, const double* t0,
-                               const std::array<IllinoisBracket, kLanes>& bracket,
-                               const bool* active, double* s) const {
-    static_assert(kLanes % 4 == 0);
-    long long evaluations = 0;
-    for (int g = 0; g < kLanes; g += 4) {
-      double lo_[4], hi_[4], flo_[4], fhi_[4], last_[4], act_[4];
-      for (int q = 0; q < 4; ++q) {
-        const IllinoisBracket& br = bracket[static_cast<size_t>(g + q)];
-        lo_[q] = br.lo, hi_[q] = br.hi, flo_[q] = br.f_lo, fhi_[q] = br.f_hi;
-        last_[q] = br.last_side;
-        act_[q] = active[g + q] ? -1.0 : 0.0;  // a set sign bit marks an active lane
-      }
-      __m256d lo = _mm256_loadu_pd(lo_), hi = _mm256_loadu_pd(hi_);
-      __m256d flo = _mm256_loadu_pd(flo_), fhi = _mm256_loadu_pd(fhi_);
-      __m256d last = _mm256_loadu_pd(last_), sv = _mm256_loadu_pd(s + g);
-      __m256d act = _mm256_cmp_pd(_mm256_loadu_pd(act_), _mm256_setzero_pd(), _CMP_LT_OQ);
-      const __m256d tg = _mm256_loadu_pd(t0 + g);
-      const __m256d zero = _mm256_setzero_pd(), half = _mm256_set1_pd(0.5);
-      const __m256d one = _mm256_set1_pd(1.0), minus_one = _mm256_set1_pd(-1.0);
-      const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
-      auto finite = [&](__m256d x) { return _mm256_cmp_pd(_mm256_sub_pd(x, x), zero, _CMP_EQ_OQ); };
-      for (int it = 0; it < steps_; ++it) {
-        const int mask = _mm256_movemask_pd(act);
-        if (!mask) break;
-        evaluations += std::popcount(static_cast<unsigned>(mask));
-        const __m256d t = _mm256_add_pd(tg, sv);
-        __m256d f = _mm256_loadu_pd(C + static_cast<size_t>(degree) * kLanes + static_cast<size_t>(g));
-        for (int m = degree - 1; m >= 0; --m)
-          f = _mm256_fmadd_pd(f, t, _mm256_loadu_pd(C + static_cast<size_t>(m) * kLanes + static_cast<size_t>(g)));
-        // An exact root or a non-finite value ends the lane where it is.
-        const __m256d stop = _mm256_or_pd(_mm256_cmp_pd(f, zero, _CMP_EQ_OQ),
-                                          _mm256_andnot_pd(finite(f), act));
-        const __m256d step = _mm256_andnot_pd(stop, act);
-        // Which end s replaces: the one whose value has f's sign (is_positive alike).
-        const __m256d same = _mm256_xor_pd(
-            _mm256_xor_pd(_mm256_cmp_pd(f, zero, _CMP_NLT_UQ), _mm256_cmp_pd(fhi, zero, _CMP_NLT_UQ)),
-            _mm256_castsi256_pd(_mm256_set1_epi64x(-1)));
-        const __m256d up = _mm256_and_pd(step, same), down = _mm256_andnot_pd(same, step);
-        const __m256d halve_lo = _mm256_and_pd(up, _mm256_cmp_pd(last, one, _CMP_EQ_OQ));
-        const __m256d halve_hi = _mm256_and_pd(down, _mm256_cmp_pd(last, minus_one, _CMP_EQ_OQ));
-        flo = _mm256_blendv_pd(flo, _mm256_mul_pd(flo, half), halve_lo);
-        fhi = _mm256_blendv_pd(fhi, _mm256_mul_pd(fhi, half), halve_hi);
-        hi = _mm256_blendv_pd(hi, sv, up), fhi = _mm256_blendv_pd(fhi, f, up);
-        lo = _mm256_blendv_pd(lo, sv, down), flo = _mm256_blendv_pd(flo, f, down);
-        last = _mm256_blendv_pd(_mm256_blendv_pd(last, minus_one, down), one, up);
-        __m256d n = _mm256_sub_pd(hi, _mm256_div_pd(_mm256_mul_pd(fhi, _mm256_sub_pd(hi, lo)),
-                                                    _mm256_sub_pd(fhi, flo)));
-        const __m256d outside = _mm256_or_pd(
-            _mm256_andnot_pd(finite(n), step),
-            _mm256_or_pd(_mm256_cmp_pd(n, _mm256_min_pd(lo, hi), _CMP_LT_OQ),
-                         _mm256_cmp_pd(n, _mm256_max_pd(lo, hi), _CMP_GT_OQ)));
-        n = _mm256_blendv_pd(n, _mm256_mul_pd(half, _mm256_add_pd(lo, hi)), outside);
-        const __m256d done = _mm256_or_pd(
-            _mm256_cmp_pd(_mm256_and_pd(_mm256_sub_pd(n, sv), abs_mask), _mm256_set1_pd(1e-13), _CMP_LE_OQ),
-            _mm256_cmp_pd(_mm256_and_pd(_mm256_sub_pd(hi, lo), abs_mask), _mm256_set1_pd(1e-15), _CMP_LE_OQ));
-        sv = _mm256_blendv_pd(sv, n, step);
-        act = _mm256_andnot_pd(_mm256_or_pd(stop, _mm256_and_pd(done, step)), act);
-      }
-      _mm256_storeu_pd(s + g, sv);
-    }
-    return evaluations;
-  }
-#endif
-
-  void place_batched(std::span<const Crossing> in, Vec3* out, long long& evaluations) {
-    const size_t n = in.size();
-    brackets_.clear();
-    t_.resize(n);
-    active_.resize(n);
-    for (size_t e = 0; e < n; ++e) {
-      brackets_.emplace_back(in[e].fa, in[e].fb);
-      t_[e] = linear_fraction(in[e].fa, in[e].fb);
-      active_[e] = e;
-    }
-    for (int it = 0; it < steps_ && !active_.empty(); ++it) {
-      const size_t m = active_.size();
-      x_.resize(m), y_.resize(m), z_.resize(m), f_.resize(m);
-      for (size_t q = 0; q < m; ++q) {
-        const Vec3 p = point(in[active_[q]], t_[active_[q]]);
-        x_[q] = p.x(), y_[q] = p.y(), z_[q] = p.z();
-      }
-      eval_.values(x_, y_, z_, f_);
-      evaluations += static_cast<long long>(m);
-      size_t kept = 0;
-      for (size_t q = 0; q < m; ++q) {
-        const size_t e = active_[q];
-        if (f_[q] == 0) continue;  // exact root
-        bool done = false;
-        t_[e] = brackets_[e].next(t_[e], f_[q], done);
-        if (!done) active_[kept++] = e;
-      }
-      active_.resize(kept);
-    }
-    for (size_t e = 0; e < n; ++e) out[e] = point(in[e], t_[e]);
-  }
-
-  Evaluator eval_;
-  const Grid& grid_;
-  int steps_;
-  std::array<std::optional<LineRestriction>, 3> lines_;
-  std::vector<double> coeffs_, lane_coeffs_;
-  std::vector<IllinoisBracket> brackets_;
-  std::vector<double> t_, x_, y_, z_, f_;
-  std::vector<size_t> active_;
-};
-
-// Places a batch of crossings split over the workers (chunks of a few thousand edges).
-void place_vertices_parallel(std::vector<std::unique_ptr<VertexPlacer>>& placers, int workers,
-                             const std::vector<Crossing>& in, Vec3* out, long long& evaluations,
-                             const std::stop_token& stop) {
-  constexpr size_t kChunk = 4096;
-  const long long chunks = static_cast<long long>((in.size() + kChunk - 1) / kChunk);
-  long long evals = 0;
-#pragma omp parallel for num_threads(workers) schedule(dynamic, 1) reduction(+ : evals)
-  for (long long c = 0; c < chunks; ++c) {
-    if (stop.stop_requested()) continue;
-    const size_t b = static_cast<size_t>(c) * kChunk, e = std::min(in.size(), b + kChunk);
-    placers[static_cast<size_t>(detail::worker_index())]->place(
-        std::span<const Crossing>(in.data() + b, e - b), out + b, evals);
-  }
-  evaluations += evals;
-}
-
-// The linear interpolation of the crossing on the edge from node (i, j, k) along `axis`. The
-// triangulation of each cube uses these points (not the refined ones) so that the dense and
-// the sparse path, which refines later, triangulate alike.
-Vec3 linear_point(const Grid& g, long long i, long long j, long long k, int axis, double fa,
-                  double fb) {
-  Vec3 p = g.node(i, j, k);
-  p[axis] += linear_fraction(fa, fb) * g.h;
-  return p;
-}
-
-// Triangulates a cycle of edge points (n ≤ 12) to maximise the smallest triangle quality
-// (mean ratio 4√3·area / Σ edge²), never using a diagonal between two points of one cube
-// face: such a diagonal could also appear in the neighbouring cube and make the edge
-// non-manifold. Emits triangles in cycle order (counter-clockwise seen from F > 0).
-template <class Emit>
-void triangulate_cycle(const std::uint8_t* edges, int n, const Vec3* pos, Emit&& emit) {
-  if (n == 3) {
-    emit(edges[0], edges[1], edges[2]);
-    return;
-  }
-  // Squared distances between the cycle's points, computed once: every triangle's quality
-  // comes from its three sides.
-  double d2[12][12];
-  for (int a = 0; a < n; ++a)
-    for (int b = a + 1; b < n; ++b) d2[a][b] = (pos[edges[b]] - pos[edges[a]]).squaredNorm();
-  // The square of the quality up to a constant factor (it orders triangles alike): with sides
-  // u = b − a, v = c − a, |u × v|² = |u|²|v|² − (u·v)² and 2 u·v = |u|² + |v|² − |c − b|².
-  auto quality = [&](int a, int b, int c) {  // a < b < c
-    const double u = d2[a][b], v = d2[a][c], w = d2[b][c];
-    const double dot = 0.5 * (u + v - w);
-    const double area2 = std::max(0.0, u * v - dot * dot);
-    const double sum = u + v + w;
-    return sum > 0 ? area2 / (sum * sum) : 0.0;
-  };
-  auto allowed = [&](int a, int b) {
-    return b - a == 1 || (a == 0 && b == n - 1) ||
-           !detail::edges_share_face(edges[a], edges[b]);
-  };
-  if (n == 4) {  // the most common cycle: two diagonals, decided as the general case would
-    const double via1 = allowed(1, 3) ? std::min(quality(0, 1, 3), quality(1, 2, 3)) : -1;
-    const double via2 = allowed(0, 2) ? std::min(quality(0, 2, 3), quality(0, 1, 2)) : -1;
-    if (via2 > via1) emit(edges[0], edges[2], edges[3]), emit(edges[0], edges[1], edges[2]);
-    else emit(edges[0], edges[1], edges[3]), emit(edges[1], edges[2], edges[3]);
-    return;
-  }
-  bool ok[12][12];
-  for (int a = 0; a < n; ++a)
-    for (int b = a + 1; b < n; ++b) ok[a][b] = allowed(a, b);
-  double best[12][12];
-  int split[12][12];
-  for (int len = 2; len < n; ++len)
-    for (int a = 0; a + len < n; ++a) {
-      const int b = a + len;
-      best[a][b] = -2;
-      split[a][b] = -1;
-      for (int m = a + 1; m < b; ++m) {
-        double s = ok[a][m] && ok[m][b] ? quality(a, m, b) : -1;
-        if (m - a > 1) s = std::min(s, best[a][m]);
-        if (b - m > 1) s = std::min(s, best[m][b]);
-        if (s > best[a][b]) best[a][b] = s, split[a][b] = m;
-      }
-    }
-  // Explicit stack: (a, b) sub-polygons still to split.
-  int stack_a[12], stack_b[12], top = 0;
-  stack_a[top] = 0, stack_b[top] = n - 1, ++top;
-  while (top > 0) {
-    --top;
-    const int a = stack_a[top], b = stack_b[top];
-    const int m = split[a][b];
-    emit(edges[a], edges[m], edges[b]);
-    if (m - a > 1) stack_a[top] = a, stack_b[top] = m, ++top;
-    if (b - m > 1) stack_a[top] = m, stack_b[top] = b, ++top;
-  }
-}
-
-// The cube's case, its face decisions and its cycles.
-struct CellCase {
-  int cube_case = 0;
-  int ambiguous = 0;
-  const CellPolygons* polys = nullptr;
-};
-
-// `table` is detail::cell_polygon_table(), looked up once by the caller's loop.
-CellCase classify_cell(const double v[8], const CellPolygons* table) {
-  CellCase c;
-  for (int k = 0; k < 8; ++k) c.cube_case |= static_cast<int>(is_positive(v[k])) << k;
-  const int amb = detail::ambiguous_faces(c.cube_case);
-  int connected = 0;
-  if (amb) {  // rare: decide each ambiguous face
-    for (int f = 0; f < 6; ++f) {
-      if (!((amb >> f) & 1)) continue;
-      const auto& q = kFaceCanonical[f];
-      if (detail::positive_corners_connected(v[q[0]], v[q[1]], v[q[2]], v[q[3]]))
-        connected |= 1 << f;
-    }
-    c.ambiguous = std::popcount(static_cast<unsigned>(amb));
-  }
-  c.polys = &table[c.cube_case * 64 + connected];
-  return c;
-}
-
-// Emits the triangles of one cell given the vertex handles and positions of its 12 edges.
-template <class Handle, class Out>
-void emit_cell(const CellPolygons& polys, const Handle* handle, const Vec3* pos, Out& out) {
-  int offset = 0;
-  for (int c = 0; c < polys.cycle_count; ++c) {
-    const int n = polys.cycle_length[c];
-    triangulate_cycle(&polys.edges[offset], n, pos, [&](int e0, int e1, int e2) {
-      out.push_back({handle[e0], handle[e1], handle[e2]});
-    });
-    offset += n;
-  }
-}
-
-using Triangle = std::array<std::uint32_t, 3>;
-
-// ---------------------------------------------------------------------------------------
-// Dense path: every node sampled; vertex ids from per-row prefix counts over bit sets.
-//
-// The grid is cut into slabs of a few cell layers (slab_layers), handled one at a time by a worker
-// from sampling to triangles, so only a slab's values are held (not the whole volume) and
-// they are still in cache when its triangles are made. Vertices are numbered in row order
-// (row = (j, k), then axis, then x), the same order whatever the slabs: a slab numbers the
-// rows of its own node layers from 0 and carries on into the next slab's first layer (the
-// top faces of its last cells), so adding the slab's first global id makes all its ids
-// global. That numbering needs the z edges of that layer, so a slab samples two node
-// layers beyond its own. Slab sizes depend on the grid only, so the mesh does not depend on the
-// thread count.
-
-struct DenseResult {
-  std::vector<Vec3> positions;
-  std::vector<Triangle> triangles;
-};
-
-constexpr long long kSlabLayers = 16;
-
-// Cell layers per slab: kSlabLayers, fewer on small grids so that they still make eight slabs
-// for the workers to share (never fewer than 8 layers: each slab samples two extra layers).
-long long slab_layers(const Grid& g) { return std::clamp<long long>(g.cells[2] / 8, 8, kSlabLayers); }
 
 // Bit i of bits[i / 64] set where values[i] counts as positive (is_positive); returns how many
 // values are NaN. Four (AVX) or two (SSE2) values per compare where available.
@@ -694,6 +264,717 @@ long long sign_bits(const double* values, long long n, std::uint64_t* bits) {
   return nans;
 }
 
+// Samples F at runs of grid nodes along x: through the line restriction for polynomials
+// (vectorised Horner), otherwise through the field over structure-of-arrays rows.
+class RowSampler {
+ public:
+  RowSampler(const Field& field, const Grid& grid, const Polynomial* poly) : grid_(grid) {
+    if (!poly) {
+      eval_.emplace(field);
+      return;
+    }
+    line_.emplace(*poly, grid, 0);
+    coeffs_.resize(static_cast<size_t>(std::max(0, line_->degree()) + 1));
+    t_.resize(static_cast<size_t>(grid_.nx()));
+    for (long long i = 0; i < grid_.nx(); ++i) t_[static_cast<size_t>(i)] = line_->t_of(i);
+  }
+
+  /// F at nodes i0 .. i0 + count − 1 of row (j, k) into out. With `bits`, also their sign bits
+  /// as sign_bits makes them (bit n for node i0 + n), and returns how many values are NaN.
+  long long sample(long long i0, long long count, long long j, long long k, double* out,
+                   std::uint64_t* bits = nullptr) {
+    if (line_ && line_->degree() >= 0) {
+      line_->coefficients(grid_.coord(1, j), grid_.coord(2, k), coeffs_.data());
+      // Horner's rule on blocks of nodes held in registers; every node sees the same
+      // operations in the same order (fused multiply-adds where the processor has them),
+      // whichever block it falls in, so a node's value does not depend on the run.
+      const int degree = line_->degree();
+      const double* t = &t_[static_cast<size_t>(i0)];
+      const double* c = coeffs_.data();
+      long long n = 0;
+#if defined(__AVX2__) && defined(__FMA__)
+      // The sign bits come from the registers too: sixteen nodes are a quarter word.
+      long long nans = 0;
+      if (bits) std::fill(bits, bits + (count + 63) / 64, 0);
+      // Four independent chains of four nodes hide the latency of the multiply-adds.
+      for (; n + 16 <= count; n += 16) {
+        __m256d acc[4], tt[4];
+        for (int q = 0; q < 4; ++q) acc[q] = _mm256_set1_pd(c[degree]), tt[q] = _mm256_loadu_pd(t + n + 4 * q);
+        for (int m = degree - 1; m >= 0; --m) {
+          const __m256d cm = _mm256_set1_pd(c[m]);
+          for (int q = 0; q < 4; ++q) acc[q] = _mm256_fmadd_pd(acc[q], tt[q], cm);
+        }
+        for (int q = 0; q < 4; ++q) _mm256_storeu_pd(out + n + 4 * q, acc[q]);
+        if (!bits) continue;
+        std::uint64_t positive = 0;
+        __m256d unordered = _mm256_setzero_pd();
+        for (int q = 0; q < 4; ++q) {
+          // not (v < 0), true for NaN: NaN counts as positive
+          positive |= static_cast<std::uint64_t>(_mm256_movemask_pd(
+                          _mm256_cmp_pd(acc[q], _mm256_setzero_pd(), _CMP_NLT_UQ)))
+                      << (4 * q);
+          unordered = _mm256_or_pd(unordered, _mm256_cmp_pd(acc[q], acc[q], _CMP_UNORD_Q));
+        }
+        bits[n / 64] |= positive << (n % 64);
+        if (_mm256_movemask_pd(unordered))  // rare: count the NaNs one by one
+          for (long long q = n; q < n + 16; ++q) nans += std::isnan(out[q]) ? 1 : 0;
+      }
+      for (; n < count; ++n) {
+        double v = c[degree];
+        for (int m = degree - 1; m >= 0; --m) v = std::fma(v, t[n], c[m]);
+        out[n] = v;
+        if (!bits) continue;
+        bits[n / 64] |= static_cast<std::uint64_t>(is_positive(v)) << (n % 64);
+        nans += std::isnan(v) ? 1 : 0;
+      }
+      return nans;
+#else
+      for (; n < count; ++n) {
+        double v = c[degree];
+        for (int m = degree - 1; m >= 0; --m) v = v * t[n] + c[m];
+        out[n] = v;
+      }
+#endif
+    } else if (line_) {  // the zero polynomial
+      std::fill(out, out + count, 0.0);
+    } else {
+      x_.resize(static_cast<size_t>(count));
+      y_.assign(static_cast<size_t>(count), grid_.coord(1, j));
+      z_.assign(static_cast<size_t>(count), grid_.coord(2, k));
+      for (long long n = 0; n < count; ++n) x_[static_cast<size_t>(n)] = grid_.coord(0, i0 + n);
+      eval_->values(x_, y_, z_, std::span<double>(out, static_cast<size_t>(count)));
+    }
+    return bits ? sign_bits(out, count, bits) : 0;
+  }
+
+ private:
+  std::optional<Evaluator> eval_;  // fields that are not polynomials
+  const Grid& grid_;
+  std::optional<LineRestriction> line_;
+  std::vector<double> coeffs_, t_, x_, y_, z_;
+};
+
+// One crossing edge: its lower node, axis and the field values at both ends.
+struct Crossing {
+  long long i, j, k;
+  int axis;
+  double fa, fb;
+};
+
+// Where the sign changes on the edge by linear interpolation, as a fraction of the edge.
+double linear_fraction(double fa, double fb) {
+  const double s = fa / (fa - fb);
+  return std::isfinite(s) ? std::clamp(s, 0.0, 1.0) : 0.5;
+}
+
+// The Illinois variant of regula falsi on one edge, in the edge's fraction s ∈ [0, 1]: the
+// bracket [lo, hi] keeps opposite signs, and the end value kept twice in a row is halved so
+// the bracket shrinks from both sides. Robust where the surface touches the edge (a double
+// root), where Newton's method would crawl.
+struct IllinoisBracket {
+  double lo = 0, hi = 1, f_lo = 0, f_hi = 0;
+  int last_side = 0;
+
+  IllinoisBracket(double fa, double fb) : f_lo(fa), f_hi(fb) {}
+
+  /// Takes F at s (not 0): s replaces the end whose value has f's sign.
+  void update(double s, double f) {
+    if (is_positive(f) == is_positive(f_hi)) {
+      hi = s, f_hi = f;
+      if (last_side == 1) f_lo *= 0.5;
+      last_side = 1;
+    } else {
+      lo = s, f_lo = f;
+      if (last_side == -1) f_hi *= 0.5;
+      last_side = -1;
+    }
+  }
+
+  /// Where the line through the ends' values crosses zero. Converged, the estimate may round
+  /// onto an end: that is fine, so only an estimate outside the closed bracket falls back to
+  /// bisection.
+  double estimate() const {
+    const double n = hi - f_hi * (hi - lo) / (f_hi - f_lo);
+    return std::isfinite(n) && n >= std::min(lo, hi) && n <= std::max(lo, hi) ? n : 0.5 * (lo + hi);
+  }
+
+  /// Takes F at s (not 0) and returns the next s; sets `done` once s no longer moves.
+  double next(double s, double f, bool& done) {
+    update(s, f);
+    const double n = estimate();
+    done = std::abs(n - s) <= 1e-13 || std::abs(hi - lo) <= 1e-15;
+    return n;
+  }
+};
+
+// Places one vertex on each crossing edge: linear interpolation, then refinement on F
+// restricted to the edge. Polynomials: F along the edge is a univariate polynomial (its grid
+// line's restriction), so each step is one Horner pass for F and F', and Newton's method
+// converges in three or four steps from the linear start; it runs inside the Illinois
+// bracket, whose estimate takes over when Newton's steps stop shrinking fast (a double root,
+// where Newton would crawl). Other fields: the Illinois method, all edges of a batch
+// evaluated together through the field's tape. One per worker.
+class VertexPlacer {
+ public:
+  VertexPlacer(const Field& field, const Grid& grid, const Polynomial* poly, int steps)
+      : grid_(grid), steps_(steps) {
+    if (steps <= 0) return;  // linear points only: place_batched evaluates nothing
+    if (!poly || poly->degree() < 1) {
+      eval_.emplace(field);
+      return;
+    }
+    for (int a = 0; a < 3; ++a) lines_[static_cast<size_t>(a)].emplace(*poly, grid, a);
+    nc_ = static_cast<size_t>(poly->degree() + 1);
+    coeffs_.resize(nc_ * kStride);
+  }
+
+  /// False when vertices stay at the linear interpolation (no refinement steps).
+  bool refines() const { return steps_ > 0; }
+
+  void place(std::span<const Crossing> in, Vec3* out, long long& evaluations) {
+    if (lines_[0]) place_polynomial(in, out, evaluations);
+    else place_batched(in, out, evaluations);
+  }
+
+ private:
+  Vec3 point(const Crossing& c, double s) const {
+    Vec3 p = grid_.node(c.i, c.j, c.k);
+    p[c.axis] += std::clamp(s, 0.0, 1.0) * grid_.h;
+    return p;
+  }
+
+  // Edges are refined in lockstep blocks of kLanes: each step is a chain of dependent
+  // multiply-adds and divisions, so independent edges side by side keep the processor busy
+  // (and the Horner loop is one vector operation per four lanes). Finished lanes stay put.
+  // The coefficients of kChunk edges at a time are held lane by lane: coeffs_[m · kStride +
+  // edge], kLanes columns to spare for a last block or four-line pass that runs over.
+  static constexpr int kLanes = 8;
+  static constexpr size_t kChunk = 256, kStride = kChunk + kLanes;
+
+  // An edge's line comes from the restriction along its axis with v fixed (set_v builds a
+  // table from all terms of F, the costly part) and a Horner pass in u:
+  //   x edges: (u, v) = (y, z) and y edges: (u, v) = (x, z), v fixed for a whole node layer;
+  //   z edges: (u, v) = (x, y), v fixed for a whole xz plane: they are taken by j rather
+  //   than in row order, so that each plane's table is built once.
+  void place_polynomial(std::span<const Crossing> in, Vec3* out, long long& evaluations) {
+    order_.clear();
+    long long j_lo = std::numeric_limits<long long>::max();
+    long long j_hi = std::numeric_limits<long long>::min();
+    size_t z_count = 0;
+    for (size_t n = 0; n < in.size(); ++n)
+      if (in[n].axis < 2) order_.push_back(static_cast<std::uint32_t>(n));
+      else ++z_count, j_lo = std::min(j_lo, in[n].j), j_hi = std::max(j_hi, in[n].j);
+    if (z_count > 0) {  // the z edges after them, by j (a stable counting sort)
+      bucket_.assign(static_cast<size_t>(j_hi - j_lo + 2), 0);
+      for (size_t n = 0; n < in.size(); ++n)
+        if (in[n].axis == 2) ++bucket_[static_cast<size_t>(in[n].j - j_lo + 1)];
+      for (size_t b = 1; b < bucket_.size(); ++b) bucket_[b] += bucket_[b - 1];
+      const size_t first = order_.size();
+      order_.resize(first + z_count);
+      for (size_t n = 0; n < in.size(); ++n)
+        if (in[n].axis == 2)
+          order_[first + bucket_[static_cast<size_t>(in[n].j - j_lo)]++] = static_cast<std::uint32_t>(n);
+    }
+    // The fractions come back in that order; the points go out in the crossings' order.
+    fraction_.resize(in.size());
+    for (size_t c0 = 0; c0 < order_.size(); c0 += kChunk) {
+      const size_t len = std::min(kChunk, order_.size() - c0);
+      const std::uint32_t* edge = &order_[c0];
+      fill_chunk(in, edge, len);
+      for (size_t b = 0; b < len; b += kLanes)
+        evaluations += refine_block(b, static_cast<int>(std::min<size_t>(kLanes, len - b)));
+      for (size_t e = 0; e < len; ++e) fraction_[edge[e]] = s_[e];
+    }
+    for (size_t n = 0; n < in.size(); ++n) out[n] = point(in[n], fraction_[n]);
+  }
+
+  // Coefficients, t at the lower node, end values and the linear start of edges[0..len).
+  void fill_chunk(std::span<const Crossing> in, const std::uint32_t* edge, size_t len) {
+    double* C = coeffs_.data();
+    for (size_t e = 0; e < len;) {
+      // A run of edges along one axis whose lines share v.
+      const int axis = in[edge[e]].axis;
+      auto v_index = [&](size_t f) { return axis == 2 ? in[edge[f]].j : in[edge[f]].k; };
+      const long long v = v_index(e);
+      size_t end = e + 1;
+      while (end < len && in[edge[end]].axis == axis && v_index(end) == v) ++end;
+      LineRestriction& line = *lines_[static_cast<size_t>(axis)];
+      line.set_v(grid_.coord(axis == 2 ? 1 : 2, v));
+      auto u_of = [&](size_t f) {
+        const Crossing& x = in[edge[f]];
+        return axis == 0 ? grid_.coord(1, x.j) : grid_.coord(0, x.i);
+      };
+#if defined(__AVX2__) && defined(__FMA__)
+      // Four lines at a time; a last group short of four repeats its last edge into columns
+      // that the next run overwrites (or past the chunk's end).
+      for (size_t f = e; f < end; f += 4) {
+        const __m256d u = _mm256_setr_pd(u_of(f), u_of(std::min(f + 1, end - 1)),
+                                         u_of(std::min(f + 2, end - 1)), u_of(std::min(f + 3, end - 1)));
+        line.coefficients_at(u, C + f, kStride);
+      }
+#else
+      for (size_t f = e; f < end; ++f) line.coefficients_at(u_of(f), C + f, kStride);
+#endif
+      for (; e < end; ++e) {
+        const Crossing& x = in[edge[e]];
+        t0_[e] = line.t_of(axis == 0 ? x.i : axis == 1 ? x.j : x.k);
+        fa_[e] = x.fa, fb_[e] = x.fb;
+        s_[e] = linear_fraction(x.fa, x.fb);
+      }
+    }
+    // The last block's idle lanes: harmless finite values.
+    for (size_t e = len; e % kLanes != 0; ++e) {
+      for (size_t m = 0; m < nc_; ++m) C[m * kStride + e] = 0;
+      t0_[e] = 0, fa_[e] = -1, fb_[e] = 1, s_[e] = 0.5;
+    }
+  }
+
+#if defined(__AVX2__) && defined(__FMA__)
+  // Refines lanes b..b + 7 in lockstep (see IllinoisBracket for the scalar form of the bracket
+  // and its estimate): leaves s_ refined; returns the evaluations of F. Two vectors of four
+  // lanes go side by side, as each step is a chain of dependent operations.
+  long long refine_block(size_t b, int lanes) {
+    constexpr int kGroups = kLanes / 4;
+    const int degree = lines_[0]->degree();
+    const double* C = coeffs_.data() + b;
+    long long evaluations = 0;
+    const __m256d zero = _mm256_setzero_pd(), half = _mm256_set1_pd(0.5);
+    const __m256d one = _mm256_set1_pd(1.0), minus_one = _mm256_set1_pd(-1.0);
+    const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
+    auto finite = [&](__m256d x) { return _mm256_cmp_pd(_mm256_sub_pd(x, x), zero, _CMP_EQ_OQ); };
+    auto within = [&](__m256d x, __m256d a, __m256d c) {  // false for NaN
+      return _mm256_and_pd(_mm256_cmp_pd(x, a, _CMP_GE_OQ), _mm256_cmp_pd(x, c, _CMP_LE_OQ));
+    };
+    __m256d lo[kGroups], hi[kGroups], flo[kGroups], fhi[kGroups], last[kGroups], sv[kGroups],
+        last_move[kGroups], act[kGroups], tg[kGroups];
+    for (int g = 0; g < kGroups; ++g) {
+      const size_t at = b + 4 * static_cast<size_t>(g);
+      lo[g] = zero, hi[g] = one, last[g] = zero, sv[g] = _mm256_loadu_pd(&s_[at]);
+      flo[g] = _mm256_loadu_pd(&fa_[at]), fhi[g] = _mm256_loadu_pd(&fb_[at]);
+      last_move[g] = _mm256_set1_pd(std::numeric_limits<double>::infinity());
+      tg[g] = _mm256_loadu_pd(&t0_[at]);
+      // Active: a lane in use whose end values are finite.
+      const __m256d in_use =
+          _mm256_cmp_pd(_mm256_setr_pd(0, 1, 2, 3), _mm256_set1_pd(lanes - 4 * g), _CMP_LT_OQ);
+      act[g] = steps_ > 0 ? _mm256_and_pd(in_use, _mm256_and_pd(finite(flo[g]), finite(fhi[g]))) : zero;
+    }
+    for (int it = 0; it < steps_; ++it) {
+      int mask = 0;
+      for (int g = 0; g < kGroups; ++g) mask |= _mm256_movemask_pd(act[g]) << (4 * g);
+      if (!mask) break;
+      evaluations += std::popcount(static_cast<unsigned>(mask));
+      // F and its derivative by Horner's rule.
+      __m256d t[kGroups], f[kGroups], df[kGroups];
+      for (int g = 0; g < kGroups; ++g) {
+        t[g] = _mm256_add_pd(tg[g], sv[g]);
+        f[g] = _mm256_loadu_pd(C + static_cast<size_t>(degree) * kStride + 4 * static_cast<size_t>(g));
+        df[g] = zero;
+      }
+      for (int m = degree - 1; m >= 0; --m)
+        for (int g = 0; g < kGroups; ++g) {
+          const __m256d cm =
+              _mm256_loadu_pd(C + static_cast<size_t>(m) * kStride + 4 * static_cast<size_t>(g));
+          df[g] = _mm256_fmadd_pd(df[g], t[g], f[g]);
+          f[g] = _mm256_fmadd_pd(f[g], t[g], cm);
+        }
+      for (int g = 0; g < kGroups; ++g) {
+        // An exact root or a non-finite value ends the lane where it is.
+        const __m256d stop = _mm256_or_pd(_mm256_cmp_pd(f[g], zero, _CMP_EQ_OQ),
+                                          _mm256_andnot_pd(finite(f[g]), act[g]));
+        const __m256d step = _mm256_andnot_pd(stop, act[g]);
+        // The bracket: s replaces the end whose value has f's sign (is_positive alike); the
+        // value of an end kept twice in a row is halved.
+        const __m256d same = _mm256_xor_pd(_mm256_xor_pd(_mm256_cmp_pd(f[g], zero, _CMP_NLT_UQ),
+                                                         _mm256_cmp_pd(fhi[g], zero, _CMP_NLT_UQ)),
+                                           _mm256_castsi256_pd(_mm256_set1_epi64x(-1)));
+        const __m256d up = _mm256_and_pd(step, same), down = _mm256_andnot_pd(same, step);
+        const __m256d halve_lo = _mm256_and_pd(up, _mm256_cmp_pd(last[g], one, _CMP_EQ_OQ));
+        const __m256d halve_hi = _mm256_and_pd(down, _mm256_cmp_pd(last[g], minus_one, _CMP_EQ_OQ));
+        flo[g] = _mm256_blendv_pd(flo[g], _mm256_mul_pd(flo[g], half), halve_lo);
+        fhi[g] = _mm256_blendv_pd(fhi[g], _mm256_mul_pd(fhi[g], half), halve_hi);
+        hi[g] = _mm256_blendv_pd(hi[g], sv[g], up), fhi[g] = _mm256_blendv_pd(fhi[g], f[g], up);
+        lo[g] = _mm256_blendv_pd(lo[g], sv[g], down), flo[g] = _mm256_blendv_pd(flo[g], f[g], down);
+        last[g] = _mm256_blendv_pd(_mm256_blendv_pd(last[g], minus_one, down), one, up);
+        const __m256d left = _mm256_min_pd(lo[g], hi[g]), right = _mm256_max_pd(lo[g], hi[g]);
+        // Newton's step while it converges fast (a quarter of the last move or less, as near
+        // a simple root); else the Illinois estimate, which does not crawl where the surface
+        // touches the edge (a double root); else bisection.
+        const __m256d newton = _mm256_sub_pd(sv[g], _mm256_div_pd(f[g], df[g]));
+        const __m256d illinois =
+            _mm256_sub_pd(hi[g], _mm256_div_pd(_mm256_mul_pd(fhi[g], _mm256_sub_pd(hi[g], lo[g])),
+                                               _mm256_sub_pd(fhi[g], flo[g])));
+        const __m256d fast = _mm256_and_pd(
+            within(newton, left, right),
+            _mm256_cmp_pd(_mm256_and_pd(_mm256_sub_pd(newton, sv[g]), abs_mask),
+                          _mm256_mul_pd(_mm256_set1_pd(0.25), last_move[g]), _CMP_LE_OQ));
+        __m256d n = _mm256_blendv_pd(_mm256_mul_pd(half, _mm256_add_pd(lo[g], hi[g])), illinois,
+                                     within(illinois, left, right));
+        n = _mm256_blendv_pd(n, newton, fast);
+        // Converged when s no longer moves; n stays in the bracket, of which s is an end, so
+        // a bracket narrower than that ends the search too.
+        const __m256d move = _mm256_and_pd(_mm256_sub_pd(n, sv[g]), abs_mask);
+        const __m256d done = _mm256_cmp_pd(move, _mm256_set1_pd(1e-13), _CMP_LE_OQ);
+        last_move[g] = move;
+        sv[g] = _mm256_blendv_pd(sv[g], n, step);
+        act[g] = _mm256_andnot_pd(_mm256_or_pd(stop, _mm256_and_pd(done, step)), act[g]);
+      }
+    }
+    for (int g = 0; g < kGroups; ++g) _mm256_storeu_pd(&s_[b + 4 * static_cast<size_t>(g)], sv[g]);
+    return evaluations;
+  }
+#else
+  long long refine_block(size_t b, int lanes) {
+    const int degree = lines_[0]->degree();
+    const double* C = coeffs_.data() + b;
+    long long evaluations = 0;
+    for (int q = 0; q < lanes; ++q) {
+      const size_t e = b + static_cast<size_t>(q);
+      if (!std::isfinite(fa_[e]) || !std::isfinite(fb_[e])) continue;
+      IllinoisBracket bracket(fa_[e], fb_[e]);
+      double s = s_[e], last_move = std::numeric_limits<double>::infinity();
+      for (int it = 0; it < steps_; ++it) {
+        const double t = t0_[e] + s;
+        double f = C[static_cast<size_t>(degree) * kStride + static_cast<size_t>(q)], df = 0;
+        for (int m = degree - 1; m >= 0; --m) {
+          df = madd(df, t, f);
+          f = madd(f, t, C[static_cast<size_t>(m) * kStride + static_cast<size_t>(q)]);
+        }
+        ++evaluations;
+        if (f == 0 || !std::isfinite(f)) break;
+        bracket.update(s, f);
+        const double newton = s - f / df;
+        const bool fast = newton >= std::min(bracket.lo, bracket.hi) &&
+                          newton <= std::max(bracket.lo, bracket.hi) &&
+                          std::abs(newton - s) <= 0.25 * last_move;
+        const double n = fast ? newton : bracket.estimate();
+        last_move = std::abs(n - s);
+        s = n;
+        if (last_move <= 1e-13) break;
+      }
+      s_[e] = s;
+    }
+    return evaluations;
+  }
+#endif
+
+  void place_batched(std::span<const Crossing> in, Vec3* out, long long& evaluations) {
+    const size_t n = in.size();
+    brackets_.clear();
+    t_.resize(n);
+    active_.resize(n);
+    for (size_t e = 0; e < n; ++e) {
+      brackets_.emplace_back(in[e].fa, in[e].fb);
+      t_[e] = linear_fraction(in[e].fa, in[e].fb);
+      active_[e] = e;
+    }
+    for (int it = 0; it < steps_ && !active_.empty(); ++it) {
+      const size_t m = active_.size();
+      x_.resize(m), y_.resize(m), z_.resize(m), f_.resize(m);
+      for (size_t q = 0; q < m; ++q) {
+        const Vec3 p = point(in[active_[q]], t_[active_[q]]);
+        x_[q] = p.x(), y_[q] = p.y(), z_[q] = p.z();
+      }
+      eval_->values(x_, y_, z_, f_);
+      evaluations += static_cast<long long>(m);
+      size_t kept = 0;
+      for (size_t q = 0; q < m; ++q) {
+        const size_t e = active_[q];
+        if (f_[q] == 0) continue;  // exact root
+        bool done = false;
+        t_[e] = brackets_[e].next(t_[e], f_[q], done);
+        if (!done) active_[kept++] = e;
+      }
+      active_.resize(kept);
+    }
+    for (size_t e = 0; e < n; ++e) out[e] = point(in[e], t_[e]);
+  }
+
+  std::optional<Evaluator> eval_;  // fields that are not polynomials
+  const Grid& grid_;
+  int steps_;
+  std::array<std::optional<LineRestriction>, 3> lines_;
+  // Polynomials: the edges in the order they are taken, counting-sort buckets, and per edge of
+  // a chunk its line's coefficients (nc_ of them), t of its lower node, end values and
+  // fraction s.
+  std::vector<std::uint32_t> order_;
+  std::vector<size_t> bucket_;
+  std::vector<double> fraction_;
+  size_t nc_ = 0;
+  std::vector<double> coeffs_;
+  double t0_[kChunk + kLanes], fa_[kChunk + kLanes], fb_[kChunk + kLanes], s_[kChunk + kLanes];
+  // Other fields.
+  std::vector<IllinoisBracket> brackets_;
+  std::vector<double> t_, x_, y_, z_, f_;
+  std::vector<size_t> active_;
+};
+
+// Places a batch of crossings split over the workers (chunks of a few thousand edges).
+void place_vertices_parallel(std::vector<std::unique_ptr<VertexPlacer>>& placers, int workers,
+                             const std::vector<Crossing>& in, Vec3* out, long long& evaluations,
+                             const std::stop_token& stop) {
+  constexpr size_t kChunk = 4096;
+  const long long chunks = static_cast<long long>((in.size() + kChunk - 1) / kChunk);
+  long long evals = 0;
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 1) reduction(+ : evals)
+  for (long long c = 0; c < chunks; ++c) {
+    if (stop.stop_requested()) continue;
+    const size_t b = static_cast<size_t>(c) * kChunk, e = std::min(in.size(), b + kChunk);
+    placers[static_cast<size_t>(detail::worker_index())]->place(
+        std::span<const Crossing>(in.data() + b, e - b), out + b, evals);
+  }
+  evaluations += evals;
+}
+
+// The linear interpolation of the crossing on the edge from node (i, j, k) along `axis`. The
+// triangulation of each cube uses these points (not the refined ones) so that the dense and
+// the sparse path, which refines later, triangulate alike.
+Vec3 linear_point(const Grid& g, long long i, long long j, long long k, int axis, double fa,
+                  double fb) {
+  Vec3 p = g.node(i, j, k);
+  p[axis] += linear_fraction(fa, fb) * g.h;
+  return p;
+}
+
+
+// Triangulation of the cycles. A cycle of n edge points is split into n − 2 triangles that
+// maximise the smallest triangle quality (mean ratio 4√3·area / Σ edge²), never with a chord
+// between two points of one cube face (CellPolygons::chords): such a chord could also appear
+// in the neighbouring cube and make the edge non-manifold. Triangles are emitted in cycle
+// order (counter-clockwise seen from F > 0). The points are the linear interpolations (see
+// linear_point), so both paths make the same choices.
+
+// The square of a triangle's quality up to a constant factor (it orders triangles alike),
+// from its squared sides: with sides u = b − a, v = c − a, |u × v|² = |u|²|v|² − (u·v)² and
+// 2 u·v = |u|² + |v|² − |c − b|².
+inline double triangle_quality(double u, double v, double w) {
+  const double dot = 0.5 * (u + v - w);
+  const double area2 = std::max(0.0, madd(u, v, -(dot * dot)));
+  const double sum = u + v + w;
+  return sum > 0 ? area2 / (sum * sum) : 0.0;
+}
+
+// The two ways to split a quadrilateral p0 p1 p2 p3: the worse triangle of (0,1,3), (1,2,3)
+// (diagonal 1–3) and of (0,2,3), (0,1,2) (diagonal 0–2).
+inline std::array<double, 2> quad_splits(const Vec3& p0, const Vec3& p1, const Vec3& p2,
+                                         const Vec3& p3) {
+#if defined(__AVX2__) && defined(__FMA__)
+  // The four triangles side by side, with the operations of triangle_quality.
+  const __m256d x = _mm256_setr_pd(p0.x(), p1.x(), p2.x(), p3.x());
+  const __m256d y = _mm256_setr_pd(p0.y(), p1.y(), p2.y(), p3.y());
+  const __m256d z = _mm256_setr_pd(p0.z(), p1.z(), p2.z(), p3.z());
+  auto squared = [](__m256d dx, __m256d dy, __m256d dz) {
+    return _mm256_fmadd_pd(dz, dz, _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)));
+  };
+  // Squared sides 0–1, 1–2, 2–3, 3–0 and diagonals 0–2, 1–3, 0–2, 1–3 (a difference and its
+  // negative square alike).
+  const __m256d side = squared(_mm256_sub_pd(_mm256_permute4x64_pd(x, 0x39), x),
+                               _mm256_sub_pd(_mm256_permute4x64_pd(y, 0x39), y),
+                               _mm256_sub_pd(_mm256_permute4x64_pd(z, 0x39), z));
+  const __m256d diag = squared(_mm256_sub_pd(_mm256_permute4x64_pd(x, 0x4e), x),
+                               _mm256_sub_pd(_mm256_permute4x64_pd(y, 0x4e), y),
+                               _mm256_sub_pd(_mm256_permute4x64_pd(z, 0x4e), z));
+  // Triangles (0,1,3), (1,2,3), (0,2,3), (0,1,2): sides u = a–b, v = a–c, w = b–c.
+  const __m256d u = _mm256_blend_pd(_mm256_permute4x64_pd(side, 0x04), diag, 0b0100);
+  const __m256d v = _mm256_blend_pd(_mm256_permute4x64_pd(side, 0xff),
+                                    _mm256_permute4x64_pd(diag, 0x04), 0b1010);
+  const __m256d w = _mm256_blend_pd(_mm256_permute4x64_pd(side, 0x68),
+                                    _mm256_permute_pd(diag, 0b0101), 0b0001);
+  const __m256d uv = _mm256_add_pd(u, v);
+  const __m256d dot = _mm256_mul_pd(_mm256_set1_pd(0.5), _mm256_sub_pd(uv, w));
+  const __m256d area2 =
+      _mm256_max_pd(_mm256_fmsub_pd(u, v, _mm256_mul_pd(dot, dot)), _mm256_setzero_pd());
+  const __m256d sum = _mm256_add_pd(uv, w);
+  const __m256d q = _mm256_and_pd(_mm256_cmp_pd(sum, _mm256_setzero_pd(), _CMP_GT_OQ),
+                                  _mm256_div_pd(area2, _mm256_mul_pd(sum, sum)));
+  const __m256d worst = _mm256_min_pd(q, _mm256_permute_pd(q, 0b0101));
+  return {_mm256_cvtsd_f64(worst), _mm_cvtsd_f64(_mm256_extractf128_pd(worst, 1))};
+#else
+  const double d01 = (p1 - p0).squaredNorm(), d12 = (p2 - p1).squaredNorm(),
+               d23 = (p3 - p2).squaredNorm(), d03 = (p3 - p0).squaredNorm(),
+               d02 = (p2 - p0).squaredNorm(), d13 = (p3 - p1).squaredNorm();
+  return {std::min(triangle_quality(d01, d03, d13), triangle_quality(d12, d13, d23)),
+          std::min(triangle_quality(d02, d03, d23), triangle_quality(d01, d02, d12))};
+#endif
+}
+
+template <class Pos, class Emit>
+void triangulate_pentagon(const std::uint8_t* edges, const std::uint16_t* chords, Pos& pos,
+                          Emit& emit);
+template <class Pos, class Emit>
+void triangulate_polygon(const std::uint8_t* edges, const std::uint16_t* chords, int n, Pos& pos,
+                         Emit& emit);
+
+// `pos(e)` is the point on cube edge e, `emit(e0, e1, e2)` takes a triangle of cube edges.
+template <class Pos, class Emit>
+void triangulate_cycle(const std::uint8_t* edges, const std::uint16_t* chords, int n, Pos& pos,
+                       Emit& emit) {
+  if (n == 3) {
+    emit(edges[0], edges[1], edges[2]);
+    return;
+  }
+  if (n == 4) {  // the most common cycle: two diagonals, decided as the general case would
+    const auto splits = quad_splits(pos(edges[0]), pos(edges[1]), pos(edges[2]), pos(edges[3]));
+    const double via1 = (chords[1] >> 3) & 1 ? splits[0] : -1;
+    const double via2 = (chords[0] >> 2) & 1 ? splits[1] : -1;
+    if (via2 > via1) emit(edges[0], edges[2], edges[3]), emit(edges[0], edges[1], edges[2]);
+    else emit(edges[0], edges[1], edges[3]), emit(edges[1], edges[2], edges[3]);
+    return;
+  }
+  if (n == 5) triangulate_pentagon(edges, chords, pos, emit);
+  else triangulate_polygon(edges, chords, n, pos, emit);
+}
+
+// Keeps the better of best and s (the first of equals), as the dynamic programming does.
+inline void keep_better(double& best, int& split, double s, int m) {
+  if (s > best) best = s, split = m;
+}
+
+// triangulate_polygon for n = 5 written out: the same recurrences, comparisons and ties,
+// without the loops and tables.
+template <class Pos, class Emit>
+void triangulate_pentagon(const std::uint8_t* edges, const std::uint16_t* chords, Pos& pos,
+                          Emit& emit) {
+  const Vec3 &p0 = pos(edges[0]), &p1 = pos(edges[1]), &p2 = pos(edges[2]), &p3 = pos(edges[3]),
+             &p4 = pos(edges[4]);
+  const double d01 = (p1 - p0).squaredNorm(), d02 = (p2 - p0).squaredNorm(),
+               d03 = (p3 - p0).squaredNorm(), d04 = (p4 - p0).squaredNorm(),
+               d12 = (p2 - p1).squaredNorm(), d13 = (p3 - p1).squaredNorm(),
+               d14 = (p4 - p1).squaredNorm(), d23 = (p3 - p2).squaredNorm(),
+               d24 = (p4 - p2).squaredNorm(), d34 = (p4 - p3).squaredNorm();
+  const bool ok02 = (chords[0] >> 2) & 1, ok03 = (chords[0] >> 3) & 1, ok13 = (chords[1] >> 3) & 1,
+             ok14 = (chords[1] >> 4) & 1, ok24 = (chords[2] >> 4) & 1;
+  // Sub-polygons of three points (sides only).
+  const double q012 = triangle_quality(d01, d02, d12), q123 = triangle_quality(d12, d13, d23),
+               q234 = triangle_quality(d23, d24, d34);
+  // Of four points: 0..3 and 1..4.
+  double best03 = -2, best14 = -2;
+  int split03 = -1, split14 = -1;
+  keep_better(best03, split03, std::min(ok13 ? triangle_quality(d01, d03, d13) : -1, q123), 1);
+  keep_better(best03, split03, std::min(ok02 ? triangle_quality(d02, d03, d23) : -1, q012), 2);
+  keep_better(best14, split14, std::min(ok24 ? triangle_quality(d12, d14, d24) : -1, q234), 2);
+  keep_better(best14, split14, std::min(ok13 ? triangle_quality(d13, d14, d34) : -1, q123), 3);
+  // The whole cycle.
+  double best = -2;
+  int split = -1;
+  keep_better(best, split, std::min(ok14 ? triangle_quality(d01, d04, d14) : -1, best14), 1);
+  keep_better(best, split,
+              std::min(std::min(ok02 && ok24 ? triangle_quality(d02, d04, d24) : -1, q012), q234), 2);
+  keep_better(best, split, std::min(ok03 ? triangle_quality(d03, d04, d34) : -1, best03), 3);
+  // The triangles in the order of triangulate_polygon's stack.
+  const int e0 = edges[0], e1 = edges[1], e2 = edges[2], e3 = edges[3], e4 = edges[4];
+  if (split == 1) {
+    emit(e0, e1, e4);
+    if (split14 == 2) emit(e1, e2, e4), emit(e2, e3, e4);
+    else emit(e1, e3, e4), emit(e1, e2, e3);
+  } else if (split == 2) {
+    emit(e0, e2, e4), emit(e2, e3, e4), emit(e0, e1, e2);
+  } else {
+    emit(e0, e3, e4);
+    if (split03 == 1) emit(e0, e1, e3), emit(e1, e2, e3);
+    else emit(e0, e2, e3), emit(e0, e1, e2);
+  }
+}
+
+// Dynamic programming over the sub-polygons a..b of a cycle of n points: best[a][b] is the
+// best worst quality of a triangulation of points a..b, split[a][b] the apex of its triangle
+// on chord a–b. Ties go to the first apex.
+template <class Pos, class Emit>
+void triangulate_polygon(const std::uint8_t* edges, const std::uint16_t* chords, int n, Pos& pos,
+                         Emit& emit) {
+  Vec3 p[12];
+  for (int a = 0; a < n; ++a) p[a] = pos(edges[a]);
+  // Squared distances computed once: every triangle's quality comes from its three sides.
+  double d2[12][12];
+  for (int a = 0; a < n; ++a)
+    for (int b = a + 1; b < n; ++b) d2[a][b] = (p[b] - p[a]).squaredNorm();
+  double best[12][12];
+  int split[12][12];
+  for (int len = 2; len < n; ++len)
+    for (int a = 0; a + len < n; ++a) {
+      const int b = a + len;
+      best[a][b] = -2;
+      split[a][b] = -1;
+      for (int m = a + 1; m < b; ++m) {
+        const bool ok = (chords[a] >> m) & (chords[m] >> b) & 1;
+        double s = ok ? triangle_quality(d2[a][m], d2[a][b], d2[m][b]) : -1;
+        if (m - a > 1) s = std::min(s, best[a][m]);
+        if (b - m > 1) s = std::min(s, best[m][b]);
+        if (s > best[a][b]) best[a][b] = s, split[a][b] = m;
+      }
+    }
+  // Explicit stack: (a, b) sub-polygons still to split.
+  int stack_a[12], stack_b[12], top = 0;
+  stack_a[top] = 0, stack_b[top] = n - 1, ++top;
+  while (top > 0) {
+    --top;
+    const int a = stack_a[top], b = stack_b[top];
+    const int m = split[a][b];
+    emit(edges[a], edges[m], edges[b]);
+    if (m - a > 1) stack_a[top] = a, stack_b[top] = m, ++top;
+    if (b - m > 1) stack_a[top] = m, stack_b[top] = b, ++top;
+  }
+}
+
+// All cycles of a cell (see triangulate_cycle).
+template <class Pos, class Emit>
+void triangulate_cell(const CellPolygons& polys, Pos&& pos, Emit&& emit) {
+  int start = 0;
+  for (int c = 0; c < polys.cycle_count; ++c) {
+    const int n = polys.cycle_length[c];
+    triangulate_cycle(&polys.edges[start], &polys.chords[start], n, pos, emit);
+    start += n;
+  }
+}
+
+// The table entry of a cell of the given case: its ambiguous faces are decided by the
+// asymptotic decider on `corner(c)`, the value at corner c (Lorensen numbering), read only
+// for those faces. Counts the decisions in `ambiguous`.
+template <class Corner>
+const CellPolygons& cell_entry(const CellPolygons* table, int cube_case, Corner&& corner,
+                               long long& ambiguous) {
+  const int amb = detail::kAmbiguousFaces[static_cast<size_t>(cube_case)];
+  int rank = 0;
+  if (amb) {  // rare
+    int t = 0;
+    for (int f = 0; f < 6; ++f) {
+      if (!((amb >> f) & 1)) continue;
+      const auto& q = kFaceCanonical[f];
+      if (detail::positive_corners_connected(corner(q[0]), corner(q[1]), corner(q[2]), corner(q[3])))
+        rank |= 1 << t;
+      ++t;
+    }
+    ambiguous += std::popcount(static_cast<unsigned>(amb));
+  }
+  return table[detail::kCaseFirst[static_cast<size_t>(cube_case)] + static_cast<size_t>(rank)];
+}
+
+
+using Triangle = std::array<std::uint32_t, 3>;
+
+// ---------------------------------------------------------------------------------------
+// Dense path: every node sampled; vertex ids from per-row prefix counts over bit sets.
+//
+// The grid is cut into slabs of a few cell layers (slab_layers), handled one at a time by a
+// worker from sampling to triangles (see extract_slab), so only a few node layers' values are
+// held (not the whole volume) and they are still in cache when used. Vertices are numbered in
+// row order (row = (j, k), then axis, then x), the same order whatever the slabs: a slab
+// numbers the rows of its own node layers from 0 and carries on into the next slab's first
+// layer (the top faces of its last cells), so adding the slab's first global id makes all its
+// ids global. That numbering needs the z edges of that layer, so a slab samples two node
+// layers beyond its own. Slab sizes depend on the grid only, so the mesh does not depend on
+// the thread count.
+
+struct DenseResult {
+  std::vector<Vec3> positions;
+  std::vector<Triangle> triangles;
+};
+
+constexpr long long kSlabLayers = 16;
+
+// Cell layers per slab: kSlabLayers, fewer on small grids so that they still make eight slabs
+// for the workers to share (never fewer than 8 layers: each slab samples two extra layers).
+long long slab_layers(const Grid& g) { return std::clamp<long long>(g.cells[2] / 8, 8, kSlabLayers); }
+
 // Per cube corner: which of the cell's four node rows holds it ((dy, dz) = (0,0), (1,0),
 // (0,1), (1,1)); per cube edge: the row and x offset of its lower corner.
 constexpr std::array<int, 8> kCornerRow = [] {
@@ -711,11 +992,75 @@ constexpr std::array<int, 12> kEdgeDx = [] {
   for (int e = 0; e < 12; ++e) dx[e] = detail::kCorner[kEdgeCorners[e][0]][0];
   return dx;
 }();
+// The case of a cell from its corners' sign bits gathered by row: bit q (dx = 0) and bit 4 + q
+// (dx = 1) hold the corner in node row q.
+constexpr std::array<std::uint8_t, 256> kRowBitsToCase = [] {
+  std::array<std::uint8_t, 256> cases{};
+  for (int bits = 0; bits < 256; ++bits)
+    for (int c = 0; c < 8; ++c)
+      if ((bits >> (4 * detail::kCorner[c][0] + kCornerRow[c])) & 1)
+        cases[bits] = static_cast<std::uint8_t>(cases[bits] | 1 << c);
+  return cases;
+}();
+
+// The sign bits of the four node rows of a row of cells, one 64-cell word at a time: `lo` has
+// the corners at dx = 0 of cell b at bit b, `hi` those at dx = 1.
+struct CellWord {
+  std::uint64_t lo[4], hi[4];
+#if defined(__AVX2__)
+  __m256i lo_v, hi_v;
+  void load() {
+    lo_v = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(lo));
+    hi_v = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(hi));
+  }
+  // Each row's bit b moved to its lane's sign bit and collected by movemask.
+  int row_bits(int b) const {
+    const __m128i shift = _mm_cvtsi32_si128(63 - b);
+    return _mm256_movemask_pd(_mm256_castsi256_pd(_mm256_sll_epi64(lo_v, shift))) |
+           _mm256_movemask_pd(_mm256_castsi256_pd(_mm256_sll_epi64(hi_v, shift))) << 4;
+  }
+#else
+  void load() {}
+  int row_bits(int b) const {
+    int bits = 0;
+    for (int q = 0; q < 4; ++q)
+      bits |= static_cast<int>((lo[q] >> b) & 1) << q | static_cast<int>((hi[q] >> b) & 1) << (4 + q);
+    return bits;
+  }
+#endif
+  int cube_case(int b) const { return kRowBitsToCase[static_cast<size_t>(row_bits(b))]; }
+};
+
+// An allocator whose resize leaves new elements default-initialised (for numbers: not
+// written), for arrays whose every entry used is written first: no pass zeroing them.
+template <class T>
+struct DefaultInitAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = DefaultInitAllocator<U>;
+  };
+  DefaultInitAllocator() = default;
+  template <class U>
+  DefaultInitAllocator(const DefaultInitAllocator<U>&) noexcept {}
+  template <class U>
+  void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+template <class T>
+using ScratchVector = std::vector<T, DefaultInitAllocator<T>>;
+
+// A cell's cycles have at most 12 points in all, so it makes at most 12 − 2 triangles.
+constexpr std::ptrdiff_t kMaxCellTriangles = 10;
 
 // What one slab made, with slab-local vertex ids.
 struct Slab {
   std::vector<Vec3> positions;  // the vertices of the slab's own node layers
-  std::vector<Triangle> triangles;
+  ScratchVector<Triangle> triangles;
   std::uint64_t numbered = 0;   // vertices numbered, including the next slab's first layer
   long long active_cells = 0, ambiguous = 0, samples = 0, nan_samples = 0, evaluations = 0;
   double seconds_sampling = 0, seconds_refinement = 0;
@@ -724,14 +1069,18 @@ struct Slab {
 // A worker's arrays, reused from slab to slab (resized, never cleared: every entry used is
 // written first).
 struct SlabScratch {
-  std::vector<double> values;
-  std::vector<std::uint64_t> positive, crossing_bits;
-  std::vector<std::uint32_t> first_id;
+  ScratchVector<double> values;
+  ScratchVector<std::uint64_t> positive, crossing_bits;
+  ScratchVector<std::uint32_t> first_id;
   std::vector<Crossing> crossings;
-  std::vector<Vec3> linear;
+  ScratchVector<Vec3> linear;
 };
 
-// Samples, numbers and triangulates the cells of layers [k0, k0 + layers).
+// Samples, numbers and triangulates the cells of layers [k0, k0 + layers), one node layer at
+// a time: numbering a node layer and placing its linear points needs F on the next layer too,
+// and the cells of a layer need their two node layers numbered, so once layer L is sampled
+// layer L − 1 is numbered and the cells of layer L − 2 are made. F is held for three node
+// layers only (slot (L − k0) mod 3), the bit sets, ids and points for the whole slab.
 void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratch, const Grid& g,
                   long long k0, long long layers, Slab& slab) {
   const long long nx = g.nx(), ny = g.ny(), nz = g.nz();
@@ -744,136 +1093,216 @@ void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratc
   const long long num_rows = ny * (k_num - k0);
   const long long own_rows = ny * (k_own - k0);
 
-  // Sample F row by row, then its sign bits a word at a time.
-  const auto ts = Clock::now();
-  std::vector<double>& V = scratch.values;
-  std::vector<std::uint64_t>& P = scratch.positive;
-  V.resize(static_cast<size_t>(nx * rows));
+  ScratchVector<double>& V = scratch.values;
+  ScratchVector<std::uint64_t>& P = scratch.positive;
+  ScratchVector<std::uint64_t>& C = scratch.crossing_bits;
+  ScratchVector<std::uint32_t>& off = scratch.first_id;
+  ScratchVector<Vec3>& linear = scratch.linear;
+  std::vector<Crossing>& crossings = scratch.crossings;
+  V.resize(static_cast<size_t>(3 * ny * nx));
   P.resize(static_cast<size_t>(W * rows));
-  for (long long r = 0; r < rows; ++r) {
-    double* row = &V[static_cast<size_t>(r * nx)];
-    sampler.sample(0, nx, r % ny, k0 + r / ny, row);
-    std::uint64_t* bits = &P[static_cast<size_t>(r * W)];
-    const long long nans = sign_bits(row, nx, bits);
-    if (r < own_rows) slab.nan_samples += nans;
-  }
-  slab.samples += nx * rows;
-  slab.seconds_sampling += seconds_since(ts);
-
-  // Crossing bits per (row, axis, word), and the id of the first crossing of each: a
-  // crossing's id is its word's first id plus the crossings before it in the word.
-  std::vector<std::uint64_t>& C = scratch.crossing_bits;
-  std::vector<std::uint32_t>& off = scratch.first_id;
   C.resize(static_cast<size_t>(num_rows * 3 * W));
   off.resize(C.size());
+  linear.clear();
+  crossings.clear();
+  auto layer_values = [&](long long k) {  // F on node layer k, row j at j · nx
+    return &V[static_cast<size_t>((k - k0) % 3 * ny * nx)];
+  };
+  const bool refine = placer.refines();
   const std::uint64_t last_node_mask = (nx % 64) ? (1ull << (nx % 64)) - 1 : ~0ull;
   const std::uint64_t last_edge_mask =
       ((nx - 1) % 64) ? (1ull << ((nx - 1) % 64)) - 1 : ~0ull;  // x edges: i ≤ nx − 2
   const long long edge_words = (nx - 1 + 63) / 64;
   std::uint64_t id = 0, own_count = 0;
-  for (long long r = 0; r < num_rows; ++r) {
-    const long long j = r % ny, k = k0 + r / ny;
-    const std::uint64_t* p = &P[static_cast<size_t>(r * W)];
-    std::uint64_t* c = &C[static_cast<size_t>(r * 3 * W)];
-    if (r == own_rows) own_count = id;
-    for (long long w = 0; w < W; ++w) {
-      const std::uint64_t next = w + 1 < W ? p[w + 1] : 0;
-      std::uint64_t xb = p[w] ^ ((p[w] >> 1) | (next << 63));
-      if (w >= edge_words) xb = 0;
-      else if (w == edge_words - 1) xb &= last_edge_mask;
-      std::uint64_t yb = j + 1 < ny ? p[w] ^ p[w + W] : 0;
-      std::uint64_t zb = k + 1 < nz ? p[w] ^ p[w + W * ny] : 0;
-      if (w == W - 1) yb &= last_node_mask, zb &= last_node_mask;
-      c[w] = xb, c[W + w] = yb, c[2 * W + w] = zb;
-    }
-    std::uint32_t* o = &off[static_cast<size_t>(r * 3 * W)];
-    for (long long w = 0; w < 3 * W; ++w) {
-      o[w] = static_cast<std::uint32_t>(id);
-      id += static_cast<std::uint64_t>(std::popcount(c[w]));
-    }
-    if (id > kMaxVertices) {  // the caller reports it
-      slab.numbered = id;
-      return;
-    }
-  }
-  if (num_rows == own_rows) own_count = id;
-  slab.numbered = id;
 
-  // The linear point of every numbered crossing, in id order (the cells use those); then the
-  // vertices of the own layers, refined in one batch (without refinement: the linear points).
-  const auto tr = Clock::now();
-  std::vector<Vec3>& linear = scratch.linear;
-  std::vector<Crossing>& crossings = scratch.crossings;
-  linear.resize(id);
-  crossings.clear();
-  const bool refine = placer.refines();
-  if (refine) crossings.reserve(own_count);
-  {
-    const long long stride[3] = {1, nx, nx * ny};
-    size_t n = 0;
-    for (long long r = 0; r < num_rows; ++r) {
-      const long long j = r % ny, k = k0 + r / ny;
+  // F and its sign bits on node layer k.
+  auto sample_layer = [&](long long k) {
+    const auto ts = Clock::now();
+    double* layer = layer_values(k);
+    for (long long j = 0; j < ny; ++j) {
+      const long long r = j + ny * (k - k0);
+      const long long nans = sampler.sample(0, nx, j, k, layer + j * nx, &P[static_cast<size_t>(r * W)]);
+      if (r < own_rows) slab.nan_samples += nans;
+    }
+    slab.samples += nx * ny;
+    slab.seconds_sampling += seconds_since(ts);
+  };
+
+  // Crossing bits per (row, axis, word) of node layer k, and the id of the first crossing of
+  // each: a crossing's id is its word's first id plus the crossings before it in the word.
+  // False when the ids run out (the caller reports it).
+  auto number_layer = [&](long long k) {
+    std::uint64_t next_id = id;
+    for (long long j = 0; j < ny; ++j) {
+      const long long r = j + ny * (k - k0);
+      const std::uint64_t* p = &P[static_cast<size_t>(r * W)];
+      std::uint64_t* c = &C[static_cast<size_t>(r * 3 * W)];
+      if (r == own_rows) own_count = next_id;
+      for (long long w = 0; w < W; ++w) {
+        const std::uint64_t next = w + 1 < W ? p[w + 1] : 0;
+        std::uint64_t xb = p[w] ^ ((p[w] >> 1) | (next << 63));
+        if (w >= edge_words) xb = 0;
+        else if (w == edge_words - 1) xb &= last_edge_mask;
+        std::uint64_t yb = j + 1 < ny ? p[w] ^ p[w + W] : 0;
+        std::uint64_t zb = k + 1 < nz ? p[w] ^ p[w + W * ny] : 0;
+        if (w == W - 1) yb &= last_node_mask, zb &= last_node_mask;
+        c[w] = xb, c[W + w] = yb, c[2 * W + w] = zb;
+      }
+      std::uint32_t* o = &off[static_cast<size_t>(r * 3 * W)];
+      for (long long w = 0; w < 3 * W; ++w) {
+        o[w] = static_cast<std::uint32_t>(next_id);
+        next_id += static_cast<std::uint64_t>(std::popcount(c[w]));
+      }
+      if (next_id > kMaxVertices) {
+        id = next_id;
+        return false;
+      }
+    }
+    id = next_id;
+    if (k + 1 == k_own && k_own == k_num) own_count = id;  // the slab ends at the grid's top
+    return true;
+  };
+
+  // The linear points of node layer k's crossings in id order (the cells use those), and the
+  // crossings of the own layers to refine.
+  const Grid grid = g;  // a copy the stores below cannot alias, so its fields stay in registers
+  auto place_layer = [&](long long k) {
+    const auto tr = Clock::now();
+    const size_t first = linear.size();
+    linear.resize(id);
+    size_t n = first;
+    const bool refine_own = refine && k < k_own;
+    const double* layer = layer_values(k);
+    const double* next_layer = k + 1 < nz ? layer_values(k + 1) : layer;
+    for (long long j = 0; j < ny; ++j) {
+      const long long r = j + ny * (k - k0);
       const std::uint64_t* c = &C[static_cast<size_t>(r * 3 * W)];
-      for (int a = 0; a < 3; ++a)
+      const double* row = layer + j * nx;
+      const double* ends[3] = {row + 1, j + 1 < ny ? row + nx : row, next_layer + j * nx};
+      // Each axis with its number known to the compiler.
+      auto along = [&](auto axis) {
+        constexpr int a = decltype(axis)::value;
+        const double* end = ends[a];
         for (long long w = 0; w < W; ++w)
           for (std::uint64_t b = c[a * W + w]; b; b &= b - 1, ++n) {
             const long long i = w * 64 + std::countr_zero(b);
-            const long long at = r * nx + i;
-            const double fa = V[static_cast<size_t>(at)], fb = V[static_cast<size_t>(at + stride[a])];
-            linear[n] = linear_point(g, i, j, k, a, fa, fb);
-            if (refine && n < own_count) crossings.push_back({i, j, k, a, fa, fb});
+            const double fa = row[i], fb = end[i];
+            linear[n] = linear_point(grid, i, j, k, a, fa, fb);
+            if (refine_own) crossings.push_back({i, j, k, a, fa, fb});
           }
+      };
+      along(std::integral_constant<int, 0>{});
+      along(std::integral_constant<int, 1>{});
+      along(std::integral_constant<int, 2>{});
     }
-    slab.positions.resize(own_count);
-    if (refine) placer.place(crossings, slab.positions.data(), slab.evaluations);
-    else std::copy(linear.begin(), linear.begin() + static_cast<long>(own_count), slab.positions.begin());
-  }
-  slab.seconds_refinement += seconds_since(tr);
+    slab.seconds_refinement += seconds_since(tr);
+  };
 
-  // Triangles of the slab's cells, cell row by cell row.
+  // Triangles of the cells of layer k, cell row by cell row. A cell's case comes from the
+  // sign bits, its corner values are read only to decide ambiguous faces, and the id of the
+  // vertex on its edge e is the first id of the edge's word plus the crossings before it there.
   const CellPolygons* table = detail::cell_polygon_table();
   const std::uint64_t last_cell_mask = last_edge_mask;
   const long long cell_words = edge_words;
-  for (long long k = k0; k < k_cells; ++k)
+  // Where the words of cube edge e's (row, axis) start in C and off, from those of the cell's
+  // first node row.
+  long long edge_word[12];
+  for (int e = 0; e < 12; ++e) {
+    const long long row = (kEdgeRow[e] & 1) + (kEdgeRow[e] >> 1) * ny;
+    edge_word[e] = (row * 3 + kEdgeAxis[e]) * W;
+  }
+  // Triangles are written through a pointer, with room for one more cell checked per cell.
+  ScratchVector<Triangle>& tris = slab.triangles;
+  tris.resize(static_cast<size_t>(2 * nx * ny) + kMaxCellTriangles);  // a guess; grows if needed
+  Triangle* tri = tris.data();
+  const Triangle* tri_end = tri + tris.size();
+  auto triangulate_layer = [&](long long k) {
+    const Vec3* lin = linear.data();
+    const double* layer = layer_values(k);
+    const double* next_layer = layer_values(k + 1);
+    Triangle* out = tri;
+    long long active = 0;
     for (long long j = 0; j + 1 < ny; ++j) {
       // Node rows of corners (dy, dz) = (0,0), (1,0), (0,1), (1,1).
       const long long r0 = j + ny * (k - k0);
       const long long nr[4] = {r0, r0 + 1, r0 + ny, r0 + ny + 1};
-      const double* vr[4];
-      for (int q = 0; q < 4; ++q) vr[q] = &V[static_cast<size_t>(nr[q] * nx)];
+      const double* vr[4] = {layer + j * nx, layer + (j + 1) * nx, next_layer + j * nx,
+                             next_layer + (j + 1) * nx};
+      const std::uint64_t* pr[4];
+      for (int q = 0; q < 4; ++q) pr[q] = &P[static_cast<size_t>(nr[q] * W)];
       for (long long w = 0; w < cell_words; ++w) {
+        CellWord cw;
         std::uint64_t all = ~0ull, any = 0;
         for (int q = 0; q < 4; ++q) {
-          const std::uint64_t* p = &P[static_cast<size_t>(nr[q] * W)];
-          const std::uint64_t next = w + 1 < W ? p[w + 1] : 0;
-          const std::uint64_t s = (p[w] >> 1) | (next << 63);
-          all &= p[w] & s;
-          any |= p[w] | s;
+          const std::uint64_t next = w + 1 < W ? pr[q][w + 1] : 0;
+          cw.lo[q] = pr[q][w];
+          cw.hi[q] = (pr[q][w] >> 1) | (next << 63);
+          all &= cw.lo[q] & cw.hi[q];
+          any |= cw.lo[q] | cw.hi[q];
         }
         std::uint64_t act = any & ~all;
         if (w == cell_words - 1) act &= last_cell_mask;
+        if (!act) continue;
+        cw.load();
+        const std::uint64_t* crossing_word = &C[static_cast<size_t>(r0 * 3 * W + w)];
+        const std::uint32_t* first_id_word = &off[static_cast<size_t>(r0 * 3 * W + w)];
         while (act) {
-          const long long i = w * 64 + std::countr_zero(act);
+          const int b = std::countr_zero(act);
           act &= act - 1;
+          const long long i = w * 64 + b;
+          const int cube_case = cw.cube_case(b);
+          ++active;
           // Corner c at (i + dx, j + dy, k + dz), Lorensen numbering.
-          double v[8];
-          for (int c = 0; c < 8; ++c) v[c] = vr[kCornerRow[c]][i + detail::kCorner[c][0]];
-          const CellCase cc = classify_cell(v, table);
-          ++slab.active_cells;
-          slab.ambiguous += cc.ambiguous;
+          const CellPolygons& polys = cell_entry(
+              table, cube_case, [&](int c) { return vr[kCornerRow[c]][i + detail::kCorner[c][0]]; },
+              slab.ambiguous);
+          // The crossings before node i, and before node i + 1 (at b = 63 that is the whole
+          // word, and the next word's first id is this one's plus its crossings).
+          const std::uint64_t before[2] = {(1ull << b) - 1, (2ull << b) - 1};
           std::uint32_t ids[12];
-          Vec3 pos[12];
-          for (unsigned m = detail::kCrossingEdges[static_cast<size_t>(cc.cube_case)]; m; m &= m - 1) {
+          for (unsigned m = detail::kCrossingEdges[static_cast<size_t>(cube_case)]; m; m &= m - 1) {
             const int e = std::countr_zero(m);
-            const long long ii = i + kEdgeDx[e];
-            const size_t at = static_cast<size_t>((nr[kEdgeRow[e]] * 3 + kEdgeAxis[e]) * W + (ii >> 6));
-            ids[e] = off[at] + static_cast<std::uint32_t>(std::popcount(C[at] & ((1ull << (ii & 63)) - 1)));
-            pos[e] = linear[ids[e]];
+            const long long at = edge_word[e];
+            ids[e] = first_id_word[at] +
+                     static_cast<std::uint32_t>(std::popcount(crossing_word[at] & before[kEdgeDx[e]]));
           }
-          emit_cell(*cc.polys, ids, pos, slab.triangles);
+          if (tri_end - out < kMaxCellTriangles) {
+            const size_t used = static_cast<size_t>(out - tris.data());
+            tris.resize(2 * tris.size());
+            out = tris.data() + used, tri_end = tris.data() + tris.size();
+          }
+          triangulate_cell(
+              polys, [&](int e) -> const Vec3& { return lin[ids[e]]; },
+              [&](int e0, int e1, int e2) { *out++ = {ids[e0], ids[e1], ids[e2]}; });
         }
       }
     }
+    tri = out;
+    slab.active_cells += active;
+  };
+
+  long long numbered = k0, triangulated = k0;  // the next layers to number and to triangulate
+  for (long long k = k0; k < k_end; ++k) {
+    sample_layer(k);
+    for (; numbered < k_num && (numbered < k || numbered + 1 == nz); ++numbered) {
+      if (!number_layer(numbered)) {
+        slab.numbered = id;
+        return;
+      }
+      place_layer(numbered);
+    }
+    for (; triangulated < k_cells && triangulated + 1 < numbered; ++triangulated)
+      triangulate_layer(triangulated);
+  }
+  slab.numbered = id;
+  tris.resize(static_cast<size_t>(tri - tris.data()));
+
+  // The vertices of the own layers: refined in one batch, or the linear points.
+  const auto tr = Clock::now();
+  slab.positions.resize(own_count);
+  if (refine) placer.place(crossings, slab.positions.data(), slab.evaluations);
+  else std::copy(linear.begin(), linear.begin() + static_cast<long>(own_count), slab.positions.begin());
+  slab.seconds_refinement += seconds_since(tr);
 }
 
 DenseResult extract_dense(const Surface& surface, const Grid& g, const PolygonizeOptions& o,
@@ -925,7 +1354,7 @@ DenseResult extract_dense(const Surface& surface, const Grid& g, const Polygoniz
     Triangle* dst = &res.triangles[tri_base[static_cast<size_t>(s)]];
     for (const Triangle& t : slab.triangles) *dst++ = {t[0] + b, t[1] + b, t[2] + b};
     std::vector<Vec3>().swap(slab.positions);
-    std::vector<Triangle>().swap(slab.triangles);
+    ScratchVector<Triangle>().swap(slab.triangles);
   }
 
   // The slabs ran on all workers: count their sampling and refinement shares of the wall time.
@@ -1075,18 +1504,15 @@ DenseResult extract_sparse(const Surface& surface, const Grid& g, const Polygoni
               const auto& d = detail::kCorner[c];
               cv[c] = v[static_cast<size_t>(((kk + d[2]) * sy + jj + d[1]) * sx + ii + d[0])];
             }
-            bool any = false, all = true;
-            for (double val : cv) {
-              const bool p = is_positive(val);
-              any |= p, all &= p;
-            }
-            if (!any || all) continue;
-            const CellCase cc = classify_cell(cv, table);
+            int cube_case = 0;
+            for (int c = 0; c < 8; ++c) cube_case |= static_cast<int>(is_positive(cv[c])) << c;
+            if (cube_case == 0 || cube_case == 255) continue;
             ++active_cells;
-            ambiguous += cc.ambiguous;
+            const CellPolygons& polys =
+                cell_entry(table, cube_case, [&](int c) { return cv[c]; }, ambiguous);
             std::uint64_t key[12];
             Vec3 pos[12];
-            for (unsigned m = detail::kCrossingEdges[static_cast<size_t>(cc.cube_case)]; m; m &= m - 1) {
+            for (unsigned m = detail::kCrossingEdges[static_cast<size_t>(cube_case)]; m; m &= m - 1) {
               const int e = std::countr_zero(m);
               const int c0 = kEdgeCorners[e][0], c1 = kEdgeCorners[e][1];
               const auto& d = detail::kCorner[c0];
@@ -1096,7 +1522,9 @@ DenseResult extract_sparse(const Surface& surface, const Grid& g, const Polygoni
               pos[e] = linear_point(g, gi, gj, gk, a, cv[c0], cv[c1]);
               out_c.push_back({key[e], {gi, gj, gk, a, cv[c0], cv[c1]}});
             }
-            emit_cell(*cc.polys, key, pos, out_t);
+            triangulate_cell(
+                polys, [&](int e) -> const Vec3& { return pos[e]; },
+                [&](int e0, int e1, int e2) { out_t.push_back({key[e0], key[e1], key[e2]}); });
           }
       std::sort(out_c.begin(), out_c.end(),
                 [](const KeyedCrossing& l, const KeyedCrossing& r) { return l.key < r.key; });
@@ -1188,12 +1616,12 @@ GridPlan plan_grid(const Surface& surface, const PolygonizeOptions& options) {
     const double B = options.brick_cells;
     plan.estimated_bytes = nodes / (B * B * B) * 40.0 + mesh_bytes;
   } else {
-    // Each worker holds one slab: its node layers plus two, 8 bytes of F and about half a
-    // byte of bit sets and ids per node.
-    const double slab_nodes = static_cast<double>(kSlabLayers + 2) *
-                              static_cast<double>(g.nx()) * static_cast<double>(g.ny());
-    plan.estimated_bytes =
-        detail::worker_count(options.threads) * slab_nodes * (8.0 + 0.5) + mesh_bytes;
+    // Each worker holds F on three node layers (8 bytes a node) and the bit sets and ids of
+    // one slab, its node layers plus two (about half a byte a node).
+    const double layer_nodes = static_cast<double>(g.nx()) * static_cast<double>(g.ny());
+    plan.estimated_bytes = detail::worker_count(options.threads) * layer_nodes *
+                               (3 * 8.0 + static_cast<double>(kSlabLayers + 2) * 0.5) +
+                           mesh_bytes;
   }
   return plan;
 }

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 
@@ -69,6 +71,51 @@ TEST(McTable, ComplementaryCasesHaveReversedCycles) {
     }
     EXPECT_EQ(next_p, next_q) << "case " << c;
   }
+}
+
+TEST(McTable, ChordsJoinNeighboursAndPointsOfDifferentFaces) {
+  for (int c = 0; c < 256; ++c)
+    for (int d = 0; d < 64; ++d) {
+      const CellPolygons& p = cell_polygons(c, d);
+      int start = 0;
+      for (int k = 0; k < p.cycle_count; ++k) {
+        const int n = p.cycle_length[k];
+        for (int a = 0; a < n; ++a) {
+          for (int b = 0; b < n; ++b) {
+            const bool allowed = ((p.chords[start + a] >> b) & 1) != 0;
+            const bool neighbours = (a + 1) % n == b || (b + 1) % n == a;
+            const bool one_face = edges_share_face(p.edges[start + a], p.edges[start + b]);
+            EXPECT_EQ(allowed, a != b && (neighbours || !one_face)) << "case " << c;
+          }
+          EXPECT_EQ(p.chords[start + a] >> n, 0) << "case " << c;  // only points of the cycle
+        }
+        start += n;
+      }
+    }
+}
+
+TEST(McTable, EveryResolutionOfTheAmbiguousFacesHasItsOwnEntry) {
+  const CellPolygons* table = cell_polygon_table();
+  for (int c = 0; c < 256; ++c) {
+    const int amb = ambiguous_faces(c);
+    std::array<int, 64> seen{};
+    for (int d = 0; d < 64; ++d) {
+      // Bits of faces that are not ambiguous do not matter.
+      EXPECT_EQ(&cell_polygons(c, d), &cell_polygons(c, d & amb)) << "case " << c;
+      if ((d & ~amb) == 0) ++seen[static_cast<size_t>(ambiguous_rank(c, d))];
+    }
+    const int resolutions = 1 << std::popcount(static_cast<unsigned>(amb));
+    const CellPolygons* first = table + kCaseFirst[static_cast<size_t>(c)];
+    const CellPolygons* end = table + kCaseFirst[static_cast<size_t>(c) + 1];
+    EXPECT_EQ(end - first, resolutions);
+    for (int r = 0; r < 64; ++r)
+      EXPECT_EQ(seen[static_cast<size_t>(r)], r < resolutions ? 1 : 0) << "case " << c;
+    for (int d = 0; d < 64; ++d) {
+      EXPECT_GE(&cell_polygons(c, d), first);
+      EXPECT_LT(&cell_polygons(c, d), end);
+    }
+  }
+  EXPECT_EQ(kCellEntries, 656);
 }
 
 TEST(McTable, AsymptoticDeciderFollowsTheBilinearSaddle) {

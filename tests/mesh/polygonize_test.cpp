@@ -83,6 +83,18 @@ TEST(Polygonize, VerticesLieOnTheSurfaceAndFacesFollowTheGradient) {
   for (const Vec3& n : m.normals) EXPECT_NEAR(n.norm(), 1, 1e-12);
 }
 
+TEST(Polygonize, VerticesConvergeWhereTheSurfaceTouchesAGridLine) {
+  // The torus's top circle (z = r) lies in a grid plane at these resolutions: the x edges
+  // through it touch the surface (F has a double root there), where Newton's method alone
+  // crawls and stops far from the root after its few steps.
+  const Surface s = test::catalog_surface("torus");
+  for (int cells : {32, 40}) {
+    PolygonizeStats st;
+    const Mesh m = polygonize(s, {.cells = cells}, &st);
+    EXPECT_LT(max_residual(s, m), 1e-12 * st.cell_size) << cells;
+  }
+}
+
 TEST(Polygonize, BoundaryVerticesLieOnTheClipAndTheSurface) {
   const Surface s = test::kummer(1.5, 3);
   PolygonizeStats st;
@@ -142,6 +154,26 @@ TEST(Polygonize, SparseGridMatchesDenseGrid) {
   const Mesh dense = polygonize(s, {.cells = 40, .mode = GridMode::kDense}, &sd);
   const Mesh sparse = polygonize(s, {.cells = 40, .mode = GridMode::kSparse, .brick_cells = 4}, &ss);
   EXPECT_TRUE(ss.sparse);
+  EXPECT_EQ(sorted(sparse.triangles), sorted(dense.triangles));
+  EXPECT_EQ(sparse.positions, dense.positions);
+}
+
+TEST(Polygonize, DenseSlabsMatchSparseBricksOnAnUnevenGrid) {
+  // 45 cell layers: the dense path's last slab is shorter than the others, and no axis has
+  // the same number of cells.
+  const Surface s = test::kummer(1.5, 3);
+  const Box3 box{Vec3(-3, -2.1, -2.7), Vec3(2.4, 2.7, 3)};
+  const PolygonizeOptions base{.bounds = box, .cells = 45};
+  PolygonizeOptions dense_options = base, sparse_options = base;
+  dense_options.mode = GridMode::kDense;
+  sparse_options.mode = GridMode::kSparse;
+  sparse_options.brick_cells = 4;
+  PolygonizeStats sd;
+  const Mesh dense = polygonize(s, dense_options, &sd);
+  const Mesh sparse = polygonize(s, sparse_options);
+  EXPECT_NE(sd.cells[0], sd.cells[1]);
+  EXPECT_NE(sd.cells[1], sd.cells[2]);
+  ASSERT_FALSE(dense.empty());
   EXPECT_EQ(sorted(sparse.triangles), sorted(dense.triangles));
   EXPECT_EQ(sparse.positions, dense.positions);
 }

@@ -8,13 +8,16 @@
 ///    univariate polynomial evaluated by Horner's rule, otherwise the field is evaluated over
 ///    structure-of-arrays rows (Evaluator::values). F ≥ 0 (and NaN) counts as positive. The
 ///    dense path works through slabs of 16 cell layers, one per worker at a time from sampling
-///    to triangles, so it holds a few slabs of values rather than the whole grid (the two node
-///    layers above a slab are sampled again by the next one).
+///    to triangles a node layer at a time, so a worker holds F on three node layers and the
+///    bit sets of one slab rather than the whole grid (the two node layers above a slab are
+///    sampled again by the next one).
 ///  - Every sign-changing grid edge gets exactly one vertex, numbered by the edge (a per-row
 ///    prefix count over bit sets, as in Flying Edges, Schroeder et al. 2015), so neighbouring
 ///    cells share it without welding by coordinates. The vertex starts at the linear
-///    interpolation and is refined on the edge by the Illinois variant of regula falsi, in
-///    batches over all edges.
+///    interpolation and is refined on the edge, in batches over all edges: for polynomials by
+///    Newton's method on the edge's univariate restriction, kept inside a bracket whose
+///    Illinois estimate (regula falsi) takes over where Newton's steps stop shrinking fast, as
+///    where the surface touches the edge; for other fields by the Illinois method.
 ///  - Each cube's surface is built from the segments on its six faces: a face with four sign
 ///    changes is resolved by the asymptotic decider (Nielson & Hamann 1991), computed from the
 ///    face's own values in one canonical order, so both cubes that share a face connect the
@@ -65,7 +68,8 @@ struct PolygonizeOptions {
   int brick_cells = 8;
   /// Safety factor of the sparse brick test (see the header comment).
   double sparse_margin = 2.0;
-  /// Illinois iterations at most per edge vertex (0: linear interpolation only).
+  /// Refinement steps at most per edge vertex, one evaluation of F each (0: linear
+  /// interpolation only).
   int refine_steps = 12;
   /// Sample polynomial fields row by row through their univariate restriction.
   bool polynomial_rows = true;
@@ -114,8 +118,9 @@ Mesh polygonize(const Surface& surface, const PolygonizeOptions& options = {},
                 PolygonizeStats* stats = nullptr, std::stop_token stop = {});
 
 /// The grid the options give for this surface: box, cells per axis and cell size, and an
-/// estimate of the peak memory of `polygonize` in bytes (dense: every node; sparse: bricks
-/// near a surface of area about 6 × the box's cross-section). Cheap; throws like polygonize.
+/// estimate of the peak memory of `polygonize` in bytes (the mesh, for a surface of area about
+/// 6 × the box's cross-section, and dense: per worker F on three node layers and a slab's bit
+/// sets; sparse: the bricks' corners). Cheap; throws like polygonize.
 struct GridPlan {
   Box3 box;
   std::array<long long, 3> cells{0, 0, 0};
