@@ -170,8 +170,8 @@ def main():
              "Times in milliseconds, 2 threads for zeroset (OpenMP, passive wait policy as its command "
              f"line uses) and for VTK (its SMP backend: {vtk_backend()}); load average "
              f"{load:.1f} when the run started. zeroset samples F through the polynomial's restriction to each grid "
-             "row (Horner); its extraction includes vertex refinement on F along each edge (Illinois, "
-             "12 steps at most); the column without refinement does the same work as VTK (linear "
+             "row (Horner); its extraction includes vertex refinement on F along each edge (Newton inside an Illinois bracket, "
+             "12 steps at most); the column without refinement (`--refine-steps 0`) does the same work as VTK (linear "
              "interpolation). Clean-up (cutting at the clip sphere, collapsing degenerate triangles, "
              "normals from ∇F) is zeroset's own extra work and not in the totals; VTK is timed likewise "
              "without normals and scalars (points and triangles only), and also with its defaults. Peers get their field "
@@ -179,7 +179,8 @@ def main():
              "np.meshgrid, is in the note below).", "",
              "| cells | numpy sampling | VTK copy-in | vtkFlyingEdges3D | (with its default normals) | skimage | zeroset sampling | "
              "zeroset extraction | zeroset extraction, no refinement | zeroset clean-up | "
-             "VTK / zeroset extraction | (numpy + VTK) / zeroset (sampling + extraction) |",
+             "VTK / zeroset extraction (with refinement, without) | "
+             "(numpy + VTK) / zeroset sampling + extraction (with refinement, without) |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     quality_rows = []
     for n in (64, 128, 256):
@@ -187,12 +188,14 @@ def main():
         z = zs[(n, 0, 12, 1)]
         z0 = zs[(n, 0, 0, 1)]
         zs_total = z["sampling_ms"] + z["extraction_ms"]
+        zs_total_linear = z0["sampling_ms"] + z0["extraction_ms"]
         peer_total = 1e3 * (p["numpy_sampling"] + p["vtk"])
         lines.append(f"| {n}³ | {1e3 * p['numpy_sampling']:.1f} | {1e3 * p['vtk_copy']:.1f} | {1e3 * p['vtk']:.1f} | "
                      f"{1e3 * p['vtk_defaults']:.1f} | "
                      f"{1e3 * p['skimage']:.1f} | {z['sampling_ms']:.1f} | {z['extraction_ms']:.1f} | "
                      f"{z0['extraction_ms']:.1f} | {z['cleanup_ms']:.1f} | "
-                     f"{1e3 * p['vtk'] / z['extraction_ms']:.2f}× | {peer_total / zs_total:.1f}× |")
+                     f"{1e3 * p['vtk'] / z['extraction_ms']:.2f}×, {1e3 * p['vtk'] / z0['extraction_ms']:.2f}× | "
+                     f"{peer_total / zs_total:.1f}×, {peer_total / zs_total_linear:.1f}× |")
         quality_rows.append((n, p, z))
     lines += ["", "numpy through np.meshgrid instead of broadcasting: " + ", ".join(
         f"{1e3 * p['numpy_meshgrid']:.1f} ms at {n}³" for n, p, _ in quality_rows) + "."]

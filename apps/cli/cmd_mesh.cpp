@@ -26,6 +26,7 @@ struct MeshArgs {
   SurfaceArgs surface;
   int resolution = 128;
   std::string grid = "auto";
+  int refine_steps = PolygonizeOptions{}.refine_steps;
   std::string improve = "auto";
   std::string boundary = "constrain";
   bool no_curvature = false;
@@ -187,6 +188,7 @@ void run_mesh(const MeshArgs& a) {
   PolygonizeOptions po;
   po.cells = resolution;
   po.threads = global_flags().threads;
+  po.refine_steps = a.refine_steps;
   if (a.grid == "dense") po.mode = GridMode::kDense;
   else if (a.grid == "sparse") po.mode = GridMode::kSparse;
   else if (a.grid != "auto") throw InvalidArgument("--grid", a.grid, "use auto, dense or sparse");
@@ -322,6 +324,11 @@ void register_mesh_command(CLI::App& app) {
           ->capture_default_str();
   cmd->add_option("--grid", args->grid,
                   "auto, dense (sample every node) or sparse (bricks near the surface only)")
+      ->capture_default_str();
+  cmd->add_option("--refine-steps", args->refine_steps,
+                  "Steps placing each vertex onto F = 0 along its grid edge, one evaluation of F "
+                  "each (0: linear interpolation, as classic marching cubes)")
+      ->check(CLI::Range(0, 64))
       ->capture_default_str();
   args->improve_opt =
       cmd->add_option("--improve", args->improve,

@@ -40,13 +40,31 @@ TEST_F(MeshCli, WritesMeshAndStats) {
   EXPECT_TRUE(j["topology_after"]["watertight"].get<bool>());
 }
 
+TEST_F(MeshCli, RefineStepsZeroIsLinearInterpolationOffTheSurface) {
+  // Linear interpolation leaves the vertices of a sphere inside it, off F = 0 by about h²;
+  // the default refinement puts them on it to rounding.
+  auto max_residual = [&](const std::string& flags) {
+    const auto r = run("sphere --resolution 16 --improve off " + flags + " -o " + path("s.ply") +
+                       " --stats " + path("s.json"));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    std::ifstream in(path("s.json"));
+    const nlohmann::json j = nlohmann::json::parse(in);
+    EXPECT_EQ(j["polygonize"]["refine_evaluations"].get<long long>() == 0,
+              flags.find("--refine-steps 0") != std::string::npos);
+    return j["quality_before"]["residual"]["max"].get<double>();
+  };
+  EXPECT_GT(max_residual("--refine-steps 0"), 1e-4);
+  EXPECT_LT(max_residual(""), 1e-12);
+}
+
 TEST_F(MeshCli, BadInputExitsWithTwoAndWritesNothing) {
   for (const std::string& args :
        {std::string("sphere --resolution 0 -o ") + path("a.obj"),
         std::string("sphere --resolution 30000 -o ") + path("a.obj"),
         std::string("sphere -o ") + path("a.xyz"), std::string("sphere -o ") + path("nodir/a.obj"),
         std::string("sphere --improve sometimes -o ") + path("a.obj"),
-        std::string("sphere --boundary loose -o ") + path("a.obj")}) {
+        std::string("sphere --boundary loose -o ") + path("a.obj"),
+        std::string("sphere --refine-steps -1 -o ") + path("a.obj")}) {
     const auto r = run(args);
     EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
     EXPECT_NE(r.output.find("error"), std::string::npos) << r.output;
