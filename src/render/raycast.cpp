@@ -12,6 +12,7 @@
 #include <immintrin.h>
 #endif
 
+#include "bernstein_detail.h"
 #include "interval_detail.h"
 #include "zeroset/error.h"
 #include "zeroset/expr/polynomial.h"
@@ -130,18 +131,6 @@ inline __m256d restrict_and_shift4(const double (*row)[4], const double (*band_c
 // gain flattens out at 4 (a picture of Barth's sextic: 3% fewer instructions than with 3).
 constexpr int kHullLevels = 4;
 
-/// 1 / C(D, k), as RootFinder's change to the Bernstein basis rounds it.
-template <int D>
-constexpr std::array<double, D + 1> kInverseBinomial = [] {
-  std::array<double, D + 1> inverse{};
-  double binomial = 1;  // C(D, k), exact
-  for (int k = 0; k <= D; ++k) {
-    inverse[static_cast<size_t>(k)] = 1 / binomial;
-    binomial = binomial * (D - k) / (k + 1);
-  }
-  return inverse;
-}();
-
 /// Which lanes of a sequence of coefficients so far all lie above the band (`above`), or all
 /// below it (`below`): the convex hull test of RootFinder, one coefficient at a time.
 struct HullTest4 {
@@ -205,7 +194,8 @@ inline int hull_misses4(const __m256d* g, __m256d band, int lanes) {
   b[0] = g[0];
 #pragma GCC unroll 16
   for (int k = 1; k <= D; ++k)
-    b[k] = _mm256_mul_pd(g[k], _mm256_set1_pd(kInverseBinomial<D>[static_cast<size_t>(k)]));
+    b[k] = _mm256_mul_pd(g[k],
+                         _mm256_set1_pd(detail::kInverseBinomials[D][static_cast<size_t>(k)]));
 #pragma GCC unroll 16
   for (int i = 0; i < D; ++i)
 #pragma GCC unroll 16

@@ -5,6 +5,7 @@
 #include <limits>
 #include <string>
 
+#include "bernstein_detail.h"
 #include "zeroset/error.h"
 
 namespace zeroset {
@@ -17,23 +18,6 @@ constexpr int kMaxStack = 64;
 constexpr double kMinTolerance = 1e-15;
 // Subdivisions a guided piece may take before the search falls back to the plain one.
 constexpr int kGuidedSplits = 8;
-
-/// inverse[d][k] = 1 / C(d, k), for the change to the Bernstein basis.
-struct InverseBinomials {
-  double inverse[kN][kN] = {};
-  InverseBinomials() {
-    double binom[kN][kN] = {};
-    for (int n = 0; n < kN; ++n) {
-      binom[n][0] = binom[n][n] = 1;
-      for (int k = 1; k < n; ++k) binom[n][k] = binom[n - 1][k - 1] + binom[n - 1][k];
-      for (int k = 0; k <= n; ++k) inverse[n][k] = 1 / binom[n][k];
-    }
-  }
-};
-const InverseBinomials& inverse_binomials() {
-  static const InverseBinomials table;
-  return table;
-}
 
 // The coefficient arrays below are written one double at a time; vectorized code that reads
 // two at once stalls on store forwarding (the load straddles two earlier scalar stores), which
@@ -149,7 +133,7 @@ ZS_NO_VECTORIZE void to_bernstein(const double* g, int d_, double lo, double hi,
   if (lo != 0)
     for (int i = 0; i < d; ++i)
       for (int k = d - 1; k >= i; --k) b[k] += lo * b[k + 1];
-  const double* inverse = inverse_binomials().inverse[d];
+  const double* inverse = detail::kInverseBinomials[static_cast<size_t>(d)].data();
   const double w = hi - lo;
   double wk = w;
   for (int k = 1; k <= d; ++k) {
