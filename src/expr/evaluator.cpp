@@ -341,4 +341,29 @@ void Evaluator::values_gradients(std::span<const double> x, std::span<const doub
   }
 }
 
+void Evaluator::values_gradients_hessians(std::span<const double> x, std::span<const double> y,
+                                          std::span<const double> z, std::span<double> value,
+                                          std::span<double> gx, std::span<double> gy,
+                                          std::span<double> gz,
+                                          const std::array<std::span<double>, 6>& hessian) {
+  check_lengths(x.size(), {y.size(), z.size(), value.size(), gx.size(), gy.size(), gz.size(),
+                           hessian[0].size(), hessian[1].size(), hessian[2].size(),
+                           hessian[3].size(), hessian[4].size(), hessian[5].size()});
+  const detail::Program& program = field_.tape().full;
+  const double* u = scratch_->uniforms.data();
+  double* s = scratch_->block.data();
+  const std::span<double> outs[4] = {value, gx, gy, gz};
+  for (std::size_t start = 0; start < x.size(); start += kBlock) {
+    const int count = static_cast<int>(std::min<std::size_t>(kBlock, x.size() - start));
+    load_block(x, y, z, start, count, s);
+    run<kBlock>(program, u, s);
+    for (int k = 0; k < 4; ++k)
+      store_block(program.outputs[static_cast<std::size_t>(k)], s, u, count,
+                  outs[k].data() + start);
+    for (int k = 0; k < 6; ++k)
+      store_block(program.outputs[static_cast<std::size_t>(detail::kFullHessian + k)], s, u,
+                  count, hessian[static_cast<std::size_t>(k)].data() + start);
+  }
+}
+
 }  // namespace zeroset

@@ -29,18 +29,6 @@
 #include <omp.h>
 #endif
 
-// Loops the compiler vectorises also get an AVX2 variant, chosen when the program loads on a
-// processor that has it: twice the lanes of the x86-64 baseline. Without FMA contraction
-// (not enabled) each variant computes the same bits, so results do not depend on the machine.
-#if defined(__x86_64__) && defined(__has_attribute)
-#if __has_attribute(target_clones)
-#define ZS_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
-#endif
-#endif
-#ifndef ZS_VECTOR_CLONES
-#define ZS_VECTOR_CLONES
-#endif
-
 namespace zeroset {
 namespace {
 
@@ -177,86 +165,6 @@ struct alignas(64) Neighbour {
 };
 static_assert(sizeof(Neighbour) == detail::kRecordFields * sizeof(double));
 
-// The constants of the pair terms (the switch is a double: a select on a bool stops the
-// compiler from vectorising the loop).
-struct PairConstants {
-  double alpha;       // α
-  double cos_weight;  // 1: E_ij weighted by |cos(∇F_i, ∇F_j)|; 0: not
-  double grading;     // g
-};
-
-// The terms of one pair: E_ij, |r|²·E_ij, the force along r_ij and the grading limit.
-struct PairTerms {
-  double e, de, fx, fy, fz, lim;
-};
-
-// The terms of the pair of floaters i and j with offset r_ij = (dx, dy, dz), |r_ij|² = d2, radii
-// σ_i = si and σ_j = sj, fission radius σ_max^j = pm, |n_i·n_j| = cosine for their unit normals
-// and `no_normal` 1 when either has none, else 0 (ALGORITHMS A.1–A.2, B and the scaled form, see
-// FloaterOptions::scaled_repulsion). A pair beyond reach 3·max(σ_i, σ_j) (the filters keep a
-// few) adds exactly nothing: no energy or force, and an infinite limit. Branch-free, so loops
-// calling it vectorise; each element is computed the same way whether they do or not.
-template <bool kScaled>
-inline __attribute__((always_inline)) PairTerms pair_term(double dx, double dy, double dz,
-                                                          double d2, double si, double sj,
-                                                          double pm, double cosine,
-                                                          double no_normal, PairConstants k) {
-  // w_ij = |cos(∇F_i, ∇F_j)|, or 1 when either has no normal (then the cosine is exactly 0).
-  const double w = k.cos_weight > 0 ? cosine + no_normal : 1.0;
-  const bool within = d2 < std::max(9 * si * si, 9 * sj * sj);
-  const double aw = within ? k.alpha * w : 0.0;
-  const double u = d2 * (1 / (2 * (si * si)));  // |r|²/2σ_i²: E_ij is cut off at u = 9/2
-  // Scaled: x = |r|²/σ_ij² with σ_ij = (σ_i + σ_j)/2; A.2: x = |r|²/σ_j² (the E_ji term).
-  const double inv = kScaled ? 2 / (si + sj) : 1 / sj;
-  const double x = d2 * inv * inv;
-  const double amplitude = kScaled ? 2 * si * inv : si * si * inv * inv;
-  // Both terms are finite for every listed pair; beyond its own cutoff each is dropped.
-  const double eij = aw * detail::exp_cutoff(-u) * (1 - u * (2.0 / 9));
-  const double pair = amplitude * aw * detail::exp_cutoff(-0.5 * x) * (1 - x * (1.0 / 9));
-  const double e = u < 4.5 ? eij : 0.0;
-  const double f = x < 9 ? pair : 0.0;
-  const double coef = kScaled ? f : f + e;
-  const double limit = pm + k.grading * std::sqrt(d2);
-  return {e,         d2 * e,
-          coef * dx, coef * dy,
-          coef * dz, within ? limit : std::numeric_limits<double>::infinity()};
-}
-
-// The terms of m pairs, element by element, from floater i's position, radius and normal
-// (arrays *i) and floater j's record fields (arrays *j, pm the fission radius σ_max^j); the
-// arrays cannot overlap, so the compiler vectorises the loop. Returns how many pairs are
-// (nearly) coincident, |r_ij|² < 10⁻¹⁸σ_i²: they feel no force along r = 0, so their terms are
-// to be computed again with a separating offset.
-template <bool kScaled>
-ZS_VECTOR_CLONES std::size_t pair_terms(
-    std::size_t m, PairConstants k, const double* __restrict xi, const double* __restrict yi,
-    const double* __restrict zi, const double* __restrict si, const double* __restrict nxi,
-    const double* __restrict nyi, const double* __restrict nzi, const double* __restrict xj,
-    const double* __restrict yj, const double* __restrict zj, const double* __restrict sj,
-    const double* __restrict pm, const double* __restrict nxj, const double* __restrict nyj,
-    const double* __restrict nzj, double* __restrict es, double* __restrict des,
-    double* __restrict fxs, double* __restrict fys, double* __restrict fzs,
-    double* __restrict lims) {
-  std::size_t coincident = 0;
-  for (std::size_t q = 0; q < m; ++q) {
-    const double dx = xi[q] - xj[q], dy = yi[q] - yj[q], dz = zi[q] - zj[q];
-    const double d2 = dx * dx + dy * dy + dz * dz;
-    coincident += d2 < 1e-18 * (si[q] * si[q]);
-    const double cosine = std::abs(nxi[q] * nxj[q] + nyi[q] * nyj[q] + nzi[q] * nzj[q]);
-    const bool free_i = nxi[q] == 0 && nyi[q] == 0 && nzi[q] == 0;
-    const bool free_j = nxj[q] == 0 && nyj[q] == 0 && nzj[q] == 0;
-    const PairTerms t = pair_term<kScaled>(dx, dy, dz, d2, si[q], sj[q], pm[q], cosine,
-                                           free_i || free_j ? 1.0 : 0.0, k);
-    es[q] = t.e;
-    des[q] = t.de;
-    fxs[q] = t.fx;
-    fys[q] = t.fy;
-    fzs[q] = t.fz;
-    lims[q] = t.lim;
-  }
-  return coincident;
-}
-
 }  // namespace
 
 RadiusAdapt parse_radius_adapt(std::string_view text, std::string_view flag) {
@@ -338,8 +246,10 @@ struct FloaterSystem::Impl {
   detail::SpatialHash hash;
 
   std::vector<Evaluator> evaluators;
-  // Per thread: the perimeter points of curvature_estimates() and their F and ∇F.
+  // Per thread: the perimeter points of curvature_estimates() and their F and ∇F; and the
+  // points of update_estimators() with F, ∇F and the Hessian's six entries.
   std::vector<std::array<std::vector<double>, 7>> perimeter;
+  std::vector<std::array<std::vector<double>, 13>> hessian_batch;
   int threads = 1;
   mutable std::vector<Vec3> shown_normals;
   mutable bool shown_normals_valid = false;
@@ -384,6 +294,7 @@ struct FloaterSystem::Impl {
     threads = resolve_threads(opt.threads);
     while (static_cast<int>(evaluators.size()) < threads) evaluators.emplace_back(surface.field);
     perimeter.resize(evaluators.size());
+    hessian_batch.resize(evaluators.size());
   }
 
   double sigma_max() const { return opt.max_radius_factor * sigma_hat; }
@@ -581,18 +492,32 @@ struct FloaterSystem::Impl {
       const std::size_t m = e - b;
       std::vector<double> alpha(m, 1.0), beta(m, 1.0);
       if (need_hessian) {
+        // F, ∇F and the Hessian at the chunk's floaters, in one batched evaluation.
+        auto& v = hessian_batch[static_cast<std::size_t>(thread_index())];
+        for (auto& a : v) a.resize(m);
+        for (std::size_t k = 0; k < m; ++k) {
+          v[0][k] = pos[b + k].x();
+          v[1][k] = pos[b + k].y();
+          v[2][k] = pos[b + k].z();
+        }
+        ev.values_gradients_hessians(v[0], v[1], v[2], v[3], v[4], v[5], v[6],
+                                     {v[7], v[8], v[9], v[10], v[11], v[12]});
         for (std::size_t k = 0; k < m; ++k) {
           const std::size_t i = b + k;
-          const FieldSample fs = ev.sample(pos[i], true, false);
+          const Vec3 gradient(v[4][k], v[5][k], v[6][k]);
+          Mat3 hessian;
+          hessian << v[7][k], v[8][k], v[9][k],  //
+              v[8][k], v[10][k], v[11][k],       //
+              v[9][k], v[11][k], v[12][k];
           // Away from singular points the Hessian is regular and only |r| matters: the
           // eigenvalues are wanted for a singular Hessian or a floater that may snap.
-          const auto regular = detail::regular_corrector(fs.gradient, fs.hessian);
+          const auto regular = detail::regular_corrector(gradient, hessian);
           const bool may_snap = opt.snap_to_nodes && !pinned[i];
           if (regular && !(may_snap && regular->norm() < kSnapFraction * sigma[i])) {
             beta[k] = std::min(regular->norm() / singular_scale, 1.0);
             continue;
           }
-          const detail::Corrector c = detail::newton_corrector(fs.gradient, fs.hessian);
+          const detail::Corrector c = detail::newton_corrector(gradient, hessian);
           const double r = c.reaches ? c.step.norm() : std::numeric_limits<double>::infinity();
           beta[k] = std::isfinite(r) ? std::min(r / singular_scale, 1.0) : 1.0;
           candidate[i] =
@@ -796,44 +721,25 @@ struct FloaterSystem::Impl {
             kMaxRadius * sigma_max()};
   }
 
-  // Pair terms are computed in batches of about this many pairs, over several floaters: long
-  // vectorised loops, and the batch stays in the first-level cache.
+  // Pair terms are computed in batches of about this many pairs, over several floaters:
+  // independent work for the processor, and the batch stays in the first-level cache.
   static constexpr std::size_t kPairBatch = 256;
 
-  // Per-thread scratch of the gather pass.
+  // Per-thread scratch of the gather pass: the floaters of a block of cells that may be within
+  // reach of a floater of its centre cell, their slots and their single-precision coordinates
+  // and thresholds, contiguous; the indices into these one floater's test kept; and the batch.
   struct Scratch {
     std::array<detail::SpatialHash::Range, detail::SpatialHash::kMaxBlockRanges> ranges;
-    // The block's floaters that may be within reach of a floater of the cell: their slots, and
-    // their single-precision coordinates and thresholds, contiguous.
     std::vector<std::uint32_t> slot;
     std::vector<float> x, y, z, cut;
-    std::vector<std::uint32_t> near;  // indices into the above one floater's test kept
-    // The batch of pairs: the slot of j; i's position, radius and normal; j's record fields
-    // (detail::gather_records); then the pair's energy term, its σ-derivative part, the force
-    // along r_ij and the grading limit. Each floater's pairs are consecutive, in slot order.
-    std::vector<std::uint32_t> other;
-    std::vector<double> xi, yi, zi, si, nxi, nyi, nzi;
-    std::array<std::vector<double>, detail::kRecordFields> record;
-    std::vector<double> e, de, fx, fy, fz, lim;
-    std::size_t pairs = 0;
-    struct Owner {
-      std::uint32_t slot, index, first, last;  // a floater and its pairs [first, last)
-    };
-    std::vector<Owner> owners;
+    std::vector<std::uint32_t> near;
+    detail::PairBatch batch;
 
     void reserve_candidates(std::size_t candidates) {
       const std::size_t size = candidates + detail::kFilterPad;
       if (slot.size() >= size) return;
       for (auto* v : {&slot, &near}) v->resize(size);
       for (auto* v : {&x, &y, &z, &cut}) v->resize(size);
-    }
-    void reserve_pairs(std::size_t count) {
-      if (e.size() >= count) return;
-      count = std::max(count, kPairBatch);
-      other.resize(count);
-      for (auto* v : {&xi, &yi, &zi, &si, &nxi, &nyi, &nzi, &e, &de, &fx, &fy, &fz, &lim})
-        v->resize(count);
-      for (auto& v : record) v.resize(count);
     }
   };
   std::vector<Scratch> scratch;  // one per thread, kept from step to step
@@ -860,6 +766,8 @@ struct FloaterSystem::Impl {
     chunk_near.resize(chunks);
     scratch.resize(static_cast<std::size_t>(threads));
     const MoveConstants k = move_constants();
+    const detail::PairConstants pk{opt.repulsion, opt.cos_weight ? 1.0 : 0.0,
+                                   opt.radius_grading};
     const auto runs = hash.runs();
     const auto order = hash.order();
 #pragma omp parallel num_threads(threads) if (n >= kParallelMin)
@@ -878,11 +786,11 @@ struct FloaterSystem::Impl {
           const std::size_t kept =
               detail::filter_near(filter, {&all, 1}, c.x.data(), c.y.data(), c.z.data(),
                                   c.cut.data(), fx[s], fy[s], fz[s], fcut[s], c.near.data());
-          if (c.pairs + kept > kPairBatch) sum_pairs_and_move(c, ev, k);
-          list_pairs(s, order[s], kept, c);
+          c.batch.add(s, c.slot.data(), c.near.data(), kept, mu[order[s]] * sigma_max());
+          if (c.batch.pairs() >= kPairBatch) sum_and_move(c.batch, pk, ev, k);
         }
       }
-      sum_pairs_and_move(c, ev, k);
+      sum_and_move(c.batch, pk, ev, k);
 #pragma omp barrier
       // Summed per chunk in index order: the same on any number of threads.
 #pragma omp for schedule(static)
@@ -903,7 +811,7 @@ struct FloaterSystem::Impl {
 
   // The neighbour search tests single-precision distances first (detail::filter_box and
   // filter_near), keeping every pair within reach 3·max(σ_i, σ_j) and a few more (see
-  // detail::prefilter_threshold); list_pairs() then decides each exactly. This is the first
+  // detail::prefilter_threshold); detail::pair_sums() then decides each exactly. This is the first
   // test, per cell: the floaters of the 3×3×3 block within reach of the bounding box of the
   // cell's floaters, copied into c (contiguous, for the second test, per floater); returns how
   // many.
@@ -937,104 +845,24 @@ struct FloaterSystem::Impl {
     return static_cast<std::uint32_t>(m);
   }
 
-  // Adds the pairs of floater i (at slot s) to the batch in c: the `kept` candidates listed
-  // in c.near other than i itself. pair_terms() tests each exactly, in double precision.
-  void list_pairs(std::uint32_t s, std::uint32_t i, std::size_t kept, Scratch& c) const {
-    c.reserve_pairs(c.pairs + kept);
-    const std::size_t first = c.pairs;
-    std::size_t m = first;
-    for (std::size_t q = 0; q < kept; ++q) {
-      const std::uint32_t t = c.slot[c.near[q]];
-      c.other[m] = t;
-      m += t != s;
+  // The batch's floaters' E_i, ∂E_i/∂σ_i, desired velocities and graded fission radii from
+  // their pairs; then each moves (move_one()). Empties the batch.
+  void sum_and_move(detail::PairBatch& batch, const detail::PairConstants& k, Evaluator& ev,
+                    const MoveConstants& mc) {
+    const auto sums = batch.sum(filter, opt.scaled_repulsion, k,
+                                reinterpret_cast<const double*>(packed.data()), pid.data());
+    const auto order = hash.order();
+    for (std::size_t b = 0; b < sums.size(); ++b) {
+      const std::uint32_t s = batch.floater(b).self, i = order[s];
+      const double si = packed[s].sigma;
+      const double limit = k.grading > 0 ? sums[b].limit : batch.floater(b).limit;
+      energy[i] = sums[b].e;
+      denergy[i] = sums[b].de / (si * si * si);
+      desired[i] = Vec3(sums[b].vx, sums[b].vy, sums[b].vz);
+      graded[i] = limit;
+      move_one(i, limit, ev, mc);
     }
-    const Neighbour& me = packed[s];
-    for (std::size_t q = first; q < m; ++q) {
-      c.xi[q] = me.x;
-      c.yi[q] = me.y;
-      c.zi[q] = me.z;
-      c.si[q] = me.sigma;
-      c.nxi[q] = me.nx;
-      c.nyi[q] = me.ny;
-      c.nzi[q] = me.nz;
-    }
-    c.owners.push_back({s, i, static_cast<std::uint32_t>(first), static_cast<std::uint32_t>(m)});
-    c.pairs = m;
-  }
-
-  // The pair terms of the batch in c, and from them each listed floater's E_i, ∂E_i/∂σ_i,
-  // desired velocity and graded fission radius, each summed over its pairs in order; then the
-  // floater moves (move_one()). Empties the batch.
-  void sum_pairs_and_move(Scratch& c, Evaluator& ev, const MoveConstants& mc) {
-    const PairConstants k{opt.repulsion, opt.cos_weight ? 1.0 : 0.0, opt.radius_grading};
-    std::array<double*, detail::kRecordFields> fields;
-    for (std::size_t f = 0; f < fields.size(); ++f) fields[f] = c.record[f].data();
-    detail::gather_records(filter, c.pairs, c.other.data(),
-                           reinterpret_cast<const double*>(packed.data()), fields.data());
-    const auto& r = c.record;  // x, y, z, sigma, smax, nx, ny, nz, as in Neighbour
-    const auto terms = opt.scaled_repulsion ? pair_terms<true> : pair_terms<false>;
-    const std::size_t coincident =
-        terms(c.pairs, k, c.xi.data(), c.yi.data(), c.zi.data(), c.si.data(), c.nxi.data(),
-              c.nyi.data(), c.nzi.data(), r[0].data(), r[1].data(), r[2].data(), r[3].data(),
-              r[4].data(), r[5].data(), r[6].data(), r[7].data(), c.e.data(), c.de.data(),
-              c.fx.data(), c.fy.data(), c.fz.data(), c.lim.data());
-    if (coincident > 0) separate_coincident(c, k);
-    for (const Scratch::Owner& o : c.owners) {
-      double e_sum = 0, de_sum = 0, vx = 0, vy = 0, vz = 0;
-      double limit = mu[o.index] * sigma_max();
-      for (std::size_t q = o.first; q < o.last; ++q) {
-        e_sum += c.e[q];
-        de_sum += c.de[q];
-        vx += c.fx[q];
-        vy += c.fy[q];
-        vz += c.fz[q];
-      }
-      if (k.grading > 0)
-        for (std::size_t q = o.first; q < o.last; ++q) limit = std::min(limit, c.lim[q]);
-      const double si = packed[o.slot].sigma;
-      energy[o.index] = e_sum;
-      denergy[o.index] = de_sum / (si * si * si);
-      desired[o.index] = Vec3(vx, vy, vz);
-      graded[o.index] = limit;
-      move_one(o.index, limit, ev, mc);
-    }
-    c.pairs = 0;
-    c.owners.clear();
-  }
-
-  // Coincident floaters feel no force along r = 0: the terms of such a pair are computed
-  // again with a tiny offset along a direction both derive from their ids, with opposite
-  // signs, so they separate.
-  void separate_coincident(Scratch& c, PairConstants k) const {
-    for (const Scratch::Owner& o : c.owners)
-      for (std::size_t q = o.first; q < o.last; ++q) {
-        const std::uint32_t s = o.slot, t = c.other[q];
-        const Neighbour &a = packed[s], &b = packed[t];
-        const double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z, si = a.sigma;
-        if (!(dx * dx + dy * dy + dz * dz < 1e-18 * (si * si))) continue;
-        const std::uint64_t lo = std::min(pid[s], pid[t]), hi = std::max(pid[s], pid[t]);
-        const std::uint64_t h = detail::mix64(lo * 0x9e3779b97f4a7c15ULL ^ hi);
-        const double sign = pid[s] < pid[t] ? 1.0 : -1.0;
-        const double angle = 2 * std::numbers::pi * static_cast<double>(h >> 11) * 0x1.0p-53;
-        const double ox = sign * 1e-3 * si * std::cos(angle);
-        const double oy = sign * 1e-3 * si * std::sin(angle);
-        const double cosine = std::abs(a.nx * b.nx + a.ny * b.ny + a.nz * b.nz);
-        const bool free_a = a.nx == 0 && a.ny == 0 && a.nz == 0;
-        const bool free_b = b.nx == 0 && b.ny == 0 && b.nz == 0;
-        const double no_normal = free_a || free_b ? 1.0 : 0.0;
-        const PairTerms r =
-            opt.scaled_repulsion
-                ? pair_term<true>(ox, oy, 0, ox * ox + oy * oy, si, b.sigma, b.smax, cosine,
-                                  no_normal, k)
-                : pair_term<false>(ox, oy, 0, ox * ox + oy * oy, si, b.sigma, b.smax, cosine,
-                                   no_normal, k);
-        c.e[q] = r.e;
-        c.de[q] = r.de;
-        c.fx[q] = r.fx;
-        c.fy[q] = r.fy;
-        c.fz[q] = r.fz;
-        c.lim[q] = r.lim;
-      }
+    batch.clear();
   }
 
   // F_q·q̇ at every floater (exact parameter derivatives).

@@ -151,38 +151,7 @@ std::size_t box_sse2(std::span<const SpatialHash::Range> ranges, const float* x,
   return m;
 }
 
-// Four records are two 4×4 blocks of doubles; each is transposed by unpacking pairs of rows
-// and swapping 128-bit halves.
-__attribute__((target("avx2"))) void gather_avx2(std::size_t m, const std::uint32_t* slots,
-                                                 const double* records, double* const* out) {
-  std::size_t q = 0;
-  for (; q + 4 <= m; q += 4) {
-    const double* r[4];
-    for (int k = 0; k < 4; ++k) r[k] = records + kRecordFields * slots[q + k];
-    for (std::size_t half = 0; half < kRecordFields; half += 4) {
-      const __m256d a0 = _mm256_load_pd(r[0] + half), a1 = _mm256_load_pd(r[1] + half);
-      const __m256d a2 = _mm256_load_pd(r[2] + half), a3 = _mm256_load_pd(r[3] + half);
-      const __m256d lo01 = _mm256_unpacklo_pd(a0, a1), hi01 = _mm256_unpackhi_pd(a0, a1);
-      const __m256d lo23 = _mm256_unpacklo_pd(a2, a3), hi23 = _mm256_unpackhi_pd(a2, a3);
-      _mm256_storeu_pd(out[half] + q, _mm256_permute2f128_pd(lo01, lo23, 0x20));
-      _mm256_storeu_pd(out[half + 1] + q, _mm256_permute2f128_pd(hi01, hi23, 0x20));
-      _mm256_storeu_pd(out[half + 2] + q, _mm256_permute2f128_pd(lo01, lo23, 0x31));
-      _mm256_storeu_pd(out[half + 3] + q, _mm256_permute2f128_pd(hi01, hi23, 0x31));
-    }
-  }
-  for (; q < m; ++q)
-    for (std::size_t k = 0; k < kRecordFields; ++k)
-      out[k][q] = records[kRecordFields * slots[q] + k];
-}
-
 #endif
-
-void gather_scalar(std::size_t m, const std::uint32_t* slots, const double* records,
-                   double* const* out) {
-  for (std::size_t q = 0; q < m; ++q)
-    for (std::size_t k = 0; k < kRecordFields; ++k)
-      out[k][q] = records[kRecordFields * slots[q] + k];
-}
 
 std::size_t filter_scalar(std::span<const SpatialHash::Range> ranges, const float* x,
                           const float* y, const float* z, const float* cut, float px, float py,
@@ -271,14 +240,6 @@ std::size_t filter_box(FilterPath path, std::span<const SpatialHash::Range> rang
     default:
       return box_scalar(ranges, x, y, z, cut, lo, hi, reach, out);
   }
-}
-
-void gather_records(FilterPath path, std::size_t m, const std::uint32_t* slots,
-                    const double* records, double* const* out) {
-#ifdef ZS_FILTER_X86
-  if (path == FilterPath::kAvx2) return gather_avx2(m, slots, records, out);
-#endif
-  gather_scalar(m, slots, records, out);
 }
 
 }  // namespace zeroset::detail

@@ -3,8 +3,7 @@
 // may lie within reach of a cell's floaters, and of one floater. Most of a block's points do not,
 // and these tests are the bulk of the work on them, so they run eight points at a time with AVX2
 // where the processor has it, four with SSE2 otherwise, and one at a time elsewhere; every
-// variant keeps exactly the same points. Then the records of the pairs kept are transposed into
-// arrays for the pair terms, four at a time with AVX2. Private to the floaters module.
+// variant keeps exactly the same points. Private to the floaters module.
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -41,11 +40,5 @@ std::size_t filter_box(FilterPath path, std::span<const SpatialHash::Range> rang
 
 /// Doubles in a neighbour record: records are 64-byte aligned groups of this many.
 inline constexpr std::size_t kRecordFields = 8;
-
-/// Copies field k of record slots[q] to out[k][q], for q < m and k < kRecordFields: the records
-/// `records` (64-byte aligned, kRecordFields doubles each) of the pairs' neighbours, transposed
-/// into one array per field. Every path copies the same values. Pure and thread-safe.
-void gather_records(FilterPath path, std::size_t m, const std::uint32_t* slots,
-                    const double* records, double* const* out);
 
 }  // namespace zeroset::detail

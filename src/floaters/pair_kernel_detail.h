@@ -1,13 +1,65 @@
 #pragma once
-// Pieces of the floaters' neighbour (repulsion) pass that are worth testing on their own: an
-// exponential for the pair terms, written so the compiler vectorises loops that call it, and
-// the single-precision prefilter threshold that never drops a pair within the cutoff.
-// Private to the floaters module.
+// The floaters' neighbour (repulsion) pass, the part worth testing on its own: the terms of a
+// pair of floaters and their sums over one floater's neighbours, with an exponential written
+// for it, and the single-precision prefilter threshold that never drops a pair within the
+// cutoff. The pair terms are written once, for a lane type that is either a double or four
+// doubles (GCC's vector extension, the AVX2 kernel's registers), with the same operations in
+// the same order in both, so both give the same bits. Private to the floaters module.
+#include <array>
 #include <bit>
+#include <cmath>
+#include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <numbers>
+#include <span>
+#include <vector>
+
+#include "neighbour_filter_detail.h"
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#define ZS_PAIR_LANES4 1
+#endif
 
 namespace zeroset::detail {
+
+// ---- lane types: what the formulas below need of a double and of four doubles ----------------
+
+[[gnu::always_inline]] inline std::uint64_t to_bits(double v) {
+  return std::bit_cast<std::uint64_t>(v);
+}
+[[gnu::always_inline]] inline double from_bits(std::uint64_t b) {
+  return std::bit_cast<double>(b);
+}
+template <class V>
+[[gnu::always_inline]] inline V splat(double v) {
+  return v;
+}
+
+#ifdef ZS_PAIR_LANES4
+// Functions on these take AVX vectors by value and are always inlined into AVX2 code, so the
+// warning that callers without AVX would pass them differently does not apply.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
+// Four lanes. Arithmetic, comparisons (which give lane masks of all ones or zeros) and a ?: on
+// a mask act lane by lane, each lane exactly as the scalar operation.
+using Double4 = double __attribute__((vector_size(32)));
+using Bits4 = std::uint64_t __attribute__((vector_size(32)));
+using Mask4 = decltype(Double4{} < Double4{});
+[[gnu::always_inline]] inline Bits4 to_bits(Double4 v) { return std::bit_cast<Bits4>(v); }
+[[gnu::always_inline]] inline Double4 from_bits(Bits4 b) { return std::bit_cast<Double4>(b); }
+template <>
+[[gnu::always_inline]] inline Double4 splat<Double4>(double v) {
+  return Double4{v, v, v, v};
+}
+#pragma GCC diagnostic pop
+#endif
+
+/// |v|, by clearing the sign bit (as std::abs does).
+template <class V>
+[[gnu::always_inline]] inline V magnitude(V v) {
+  return from_bits(to_bits(v) & 0x7fff'ffff'ffff'ffffULL);
+}
 
 /// e^a for a in [−4.5, 0], the range of every pair term inside the cutoff (|r| < 3σ gives
 /// exponents above −9/2), with relative error below 1e-10: Cody–Waite reduction to
@@ -15,18 +67,19 @@ namespace zeroset::detail {
 /// interval). The pair energies need far less; std::exp is exact to the last bit, but a call per
 /// pair cannot be vectorised and cost a sixth of a step. Arguments below −64 are taken as −64
 /// (those terms lie beyond the cutoff and are discarded); a NaN gives an unspecified value.
-/// Branch-free and pure, so loops calling it vectorise.
-inline double exp_cutoff(double a) {
-  a = a < -64.0 ? -64.0 : a;
+/// Branch-free and pure; for V a double or Double4, lane by lane.
+template <class V>
+[[gnu::always_inline]] inline V exp_cutoff(V a) {
+  a = a < splat<V>(-64.0) ? splat<V>(-64.0) : a;
   // Adding 1.5·2^52 rounds a·log2(e) to the nearest integer k, which then sits in the low bits
   // of t; k << 52 added to the bits of p multiplies p by 2^k (k ≥ −93: no underflow).
   constexpr double kShift = 0x1.8p52;
   constexpr double kLn2Hi = 0x1.62e42feep-1;  // trailing zeros: k·kLn2Hi is exact
   constexpr double kLn2Lo = 0x1.a39ef35793c76p-33;
-  const double t = a * std::numbers::log2e + kShift;
-  const double k = t - kShift;
-  const double r = (a - k * kLn2Hi) - k * kLn2Lo;
-  double p = 0x1.a17df2ec2bc60p-13;
+  const V t = a * std::numbers::log2e + kShift;
+  const V k = t - kShift;
+  const V r = (a - k * kLn2Hi) - k * kLn2Lo;
+  V p = splat<V>(0x1.a17df2ec2bc60p-13);
   p = p * r + 0x1.6da753185ad01p-10;
   p = p * r + 0x1.1110a6222ea35p-7;
   p = p * r + 0x1.555464a0f079ep-5;
@@ -34,8 +87,7 @@ inline double exp_cutoff(double a) {
   p = p * r + 0x1.0000005c89e4ep-1;
   p = p * r + 0x1.fffffffff61fdp-1;
   p = p * r + 0x1.ffffffffa7135p-1;
-  const std::uint64_t scale = std::bit_cast<std::uint64_t>(t) << 52;
-  return std::bit_cast<double>(std::bit_cast<std::uint64_t>(p) + scale);
+  return from_bits(to_bits(p) + (to_bits(t) << 52));
 }
 
 /// The neighbour prefilter compares squared distances in single precision, on coordinates
@@ -49,5 +101,116 @@ inline float prefilter_threshold(double reach) {
   // The factor covers the float rounding of the sum of squares and of the threshold itself.
   return static_cast<float>(widened * widened * (1 + 0x1p-18));
 }
+
+
+// ---- the pair terms and their sums -------------------------------------------------------------
+
+/// The constants of the pair terms (the switch is a double, to be tested without a branch).
+struct PairConstants {
+  double alpha;       // α
+  double cos_weight;  // 1: E_ij weighted by |cos(∇F_i, ∇F_j)|; 0: not
+  double grading;     // g
+};
+
+/// The terms of one pair: E_ij, |r|²·E_ij, the force along r_ij and the grading limit.
+template <class V>
+struct PairTerms {
+  V e, de, fx, fy, fz, lim;
+};
+
+/// The terms of the pair of floaters i and j with offset r_ij = (dx, dy, dz), |r_ij|² = d2 and
+/// |r_ij| = dist, radii σ_i = si and σ_j = sj, fission radius σ_max^j = pm, |n_i·n_j| = cosine
+/// for their unit normals and `no_normal` 1 when either has none, else 0 (ALGORITHMS A.1–A.2,
+/// B, and the scaled form, see FloaterOptions::scaled_repulsion). A pair beyond reach
+/// 3·max(σ_i, σ_j) adds exactly nothing: no energy or force, and an infinite limit.
+template <bool kScaled, class V>
+[[gnu::always_inline]] inline PairTerms<V> pair_term(V dx, V dy, V dz, V d2, V dist, V si,
+                                                     V sj, V pm, V cosine, V no_normal,
+                                                     const PairConstants& k) {
+  const V zero = splat<V>(0.0);
+  // w_ij = |cos(∇F_i, ∇F_j)|, or 1 when either has no normal (then the cosine is exactly 0).
+  const V w = k.cos_weight > 0 ? cosine + no_normal : splat<V>(1.0);
+  const V reach_i = 9.0 * si * si, reach_j = 9.0 * sj * sj;
+  const auto within = d2 < (reach_i < reach_j ? reach_j : reach_i);
+  const V aw = within ? k.alpha * w : zero;
+  const V u = d2 * (1.0 / (2.0 * (si * si)));  // |r|²/2σ_i²: E_ij is cut off at u = 9/2
+  // Scaled: x = |r|²/σ_ij² with σ_ij = (σ_i + σ_j)/2; A.2: x = |r|²/σ_j² (the E_ji term).
+  V inv, amplitude;
+  if constexpr (kScaled) {
+    inv = 2.0 / (si + sj);
+    amplitude = 2.0 * si * inv;
+  } else {
+    inv = 1.0 / sj;
+    amplitude = si * si * inv * inv;
+  }
+  const V x = d2 * inv * inv;
+  // Both terms are finite for every listed pair; beyond its own cutoff each is dropped.
+  const V eij = aw * exp_cutoff(-u) * (1.0 - u * (2.0 / 9));
+  const V pair = amplitude * aw * exp_cutoff(-0.5 * x) * (1.0 - x * (1.0 / 9));
+  const V e = u < splat<V>(4.5) ? eij : zero;
+  const V f = x < splat<V>(9.0) ? pair : zero;
+  V coef;
+  if constexpr (kScaled)
+    coef = f;
+  else
+    coef = f + e;
+  const V limit = pm + k.grading * dist;
+  return {e,         d2 * e,
+          coef * dx, coef * dy,
+          coef * dz, within ? limit : splat<V>(std::numeric_limits<double>::infinity())};
+}
+
+/// Σ_j E_ij, Σ_j |r_ij|²·E_ij, the desired velocity Σ_j (force along r_ij), and the smallest
+/// grading limit (or the floater's own limit if that is smaller).
+struct PairSums {
+  double e, de, vx, vy, vz, limit;
+};
+
+/// The sums of the pair terms (pair_term(), scaled or not) of several floaters, each over its
+/// candidate neighbours. Floaters are added with their candidates, then all are summed at once:
+/// the terms of all their pairs first, four at a time whoever they belong to (independent work
+/// that keeps the processor's pipelines full; one floater alone has too few pairs for that),
+/// then each floater's terms, added in the order of its candidates (its own slot, if listed,
+/// taken out and replaced by the last), so every path gives the same bits.
+///
+/// A pair that is (nearly) coincident, |r_ij|² < 10⁻¹⁸σ_i², feels no force along r = 0: its
+/// terms are taken at a tiny offset along a direction both floaters derive from their ids,
+/// with opposite signs, so they separate.
+class PairBatch {
+ public:
+  /// Adds the floater at slot `self` (of the records and ids given to sum()) whose candidates
+  /// are the slots slots[near[q]] for q < kept; its own slot may be among them, and is
+  /// skipped. `limit` is its own fission radius, the start of its smallest grading limit.
+  void add(std::uint32_t self, const std::uint32_t* slots, const std::uint32_t* near,
+           std::size_t kept, double limit);
+
+  /// A floater added: its slot, its pairs [first, last) and its own limit.
+  struct Floater {
+    std::uint32_t self, first, last;
+    double limit;
+  };
+  /// Floaters added since the last clear().
+  std::size_t size() const { return floaters_.size(); }
+  /// The k-th of them.
+  const Floater& floater(std::size_t k) const { return floaters_[k]; }
+  /// Pairs listed since the last clear().
+  std::size_t pairs() const { return pairs_; }
+
+  /// The sums of every floater added, in the order added. `records` holds every floater's
+  /// record by slot (kRecordFields doubles, 64-byte aligned: x, y, z, σ, σ_max and the unit
+  /// normal, or 0 when it has none), `ids` its id. `path` must be available
+  /// (filter_path_available); AVX2 computes four pairs at a time. Valid until the next add(),
+  /// sum() or clear().
+  std::span<const PairSums> sum(FilterPath path, bool scaled, const PairConstants& k,
+                                const double* records, const std::uint64_t* ids);
+  void clear();
+
+ private:
+  std::vector<Floater> floaters_;
+  std::size_t pairs_ = 0;
+  std::vector<std::uint32_t> i_, j_;  // each pair's slots (the first pairs_ of them)
+  std::array<std::vector<double>, 6> terms_;  // each pair's E_ij, |r|²E_ij, force, limit
+  std::vector<PairSums> sums_;
+};
 
 }  // namespace zeroset::detail

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -206,11 +207,42 @@ TEST(Field, BatchedEvaluationEqualsScalarEvaluation) {
   }
 }
 
+TEST(Field, BatchedHessiansEqualSampledHessians) {
+  for (const auto& surface : all_surfaces()) {
+    SCOPED_TRACE(surface.source);
+    Evaluator ev(compile(surface));
+    const std::vector<Vec3> points = random_points(300, 1.5, 16);  // a partial last block
+    const std::size_t n = points.size();
+    std::vector<double> x, y, z, v(n), gx(n), gy(n), gz(n);
+    for (const Vec3& p : points) {
+      x.push_back(p.x());
+      y.push_back(p.y());
+      z.push_back(p.z());
+    }
+    std::array<std::vector<double>, 6> h;
+    for (auto& entry : h) entry.resize(n);
+    ev.values_gradients_hessians(x, y, z, v, gx, gy, gz, {h[0], h[1], h[2], h[3], h[4], h[5]});
+    for (std::size_t i = 0; i < n; ++i) {
+      const FieldSample s = ev.sample(points[i], true, false);
+      ASSERT_TRUE(same_value(v[i], s.value)) << i;
+      ASSERT_TRUE(same_value(gx[i], s.gradient.x()) && same_value(gy[i], s.gradient.y()) &&
+                  same_value(gz[i], s.gradient.z()))
+          << i;
+      const double want[6] = {s.hessian(0, 0), s.hessian(0, 1), s.hessian(0, 2),
+                              s.hessian(1, 1), s.hessian(1, 2), s.hessian(2, 2)};
+      for (std::size_t k = 0; k < 6; ++k)
+        ASSERT_TRUE(same_value(h[k][i], want[k])) << i << ' ' << k;
+    }
+  }
+}
+
 TEST(Field, BatchedEvaluationRejectsMismatchedSpans) {
   Evaluator ev(compile_field("x"));
   std::vector<double> a(3), b(2);
   EXPECT_THROW(ev.values(a, a, b, a), InvalidArgument);
   EXPECT_THROW(ev.values_gradients(a, a, a, a, a, b, a), InvalidArgument);
+  EXPECT_THROW(ev.values_gradients_hessians(a, a, a, a, a, a, a, {a, a, a, a, b, a}),
+               InvalidArgument);
   std::vector<double> empty;
   EXPECT_NO_THROW(ev.values(empty, empty, empty, empty));
 }

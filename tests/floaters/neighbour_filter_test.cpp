@@ -1,15 +1,11 @@
 // The neighbour search's single-precision filters: every implementation the build and processor
 // offer keeps exactly the points the plain test keeps, and the per-cell box filter keeps every
-// point the per-floater filter keeps for any floater in the box. The record gathering copies
-// the same fields on every path.
+// point the per-floater filter keeps for any floater in the box.
 #include "neighbour_filter_detail.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <array>
-#include <limits>
-#include <new>
 #include <random>
 #include <vector>
 
@@ -40,21 +36,6 @@ Cloud make_cloud(std::uint64_t seed) {
   }
   return c;
 }
-
-// Records are 64-byte aligned.
-template <class T>
-struct AlignedAllocator {
-  using value_type = T;
-  AlignedAllocator() = default;
-  template <class U>
-  AlignedAllocator(const AlignedAllocator<U>&) {}
-  T* allocate(std::size_t n) {
-    return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t{64}));
-  }
-  void deallocate(T* p, std::size_t) { ::operator delete(p, std::align_val_t{64}); }
-  bool operator==(const AlignedAllocator&) const { return true; }
-};
-using AlignedRecords = AlignedAllocator<double>;
 
 std::vector<FilterPath> available_paths() {
   std::vector<FilterPath> paths;
@@ -118,31 +99,6 @@ TEST(NeighbourFilter, BoxKeepsWhatAnyFloaterInTheBoxKeeps) {
                                fx[k], fy[k], fz[k], fcut[k], one.data()));
         for (std::uint32_t t : one) ASSERT_TRUE(std::binary_search(box.begin(), box.end(), t));
       }
-    }
-  }
-}
-
-TEST(NeighbourFilter, EveryPathGathersTheSameRecordFields) {
-  constexpr std::size_t kRecords = 50;
-  std::vector<double, AlignedRecords> records(kRecords * kRecordFields);
-  for (std::size_t k = 0; k < records.size(); ++k) records[k] = 0.5 * static_cast<double>(k) - 3;
-  std::mt19937_64 rng(9);
-  std::uniform_int_distribution<std::uint32_t> pick(0, kRecords - 1);
-  for (std::size_t m : {0, 1, 3, 4, 7, 64, 65}) {
-    std::vector<std::uint32_t> slots(m);
-    for (auto& s : slots) s = pick(rng);
-    for (FilterPath path : available_paths()) {
-      SCOPED_TRACE(static_cast<int>(path));
-      std::array<std::vector<double>, kRecordFields> fields;
-      std::array<double*, kRecordFields> out;
-      for (std::size_t f = 0; f < kRecordFields; ++f) {
-        fields[f].assign(m, std::numeric_limits<double>::quiet_NaN());
-        out[f] = fields[f].data();
-      }
-      gather_records(path, m, slots.data(), records.data(), out.data());
-      for (std::size_t q = 0; q < m; ++q)
-        for (std::size_t f = 0; f < kRecordFields; ++f)
-          ASSERT_EQ(fields[f][q], records[kRecordFields * slots[q] + f]) << q << ' ' << f;
     }
   }
 }

@@ -1,0 +1,200 @@
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "pair_kernel_detail.h"
+#include "rng_detail.h"
+
+#ifdef ZS_PAIR_LANES4
+#include <immintrin.h>
+#endif
+
+namespace zeroset::detail {
+namespace {
+
+// The pairs' term arrays are padded to whole groups of four.
+constexpr std::size_t kLanes = 4;
+
+bool has_normal(const double* record) {
+  return !(record[5] == 0 && record[6] == 0 && record[7] == 0);
+}
+
+// The terms of the pair of floaters at slots s (i) and t (j).
+template <bool kScaled>
+PairTerms<double> one_pair(const PairConstants& k, const double* records,
+                           const std::uint64_t* ids, std::uint32_t s, std::uint32_t t) {
+  const double* me = records + kRecordFields * s;
+  const double* other = records + kRecordFields * t;
+  const double si = me[3];
+  const double cosine = std::abs(me[5] * other[5] + me[6] * other[6] + me[7] * other[7]);
+  const double no_normal = has_normal(me) && has_normal(other) ? 0.0 : 1.0;
+  const double dx = me[0] - other[0], dy = me[1] - other[1], dz = me[2] - other[2];
+  const double d2 = dx * dx + dy * dy + dz * dz;
+  if (!(d2 < 1e-18 * (si * si)))
+    return pair_term<kScaled>(dx, dy, dz, d2, std::sqrt(d2), si, other[3], other[4], cosine,
+                              no_normal, k);
+  // Coincident: a separating offset of 10⁻³σ_i in a direction from both ids, signed by which
+  // id is smaller, so the two floaters take opposite offsets.
+  const std::uint64_t a = ids[s], b = ids[t];
+  const std::uint64_t lo = std::min(a, b), hi = std::max(a, b);
+  const std::uint64_t h = mix64(lo * 0x9e3779b97f4a7c15ULL ^ hi);
+  const double sign = a < b ? 1.0 : -1.0;
+  const double angle = 2 * std::numbers::pi * static_cast<double>(h >> 11) * 0x1.0p-53;
+  const double ox = sign * 1e-3 * si * std::cos(angle);
+  const double oy = sign * 1e-3 * si * std::sin(angle);
+  const double o2 = ox * ox + oy * oy;
+  return pair_term<kScaled>(ox, oy, 0.0, o2, std::sqrt(o2), si, other[3], other[4], cosine,
+                            no_normal, k);
+}
+
+// Stores the terms of pair q.
+void store(const PairTerms<double>& r, std::array<double*, 6> out, std::size_t q) {
+  out[0][q] = r.e;
+  out[1][q] = r.de;
+  out[2][q] = r.fx;
+  out[3][q] = r.fy;
+  out[4][q] = r.fz;
+  out[5][q] = r.lim;
+}
+
+template <bool kScaled>
+void terms_scalar(const PairConstants& k, const double* records, const std::uint64_t* ids,
+                  std::size_t m, const std::uint32_t* i, const std::uint32_t* j,
+                  std::array<double*, 6> out) {
+  for (std::size_t q = 0; q < m; ++q)
+    store(one_pair<kScaled>(k, records, ids, i[q], j[q]), out, q);
+}
+
+#ifdef ZS_PAIR_LANES4
+// Fields of four records, transposed into lane vectors: x, y, z, σ, σ_max, nx, ny, nz.
+__attribute__((target("avx2"), always_inline)) inline void transpose(const double* records, const std::uint32_t* slot,
+                                               Double4* f) {
+  for (int half = 0; half < 2; ++half) {
+    const double* r = records + 4 * half;
+    const __m256d a = _mm256_load_pd(r + kRecordFields * slot[0]);
+    const __m256d b = _mm256_load_pd(r + kRecordFields * slot[1]);
+    const __m256d c = _mm256_load_pd(r + kRecordFields * slot[2]);
+    const __m256d d = _mm256_load_pd(r + kRecordFields * slot[3]);
+    const __m256d ab_even = _mm256_unpacklo_pd(a, b), ab_odd = _mm256_unpackhi_pd(a, b);
+    const __m256d cd_even = _mm256_unpacklo_pd(c, d), cd_odd = _mm256_unpackhi_pd(c, d);
+    f[4 * half + 0] = _mm256_permute2f128_pd(ab_even, cd_even, 0x20);
+    f[4 * half + 1] = _mm256_permute2f128_pd(ab_odd, cd_odd, 0x20);
+    f[4 * half + 2] = _mm256_permute2f128_pd(ab_even, cd_even, 0x31);
+    f[4 * half + 3] = _mm256_permute2f128_pd(ab_odd, cd_odd, 0x31);
+  }
+}
+
+// Four pairs at a time, the lanes exactly as the scalar path computes each; the few (nearly)
+// coincident pairs are then computed again by the scalar path, which separates them. m must
+// be a multiple of four.
+template <bool kScaled>
+__attribute__((target("avx2"))) void terms_avx2(const PairConstants& k, const double* records,
+                                                const std::uint64_t* ids, std::size_t m,
+                                                const std::uint32_t* i, const std::uint32_t* j,
+                                                std::array<double*, 6> out) {
+  const Double4 zero = splat<Double4>(0.0), one = splat<Double4>(1.0);
+  for (std::size_t q = 0; q < m; q += kLanes) {
+    Double4 a[kRecordFields], b[kRecordFields];  // floaters i and j of the four pairs
+    transpose(records, i + q, a);
+    transpose(records, j + q, b);
+    const Double4 dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
+    const Double4 d2 = dx * dx + dy * dy + dz * dz;
+    const Double4 si = a[3];
+    const Double4 cosine = magnitude(a[5] * b[5] + a[6] * b[6] + a[7] * b[7]);
+    const Mask4 free_i = (a[5] == zero) & (a[6] == zero) & (a[7] == zero);
+    const Mask4 free_j = (b[5] == zero) & (b[6] == zero) & (b[7] == zero);
+    const Double4 no_normal = (free_i | free_j) ? one : zero;
+    const PairTerms<Double4> r = pair_term<kScaled>(dx, dy, dz, d2, _mm256_sqrt_pd(d2), si,
+                                                    b[3], b[4], cosine, no_normal, k);
+    _mm256_storeu_pd(out[0] + q, r.e);
+    _mm256_storeu_pd(out[1] + q, r.de);
+    _mm256_storeu_pd(out[2] + q, r.fx);
+    _mm256_storeu_pd(out[3] + q, r.fy);
+    _mm256_storeu_pd(out[4] + q, r.fz);
+    _mm256_storeu_pd(out[5] + q, r.lim);
+    const int coincident =
+        _mm256_movemask_pd(std::bit_cast<Double4>(d2 < 1e-18 * (si * si)));
+    for (int lane = 0; lane < 4; ++lane)
+      if (coincident >> lane & 1)
+        store(one_pair<kScaled>(k, records, ids, i[q + lane], j[q + lane]), out, q + lane);
+  }
+}
+#endif
+
+}  // namespace
+
+void PairBatch::add(std::uint32_t self, const std::uint32_t* slots, const std::uint32_t* near,
+                    std::size_t kept, double limit) {
+  const std::size_t first = pairs_;
+  if (j_.size() < first + kept + kLanes) {  // room for the pairs and the padding of sum()
+    const std::size_t room = 2 * (first + kept + kLanes);
+    i_.resize(room);
+    j_.resize(room);
+  }
+  // Every candidate in order, then the floater's own slot (there is at most one) replaced by
+  // the last candidate.
+  std::uint32_t* j = j_.data() + first;
+  std::size_t own = kept;
+  for (std::size_t q = 0; q < kept; ++q) {
+    j[q] = slots[near[q]];
+    if (j[q] == self) own = q;
+  }
+  std::size_t m = first + kept;
+  if (own < kept) j[own] = j[--m - first];
+  std::fill(i_.begin() + static_cast<std::ptrdiff_t>(first),
+            i_.begin() + static_cast<std::ptrdiff_t>(m), self);
+  pairs_ = m;
+  floaters_.push_back(
+      {self, static_cast<std::uint32_t>(first), static_cast<std::uint32_t>(m), limit});
+}
+
+std::span<const PairSums> PairBatch::sum(FilterPath path, bool scaled, const PairConstants& k,
+                                         const double* records, const std::uint64_t* ids) {
+  const std::size_t m = pairs_;
+  sums_.resize(floaters_.size());
+  if (floaters_.empty()) return sums_;
+  // Padded to whole groups with copies of a real pair, whose terms are not used.
+  const std::size_t padded = (m + kLanes - 1) / kLanes * kLanes;
+  std::array<double*, 6> out;
+  for (std::size_t t = 0; t < terms_.size(); ++t) {
+    if (terms_[t].size() < padded) terms_[t].resize(2 * padded);
+    out[t] = terms_[t].data();
+  }
+#ifdef ZS_PAIR_LANES4
+  if (path == FilterPath::kAvx2 && m > 0) {
+    std::fill(i_.begin() + static_cast<std::ptrdiff_t>(m),
+              i_.begin() + static_cast<std::ptrdiff_t>(padded), i_[0]);
+    std::fill(j_.begin() + static_cast<std::ptrdiff_t>(m),
+              j_.begin() + static_cast<std::ptrdiff_t>(padded), j_[0]);
+    (scaled ? terms_avx2<true> : terms_avx2<false>)(k, records, ids, padded, i_.data(),
+                                                     j_.data(), out);
+  } else
+#endif
+  {
+    (scaled ? terms_scalar<true> : terms_scalar<false>)(k, records, ids, m, i_.data(),
+                                                         j_.data(), out);
+  }
+  for (std::size_t f = 0; f < floaters_.size(); ++f) {
+    const Floater& fl = floaters_[f];
+    PairSums s{0, 0, 0, 0, 0, fl.limit};
+    for (std::uint32_t q = fl.first; q < fl.last; ++q) {
+      s.e += out[0][q];
+      s.de += out[1][q];
+      s.vx += out[2][q];
+      s.vy += out[3][q];
+      s.vz += out[4][q];
+      s.limit = out[5][q] < s.limit ? out[5][q] : s.limit;
+    }
+    sums_[f] = s;
+  }
+  return sums_;
+}
+
+void PairBatch::clear() {
+  floaters_.clear();
+  pairs_ = 0;
+}
+
+}  // namespace zeroset::detail
