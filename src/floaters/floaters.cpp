@@ -849,7 +849,7 @@ struct FloaterSystem::Impl {
   // their pairs; then each moves (move_one()). Empties the batch.
   void sum_and_move(detail::PairBatch& batch, const detail::PairConstants& k, Evaluator& ev,
                     const MoveConstants& mc) {
-    const auto sums = batch.sum(filter, opt.scaled_repulsion, k,
+    const auto sums = batch.sum(opt.scaled_repulsion, k,
                                 reinterpret_cast<const double*>(packed.data()), pid.data());
     const auto order = hash.order();
     for (std::size_t b = 0; b < sums.size(); ++b) {

@@ -49,22 +49,15 @@ PairTerms<double> one_pair(const PairConstants& k, const double* records,
                             no_normal, k);
 }
 
-// Stores the terms of pair q.
-void store(const PairTerms<double>& r, std::array<double*, 6> out, std::size_t q) {
-  out[0][q] = r.e;
-  out[1][q] = r.de;
-  out[2][q] = r.fx;
-  out[3][q] = r.fy;
-  out[4][q] = r.fz;
-  out[5][q] = r.lim;
-}
+using Terms = PairBatch::Terms;
+
+Terms record_of(const PairTerms<double>& r) { return {r.e, r.de, r.fx, r.fy, r.fz, r.lim, 0, 0}; }
 
 template <bool kScaled>
 void terms_scalar(const PairConstants& k, const double* records, const std::uint64_t* ids,
-                  std::size_t m, const std::uint32_t* i, const std::uint32_t* j,
-                  std::array<double*, 6> out) {
+                  std::size_t m, const std::uint32_t* i, const std::uint32_t* j, Terms* out) {
   for (std::size_t q = 0; q < m; ++q)
-    store(one_pair<kScaled>(k, records, ids, i[q], j[q]), out, q);
+    out[q] = record_of(one_pair<kScaled>(k, records, ids, i[q], j[q]));
 }
 
 #ifdef ZS_PAIR_LANES4
@@ -93,7 +86,7 @@ template <bool kScaled>
 __attribute__((target("avx2"))) void terms_avx2(const PairConstants& k, const double* records,
                                                 const std::uint64_t* ids, std::size_t m,
                                                 const std::uint32_t* i, const std::uint32_t* j,
-                                                std::array<double*, 6> out) {
+                                                Terms* out) {
   const Double4 zero = splat<Double4>(0.0), one = splat<Double4>(1.0);
   for (std::size_t q = 0; q < m; q += kLanes) {
     Double4 a[kRecordFields], b[kRecordFields];  // floaters i and j of the four pairs
@@ -108,17 +101,45 @@ __attribute__((target("avx2"))) void terms_avx2(const PairConstants& k, const do
     const Double4 no_normal = (free_i | free_j) ? one : zero;
     const PairTerms<Double4> r = pair_term<kScaled>(dx, dy, dz, d2, _mm256_sqrt_pd(d2), si,
                                                     b[3], b[4], cosine, no_normal, k);
-    _mm256_storeu_pd(out[0] + q, r.e);
-    _mm256_storeu_pd(out[1] + q, r.de);
-    _mm256_storeu_pd(out[2] + q, r.fx);
-    _mm256_storeu_pd(out[3] + q, r.fy);
-    _mm256_storeu_pd(out[4] + q, r.fz);
-    _mm256_storeu_pd(out[5] + q, r.lim);
+    // Lane vectors back to one record per pair: two 4×4 transposes.
+    const Double4 rows[2][4] = {{r.e, r.de, r.fx, r.fy}, {r.fz, r.lim, zero, zero}};
+    for (int half = 0; half < 2; ++half) {
+      const Double4* v = rows[half];
+      const __m256d lo01 = _mm256_unpacklo_pd(v[0], v[1]), hi01 = _mm256_unpackhi_pd(v[0], v[1]);
+      const __m256d lo23 = _mm256_unpacklo_pd(v[2], v[3]), hi23 = _mm256_unpackhi_pd(v[2], v[3]);
+      _mm256_store_pd(&out[q].e + 4 * half, _mm256_permute2f128_pd(lo01, lo23, 0x20));
+      _mm256_store_pd(&out[q + 1].e + 4 * half, _mm256_permute2f128_pd(hi01, hi23, 0x20));
+      _mm256_store_pd(&out[q + 2].e + 4 * half, _mm256_permute2f128_pd(lo01, lo23, 0x31));
+      _mm256_store_pd(&out[q + 3].e + 4 * half, _mm256_permute2f128_pd(hi01, hi23, 0x31));
+    }
     const int coincident =
         _mm256_movemask_pd(std::bit_cast<Double4>(d2 < 1e-18 * (si * si)));
     for (int lane = 0; lane < 4; ++lane)
       if (coincident >> lane & 1)
-        store(one_pair<kScaled>(k, records, ids, i[q + lane], j[q + lane]), out, q + lane);
+        out[q + lane] = record_of(one_pair<kScaled>(k, records, ids, i[q + lane], j[q + lane]));
+  }
+}
+#endif
+
+// out[q] = slots[near[q]] for q < kept.
+void list_slots_scalar(std::uint32_t* out, const std::uint32_t* slots, const std::uint32_t* near,
+                       std::size_t kept) {
+  for (std::size_t q = 0; q < kept; ++q) out[q] = slots[near[q]];
+}
+
+#ifdef ZS_PAIR_LANES4
+// The same, eight at a time (lanes past `kept` neither read nor written).
+__attribute__((target("avx2"))) void list_slots_avx2(std::uint32_t* out,
+                                                     const std::uint32_t* slots,
+                                                     const std::uint32_t* near, std::size_t kept) {
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  for (std::size_t q = 0; q < kept; q += 8) {
+    const __m256i mask = _mm256_cmpgt_epi32(
+        _mm256_set1_epi32(static_cast<int>(std::min<std::size_t>(kept - q, 8))), lane);
+    const __m256i index = _mm256_maskload_epi32(reinterpret_cast<const int*>(near + q), mask);
+    const __m256i slot = _mm256_mask_i32gather_epi32(
+        _mm256_setzero_si256(), reinterpret_cast<const int*>(slots), index, mask, 4);
+    _mm256_maskstore_epi32(reinterpret_cast<int*>(out + q), mask, slot);
   }
 }
 #endif
@@ -136,11 +157,15 @@ void PairBatch::add(std::uint32_t self, const std::uint32_t* slots, const std::u
   // Every candidate in order, then the floater's own slot (there is at most one) replaced by
   // the last candidate.
   std::uint32_t* j = j_.data() + first;
-  std::size_t own = kept;
-  for (std::size_t q = 0; q < kept; ++q) {
-    j[q] = slots[near[q]];
-    if (j[q] == self) own = q;
+#ifdef ZS_PAIR_LANES4
+  if (path_ == FilterPath::kAvx2) {
+    list_slots_avx2(j, slots, near, kept);
+  } else
+#endif
+  {
+    list_slots_scalar(j, slots, near, kept);
   }
+  const std::size_t own = static_cast<std::size_t>(std::find(j, j + kept, self) - j);
   std::size_t m = first + kept;
   if (own < kept) j[own] = j[--m - first];
   std::fill(i_.begin() + static_cast<std::ptrdiff_t>(first),
@@ -150,20 +175,17 @@ void PairBatch::add(std::uint32_t self, const std::uint32_t* slots, const std::u
       {self, static_cast<std::uint32_t>(first), static_cast<std::uint32_t>(m), limit});
 }
 
-std::span<const PairSums> PairBatch::sum(FilterPath path, bool scaled, const PairConstants& k,
+std::span<const PairSums> PairBatch::sum(bool scaled, const PairConstants& k,
                                          const double* records, const std::uint64_t* ids) {
   const std::size_t m = pairs_;
   sums_.resize(floaters_.size());
   if (floaters_.empty()) return sums_;
   // Padded to whole groups with copies of a real pair, whose terms are not used.
   const std::size_t padded = (m + kLanes - 1) / kLanes * kLanes;
-  std::array<double*, 6> out;
-  for (std::size_t t = 0; t < terms_.size(); ++t) {
-    if (terms_[t].size() < padded) terms_[t].resize(2 * padded);
-    out[t] = terms_[t].data();
-  }
+  if (terms_.size() < padded) terms_.resize(2 * padded);
+  Terms* out = terms_.data();
 #ifdef ZS_PAIR_LANES4
-  if (path == FilterPath::kAvx2 && m > 0) {
+  if (path_ == FilterPath::kAvx2 && m > 0) {
     std::fill(i_.begin() + static_cast<std::ptrdiff_t>(m),
               i_.begin() + static_cast<std::ptrdiff_t>(padded), i_[0]);
     std::fill(j_.begin() + static_cast<std::ptrdiff_t>(m),
@@ -180,12 +202,12 @@ std::span<const PairSums> PairBatch::sum(FilterPath path, bool scaled, const Pai
     const Floater& fl = floaters_[f];
     PairSums s{0, 0, 0, 0, 0, fl.limit};
     for (std::uint32_t q = fl.first; q < fl.last; ++q) {
-      s.e += out[0][q];
-      s.de += out[1][q];
-      s.vx += out[2][q];
-      s.vy += out[3][q];
-      s.vz += out[4][q];
-      s.limit = out[5][q] < s.limit ? out[5][q] : s.limit;
+      s.e += out[q].e;
+      s.de += out[q].de;
+      s.vx += out[q].fx;
+      s.vy += out[q].fy;
+      s.vz += out[q].fz;
+      s.limit = out[q].lim < s.limit ? out[q].lim : s.limit;
     }
     sums_[f] = s;
   }

@@ -178,6 +178,10 @@ struct PairSums {
 /// with opposite signs, so they separate.
 class PairBatch {
  public:
+  /// Computes with `path`, which must be available (filter_path_available); AVX2 lists and
+  /// computes the pairs four and eight at a time.
+  explicit PairBatch(FilterPath path = best_filter_path()) : path_(path) {}
+
   /// Adds the floater at slot `self` (of the records and ids given to sum()) whose candidates
   /// are the slots slots[near[q]] for q < kept; its own slot may be among them, and is
   /// skipped. `limit` is its own fission radius, the start of its smallest grading limit.
@@ -198,18 +202,23 @@ class PairBatch {
 
   /// The sums of every floater added, in the order added. `records` holds every floater's
   /// record by slot (kRecordFields doubles, 64-byte aligned: x, y, z, σ, σ_max and the unit
-  /// normal, or 0 when it has none), `ids` its id. `path` must be available
-  /// (filter_path_available); AVX2 computes four pairs at a time. Valid until the next add(),
-  /// sum() or clear().
-  std::span<const PairSums> sum(FilterPath path, bool scaled, const PairConstants& k,
-                                const double* records, const std::uint64_t* ids);
+  /// normal, or 0 when it has none), `ids` its id. Valid until the next add(), sum() or
+  /// clear().
+  std::span<const PairSums> sum(bool scaled, const PairConstants& k, const double* records,
+                                const std::uint64_t* ids);
   void clear();
 
+  /// The terms of one pair, as sum() keeps them: one cache line each.
+  struct alignas(64) Terms {
+    double e, de, fx, fy, fz, lim, unused[2];
+  };
+
  private:
+  FilterPath path_;
   std::vector<Floater> floaters_;
   std::size_t pairs_ = 0;
   std::vector<std::uint32_t> i_, j_;  // each pair's slots (the first pairs_ of them)
-  std::array<std::vector<double>, 6> terms_;  // each pair's E_ij, |r|²E_ij, force, limit
+  std::vector<Terms> terms_;  // each pair's E_ij, |r|²E_ij, force, limit
   std::vector<PairSums> sums_;
 };
 

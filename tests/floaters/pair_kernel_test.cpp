@@ -149,13 +149,13 @@ Candidates make_candidates(std::uint64_t seed, std::size_t count) {
 
 std::vector<PairSums> sums(FilterPath path, bool scaled, const PairConstants& k,
                            const Scene& scene, const Candidates& c) {
-  PairBatch batch;
+  PairBatch batch(path);
   std::vector<PairSums> out;
   for (std::size_t s = 0; s < scene.count; ++s) {
     batch.add(static_cast<std::uint32_t>(s), c.slots.data(), c.near.data() + c.first[s],
               c.kept[s], 0.75);
     if (batch.pairs() > 40 || s + 1 == scene.count) {
-      const auto part = batch.sum(path, scaled, k, scene.records.get(), scene.ids.data());
+      const auto part = batch.sum(scaled, k, scene.records.get(), scene.ids.data());
       out.insert(out.end(), part.begin(), part.end());
       batch.clear();
     }
@@ -251,10 +251,10 @@ TEST(PairBatch, CoincidentFloatersArePushedApart) {
   const std::uint32_t slots[2] = {0, 1}, near[2] = {0, 1};
   for (FilterPath path : {FilterPath::kScalar, FilterPath::kAvx2}) {
     if (!filter_path_available(path)) continue;
-    PairBatch batch;
+    PairBatch batch(path);
     batch.add(0, slots, near, 2, 1.0);
     batch.add(1, slots, near, 2, 1.0);
-    const auto s = batch.sum(path, true, {1.0, 1.0, 0.1}, scene.records.get(), scene.ids.data());
+    const auto s = batch.sum(true, {1.0, 1.0, 0.1}, scene.records.get(), scene.ids.data());
     ASSERT_EQ(s.size(), 2u);
     const double push = std::hypot(s[0].vx, s[0].vy, s[0].vz);
     EXPECT_GT(push, 0);
