@@ -62,8 +62,8 @@ void terms_scalar(const PairConstants& k, const double* records, const std::uint
 
 #ifdef ZS_PAIR_LANES4
 // Fields of four records, transposed into lane vectors: x, y, z, σ, σ_max, nx, ny, nz.
-__attribute__((target("avx2"), always_inline)) inline void transpose(const double* records, const std::uint32_t* slot,
-                                               Double4* f) {
+__attribute__((target("avx2"), always_inline)) inline void transpose(
+    const double* records, const std::uint32_t* slot, Double4* f) {
   for (int half = 0; half < 2; ++half) {
     const double* r = records + 4 * half;
     const __m256d a = _mm256_load_pd(r + kRecordFields * slot[0]);
