@@ -121,18 +121,26 @@ __attribute__((target("avx2"))) void terms_avx2(const PairConstants& k, const do
 }
 #endif
 
-// out[q] = slots[near[q]] for q < kept.
-void list_slots_scalar(std::uint32_t* out, const std::uint32_t* slots, const std::uint32_t* near,
-                       std::size_t kept) {
-  for (std::size_t q = 0; q < kept; ++q) out[q] = slots[near[q]];
+// out[q] = slots[near[q]] for q < kept; returns the first q with out[q] == self, or kept.
+std::size_t list_slots_scalar(std::uint32_t* out, const std::uint32_t* slots,
+                              const std::uint32_t* near, std::size_t kept, std::uint32_t self) {
+  std::size_t own = kept;
+  for (std::size_t q = kept; q-- > 0;) {
+    out[q] = slots[near[q]];
+    own = out[q] == self ? q : own;
+  }
+  return own;
 }
 
 #ifdef ZS_PAIR_LANES4
 // The same, eight at a time (lanes past `kept` neither read nor written).
-__attribute__((target("avx2"))) void list_slots_avx2(std::uint32_t* out,
-                                                     const std::uint32_t* slots,
-                                                     const std::uint32_t* near, std::size_t kept) {
+__attribute__((target("avx2"))) std::size_t list_slots_avx2(std::uint32_t* out,
+                                                            const std::uint32_t* slots,
+                                                            const std::uint32_t* near,
+                                                            std::size_t kept, std::uint32_t self) {
   const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256i own = _mm256_set1_epi32(static_cast<int>(self));
+  std::size_t found = kept;
   for (std::size_t q = 0; q < kept; q += 8) {
     const __m256i mask = _mm256_cmpgt_epi32(
         _mm256_set1_epi32(static_cast<int>(std::min<std::size_t>(kept - q, 8))), lane);
@@ -140,7 +148,11 @@ __attribute__((target("avx2"))) void list_slots_avx2(std::uint32_t* out,
     const __m256i slot = _mm256_mask_i32gather_epi32(
         _mm256_setzero_si256(), reinterpret_cast<const int*>(slots), index, mask, 4);
     _mm256_maskstore_epi32(reinterpret_cast<int*>(out + q), mask, slot);
+    const __m256i hit = _mm256_and_si256(mask, _mm256_cmpeq_epi32(slot, own));
+    const auto hits = static_cast<unsigned>(_mm256_movemask_ps(_mm256_castsi256_ps(hit)));
+    if (hits != 0 && found == kept) found = q + static_cast<std::size_t>(std::countr_zero(hits));
   }
+  return found;
 }
 #endif
 
@@ -158,14 +170,12 @@ void PairBatch::add(std::uint32_t self, const std::uint32_t* slots, const std::u
   // the last candidate.
   std::uint32_t* j = j_.data() + first;
 #ifdef ZS_PAIR_LANES4
-  if (path_ == FilterPath::kAvx2) {
-    list_slots_avx2(j, slots, near, kept);
-  } else
+  const std::size_t own = path_ == FilterPath::kAvx2
+                              ? list_slots_avx2(j, slots, near, kept, self)
+                              : list_slots_scalar(j, slots, near, kept, self);
+#else
+  const std::size_t own = list_slots_scalar(j, slots, near, kept, self);
 #endif
-  {
-    list_slots_scalar(j, slots, near, kept);
-  }
-  const std::size_t own = static_cast<std::size_t>(std::find(j, j + kept, self) - j);
   std::size_t m = first + kept;
   if (own < kept) j[own] = j[--m - first];
   std::fill(i_.begin() + static_cast<std::ptrdiff_t>(first),
