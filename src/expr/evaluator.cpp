@@ -2,8 +2,10 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
 #include <memory>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "tape_detail.h"
@@ -309,36 +311,37 @@ void store_block(std::int32_t ref, const double* slots, const double* uniforms, 
 
 }  // namespace
 
-void Evaluator::values(std::span<const double> x, std::span<const double> y,
-                       std::span<const double> z, std::span<double> out) {
-  check_lengths(x.size(), {y.size(), z.size(), out.size()});
-  const detail::Program& program = field_.tape().value;
-  const double* u = scratch_->uniforms.data();
-  double* s = scratch_->block.data();
+namespace {
+
+/// Runs `program` over the points (x, y, z) a block at a time, copying output k of point i to
+/// dst[i] for every (k, dst) of `outputs`.
+void run_batched(const detail::Program& program, const double* u, double* s,
+                 std::span<const double> x, std::span<const double> y, std::span<const double> z,
+                 std::initializer_list<std::pair<int, double*>> outputs) {
   for (std::size_t start = 0; start < x.size(); start += kBlock) {
     const int count = static_cast<int>(std::min<std::size_t>(kBlock, x.size() - start));
     load_block(x, y, z, start, count, s);
     run<kBlock>(program, u, s);
-    store_block(program.outputs[0], s, u, count, out.data() + start);
+    for (const auto& [k, dst] : outputs)
+      store_block(program.outputs[static_cast<std::size_t>(k)], s, u, count, dst + start);
   }
+}
+
+}  // namespace
+
+void Evaluator::values(std::span<const double> x, std::span<const double> y,
+                       std::span<const double> z, std::span<double> out) {
+  check_lengths(x.size(), {y.size(), z.size(), out.size()});
+  run_batched(field_.tape().value, scratch_->uniforms.data(), scratch_->block.data(), x, y, z,
+              {{0, out.data()}});
 }
 
 void Evaluator::values_gradients(std::span<const double> x, std::span<const double> y,
                                  std::span<const double> z, std::span<double> value,
                                  std::span<double> gx, std::span<double> gy, std::span<double> gz) {
   check_lengths(x.size(), {y.size(), z.size(), value.size(), gx.size(), gy.size(), gz.size()});
-  const detail::Program& program = field_.tape().gradient;
-  const double* u = scratch_->uniforms.data();
-  double* s = scratch_->block.data();
-  const std::span<double> outs[4] = {value, gx, gy, gz};
-  for (std::size_t start = 0; start < x.size(); start += kBlock) {
-    const int count = static_cast<int>(std::min<std::size_t>(kBlock, x.size() - start));
-    load_block(x, y, z, start, count, s);
-    run<kBlock>(program, u, s);
-    for (int k = 0; k < 4; ++k)
-      store_block(program.outputs[static_cast<std::size_t>(k)], s, u, count,
-                  outs[k].data() + start);
-  }
+  run_batched(field_.tape().gradient, scratch_->uniforms.data(), scratch_->block.data(), x, y, z,
+              {{0, value.data()}, {1, gx.data()}, {2, gy.data()}, {3, gz.data()}});
 }
 
 void Evaluator::values_gradients_hessians(std::span<const double> x, std::span<const double> y,
@@ -349,21 +352,18 @@ void Evaluator::values_gradients_hessians(std::span<const double> x, std::span<c
   check_lengths(x.size(), {y.size(), z.size(), value.size(), gx.size(), gy.size(), gz.size(),
                            hessian[0].size(), hessian[1].size(), hessian[2].size(),
                            hessian[3].size(), hessian[4].size(), hessian[5].size()});
-  const detail::Program& program = field_.tape().full;
-  const double* u = scratch_->uniforms.data();
-  double* s = scratch_->block.data();
-  const std::span<double> outs[4] = {value, gx, gy, gz};
-  for (std::size_t start = 0; start < x.size(); start += kBlock) {
-    const int count = static_cast<int>(std::min<std::size_t>(kBlock, x.size() - start));
-    load_block(x, y, z, start, count, s);
-    run<kBlock>(program, u, s);
-    for (int k = 0; k < 4; ++k)
-      store_block(program.outputs[static_cast<std::size_t>(k)], s, u, count,
-                  outs[k].data() + start);
-    for (int k = 0; k < 6; ++k)
-      store_block(program.outputs[static_cast<std::size_t>(detail::kFullHessian + k)], s, u,
-                  count, hessian[static_cast<std::size_t>(k)].data() + start);
-  }
+  const int h = detail::kFullHessian;
+  run_batched(field_.tape().full, scratch_->uniforms.data(), scratch_->block.data(), x, y, z,
+              {{0, value.data()},
+               {1, gx.data()},
+               {2, gy.data()},
+               {3, gz.data()},
+               {h, hessian[0].data()},
+               {h + 1, hessian[1].data()},
+               {h + 2, hessian[2].data()},
+               {h + 3, hessian[3].data()},
+               {h + 4, hessian[4].data()},
+               {h + 5, hessian[5].data()}});
 }
 
 }  // namespace zeroset
