@@ -811,10 +811,10 @@ struct FloaterSystem::Impl {
 
   // The neighbour search tests single-precision distances first (detail::filter_box and
   // filter_near), keeping every pair within reach 3·max(σ_i, σ_j) and a few more (see
-  // detail::prefilter_threshold); detail::pair_sums() then decides each exactly. This is the first
-  // test, per cell: the floaters of the 3×3×3 block within reach of the bounding box of the
-  // cell's floaters, copied into c (contiguous, for the second test, per floater); returns how
-  // many.
+  // detail::prefilter_threshold); the pair terms (detail::pair_term) then decide each
+  // exactly. This is the first test, per cell: the floaters of the 3×3×3 block within reach of
+  // the bounding box of the cell's floaters, copied into c (contiguous, for the second test,
+  // per floater); returns how many.
   std::uint32_t gather_block(const detail::SpatialHash::Run& run, Scratch& c) const {
     const auto block = std::span(c.ranges).first(
         static_cast<std::size_t>(hash.block_ranges(run.key, c.ranges)));

@@ -193,9 +193,7 @@ class PairBatch {
     std::uint32_t self, first, last;
     double limit;
   };
-  /// Floaters added since the last clear().
-  std::size_t size() const { return floaters_.size(); }
-  /// The k-th of them.
+  /// The k-th floater added since the last clear().
   const Floater& floater(std::size_t k) const { return floaters_[k]; }
   /// Pairs listed since the last clear().
   std::size_t pairs() const { return pairs_; }
