@@ -16,7 +16,7 @@ namespace zeroset::detail {
 /// their output this many spare entries after the last index they keep.
 inline constexpr std::size_t kFilterPad = 8;
 
-/// The implementations of the filters.
+/// The implementations of the filters (kAvx2 needs a processor with AVX2 and FMA).
 enum class FilterPath { kScalar, kSse2, kAvx2 };
 /// Whether this build and processor can run `path` (the processor is asked once).
 bool filter_path_available(FilterPath path);

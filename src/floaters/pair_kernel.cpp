@@ -28,10 +28,10 @@ PairTerms<double> one_pair(const PairConstants& k, const double* records,
   const double* me = records + kRecordFields * s;
   const double* other = records + kRecordFields * t;
   const double si = me[3];
-  const double cosine = std::abs(me[5] * other[5] + me[6] * other[6] + me[7] * other[7]);
+  const double cosine = std::abs(dot3(me[5], me[6], me[7], other[5], other[6], other[7]));
   const double no_normal = has_normal(me) && has_normal(other) ? 0.0 : 1.0;
   const double dx = me[0] - other[0], dy = me[1] - other[1], dz = me[2] - other[2];
-  const double d2 = dx * dx + dy * dy + dz * dz;
+  const double d2 = dot3(dx, dy, dz, dx, dy, dz);
   if (!(d2 < 1e-18 * (si * si)))
     return pair_term<kScaled>(dx, dy, dz, d2, std::sqrt(d2), si, other[3], other[4], cosine,
                               no_normal, k);
@@ -44,7 +44,7 @@ PairTerms<double> one_pair(const PairConstants& k, const double* records,
   const double angle = 2 * std::numbers::pi * static_cast<double>(h >> 11) * 0x1.0p-53;
   const double ox = sign * 1e-3 * si * std::cos(angle);
   const double oy = sign * 1e-3 * si * std::sin(angle);
-  const double o2 = ox * ox + oy * oy;
+  const double o2 = dot3(ox, oy, 0.0, ox, oy, 0.0);
   return pair_term<kScaled>(ox, oy, 0.0, o2, std::sqrt(o2), si, other[3], other[4], cosine,
                             no_normal, k);
 }
@@ -62,7 +62,7 @@ void terms_scalar(const PairConstants& k, const double* records, const std::uint
 
 #ifdef ZS_PAIR_LANES4
 // Fields of four records, transposed into lane vectors: x, y, z, σ, σ_max, nx, ny, nz.
-__attribute__((target("avx2"), always_inline)) inline void transpose(
+__attribute__((target("avx2,fma"), always_inline)) inline void transpose(
     const double* records, const std::uint32_t* slot, Double4* f) {
   for (int half = 0; half < 2; ++half) {
     const double* r = records + 4 * half;
@@ -83,7 +83,7 @@ __attribute__((target("avx2"), always_inline)) inline void transpose(
 // coincident pairs are then computed again by the scalar path, which separates them. m must
 // be a multiple of four.
 template <bool kScaled>
-__attribute__((target("avx2"))) void terms_avx2(const PairConstants& k, const double* records,
+__attribute__((target("avx2,fma"))) void terms_avx2(const PairConstants& k, const double* records,
                                                 const std::uint64_t* ids, std::size_t m,
                                                 const std::uint32_t* i, const std::uint32_t* j,
                                                 Terms* out) {
@@ -93,9 +93,9 @@ __attribute__((target("avx2"))) void terms_avx2(const PairConstants& k, const do
     transpose(records, i + q, a);
     transpose(records, j + q, b);
     const Double4 dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
-    const Double4 d2 = dx * dx + dy * dy + dz * dz;
+    const Double4 d2 = dot3(dx, dy, dz, dx, dy, dz);
     const Double4 si = a[3];
-    const Double4 cosine = magnitude(a[5] * b[5] + a[6] * b[6] + a[7] * b[7]);
+    const Double4 cosine = magnitude(dot3(a[5], a[6], a[7], b[5], b[6], b[7]));
     const Mask4 free_i = (a[5] == zero) & (a[6] == zero) & (a[7] == zero);
     const Mask4 free_j = (b[5] == zero) & (b[6] == zero) & (b[7] == zero);
     const Double4 no_normal = (free_i | free_j) ? one : zero;

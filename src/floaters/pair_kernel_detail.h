@@ -35,6 +35,12 @@ template <class V>
 [[gnu::always_inline]] inline V splat(double v) {
   return v;
 }
+/// a·b + c rounded once (a fused multiply-add), as the AVX2 lanes compute it. std::fma is one
+/// instruction where the processor has FMA (every processor with AVX2), a library call
+/// otherwise.
+[[gnu::always_inline]] inline double mul_add(double a, double b, double c) {
+  return std::fma(a, b, c);
+}
 
 #ifdef ZS_PAIR_LANES4
 // Functions on these take AVX vectors by value and are always inlined into AVX2 code, so the
@@ -52,6 +58,13 @@ template <>
 [[gnu::always_inline]] inline Double4 splat<Double4>(double v) {
   return Double4{v, v, v, v};
 }
+// vfmadd231pd: c + a·b, rounded once. Assembly, not the intrinsic, because the formulas that
+// call it are compiled for every processor; only the AVX2 path (which requires FMA) uses them on
+// Double4, always inlined.
+[[gnu::always_inline]] inline Double4 mul_add(Double4 a, Double4 b, Double4 c) {
+  asm("vfmadd231pd %[b], %[a], %[c]" : [c] "+x"(c) : [a] "x"(a), [b] "x"(b));
+  return c;
+}
 #pragma GCC diagnostic pop
 #endif
 
@@ -64,8 +77,9 @@ template <class V>
 /// e^a for a in [−4.5, 0], the range of every pair term inside the cutoff (|r| < 3σ gives
 /// exponents above −9/2), with relative error below 1e-10: Cody–Waite reduction to
 /// |r| ≤ ln2/2 and a degree-7 polynomial fitted at Chebyshev nodes (error 5.5e-11 on that
-/// interval). The pair energies need far less; std::exp is exact to the last bit, but a call per
-/// pair cannot be vectorised and cost a sixth of a step. Arguments below −64 are taken as −64
+/// interval, by Horner's rule in fused multiply-adds). The pair energies need far less;
+/// std::exp is exact to the last bit, but a call per pair cannot be vectorised and cost a sixth
+/// of a step. Arguments below −64 are taken as −64
 /// (those terms lie beyond the cutoff and are discarded); a NaN gives an unspecified value.
 /// Branch-free and pure; for V a double or Double4, lane by lane.
 template <class V>
@@ -76,17 +90,15 @@ template <class V>
   constexpr double kShift = 0x1.8p52;
   constexpr double kLn2Hi = 0x1.62e42feep-1;  // trailing zeros: k·kLn2Hi is exact
   constexpr double kLn2Lo = 0x1.a39ef35793c76p-33;
-  const V t = a * std::numbers::log2e + kShift;
+  const V t = mul_add(a, splat<V>(std::numbers::log2e), splat<V>(kShift));
   const V k = t - kShift;
-  const V r = (a - k * kLn2Hi) - k * kLn2Lo;
+  const V r = mul_add(k, splat<V>(-kLn2Lo), mul_add(k, splat<V>(-kLn2Hi), a));
+  constexpr double kCoefficients[] = {0x1.6da753185ad01p-10, 0x1.1110a6222ea35p-7,
+                                      0x1.555464a0f079ep-5,  0x1.5555557e7125ep-3,
+                                      0x1.0000005c89e4ep-1,  0x1.fffffffff61fdp-1,
+                                      0x1.ffffffffa7135p-1};
   V p = splat<V>(0x1.a17df2ec2bc60p-13);
-  p = p * r + 0x1.6da753185ad01p-10;
-  p = p * r + 0x1.1110a6222ea35p-7;
-  p = p * r + 0x1.555464a0f079ep-5;
-  p = p * r + 0x1.5555557e7125ep-3;
-  p = p * r + 0x1.0000005c89e4ep-1;
-  p = p * r + 0x1.fffffffff61fdp-1;
-  p = p * r + 0x1.ffffffffa7135p-1;
+  for (double c : kCoefficients) p = mul_add(p, r, splat<V>(c));
   return from_bits(to_bits(p) + (to_bits(t) << 52));
 }
 
@@ -102,6 +114,13 @@ inline float prefilter_threshold(double reach) {
   return static_cast<float>(widened * widened * (1 + 0x1p-18));
 }
 
+
+/// a·b for three-vectors given by their coordinates, as the pair terms take it (for |r|² and
+/// the normals' cosine).
+template <class V>
+[[gnu::always_inline]] inline V dot3(V ax, V ay, V az, V bx, V by, V bz) {
+  return mul_add(az, bz, mul_add(ay, by, ax * bx));
+}
 
 // ---- the pair terms and their sums -------------------------------------------------------------
 
@@ -145,8 +164,9 @@ template <bool kScaled, class V>
   }
   const V x = d2 * inv * inv;
   // Both terms are finite for every listed pair; beyond its own cutoff each is dropped.
-  const V eij = aw * exp_cutoff(-u) * (1.0 - u * (2.0 / 9));
-  const V pair = amplitude * aw * exp_cutoff(-0.5 * x) * (1.0 - x * (1.0 / 9));
+  const V eij = aw * exp_cutoff(-u) * mul_add(u, splat<V>(-2.0 / 9), splat<V>(1.0));
+  const V pair =
+      amplitude * aw * exp_cutoff(-0.5 * x) * mul_add(x, splat<V>(-1.0 / 9), splat<V>(1.0));
   const V e = u < splat<V>(4.5) ? eij : zero;
   const V f = x < splat<V>(9.0) ? pair : zero;
   V coef;
@@ -154,7 +174,7 @@ template <bool kScaled, class V>
     coef = f;
   else
     coef = f + e;
-  const V limit = pm + k.grading * dist;
+  const V limit = mul_add(splat<V>(k.grading), dist, pm);
   return {e,         d2 * e,
           coef * dx, coef * dy,
           coef * dz, within ? limit : splat<V>(std::numeric_limits<double>::infinity())};
