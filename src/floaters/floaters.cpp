@@ -683,6 +683,25 @@ struct FloaterSystem::Impl {
       permute_state(hash.order());
       hash.build(pos, box, 3 * largest, threads);
     }
+    // The runs by layer (a stable sort: a dense grid's runs come in layer order already).
+    const auto runs = hash.runs();
+    runs_by_layer.resize(runs.size());
+    for (std::uint32_t r = 0; r < runs.size(); ++r) runs_by_layer[r] = r;
+    const auto by_layer = [&](std::uint32_t a, std::uint32_t b) {
+      return detail::SpatialHash::layer(runs[a].key) < detail::SpatialHash::layer(runs[b].key);
+    };
+    if (!std::is_sorted(runs_by_layer.begin(), runs_by_layer.end(), by_layer))
+      std::stable_sort(runs_by_layer.begin(), runs_by_layer.end(), by_layer);
+    layer_first.clear();
+    layer_z.clear();
+    for (std::uint32_t k = 0; k < runs_by_layer.size(); ++k) {
+      const std::int64_t z = detail::SpatialHash::layer(runs[runs_by_layer[k]].key);
+      if (layer_z.empty() || layer_z.back() != z) {
+        layer_z.push_back(z);
+        layer_first.push_back(k);
+      }
+    }
+    layer_first.push_back(static_cast<std::uint32_t>(runs_by_layer.size()));
     packed.resize(n);
     pid.resize(n);
     // The filter reads whole groups of slots past a range's end: padding keeps that in bounds.
@@ -725,11 +744,12 @@ struct FloaterSystem::Impl {
   // independent work for the processor, and the batch stays in the first-level cache.
   static constexpr std::size_t kPairBatch = 256;
 
-  // Per-thread scratch of the gather pass: the floaters of a block of cells that may be within
-  // reach of a floater of its centre cell, their slots and their single-precision coordinates
-  // and thresholds, contiguous; the indices into these one floater's test kept; and the batch.
+  // Per-thread scratch of the pair pass: a cell's floaters, then those of its forward cells
+  // (detail::SpatialHash::forward_ranges) that may be within reach of one of them, their slots
+  // and their single-precision coordinates and thresholds, contiguous; the indices into these
+  // one floater's test kept; and the batch.
   struct Scratch {
-    std::array<detail::SpatialHash::Range, detail::SpatialHash::kMaxBlockRanges> ranges;
+    std::array<detail::SpatialHash::Range, detail::SpatialHash::kMaxForwardRanges> ranges;
     std::vector<std::uint32_t> slot;
     std::vector<float> x, y, z, cut;
     std::vector<std::uint32_t> near;
@@ -743,17 +763,28 @@ struct FloaterSystem::Impl {
     }
   };
   std::vector<Scratch> scratch;  // one per thread, kept from step to step
+  std::vector<detail::PairSums> pair_sums;  // per slot
+  // The runs of the hash (its occupied cells) by layer: the runs of the k-th occupied layer
+  // of cells (z = layer_z[k]) are runs_by_layer[layer_first[k] .. layer_first[k + 1]), in slot
+  // order.
+  std::vector<std::uint32_t> runs_by_layer, layer_first;
+  std::vector<std::int64_t> layer_z;
 
-  // Gather pass (ALGORITHMS A.1–A.3, B): for floater i, E_i = Σ_j E_ij, ∂E_i/∂σ_i and the
-  // desired velocity P_i = Σ_j r_ij (E_ij + (σ_i/σ_j)² E_ji) (or its scaled form). Each
-  // floater computes E_ji itself, so no two threads write the same entry, and each sums its
-  // neighbours in a fixed order: the result does not depend on the number of threads.
+  // Pair pass (ALGORITHMS A.1–A.3, B): for floater i, E_i = Σ_j E_ij, ∂E_i/∂σ_i and the
+  // desired velocity P_i = Σ_j r_ij (E_ij + (σ_i/σ_j)² E_ji) (or its scaled form). Each pair
+  // is computed once, for both its floaters, by the cell of the one that comes first (in the
+  // cell's own slot order, or by cell order): a cell pairs its floaters with its later
+  // floaters and with the floaters of its 13 forward cells, which lie in its own layer of
+  // cells (z) and the next. So layers of one parity can be worked on at once, each by one
+  // thread in slot order, without two threads adding to the same sums: the even layers first,
+  // then the odd ones. Each floater's sums take its pairs in a fixed order (those listed by
+  // the layer below, then by its own; in each, in listing order): the result does not depend
+  // on the number of threads.
   // The same pass grades the fission radii: σ_max^i ≤ σ_max^j + g·|r_ij| for every neighbour
   // j (one relaxation sweep per step). Without it, where μ_i jumps (α_i drops from ~1 to ~0
   // once a floater's perimeter reaches across a node) the density wanted on either side
   // differs by more than fission and death tolerate (a factor 1/δ), and they fight forever.
-  // Each floater moves (move_one()) as soon as its sums are complete, in the same parallel
-  // region: its move reads nothing of other floaters, so there is no need to wait for them.
+  // Then every floater moves (move_one()), in the same parallel region.
   void repulsion_and_move() {
     const std::size_t n = size();
     for (auto* v : {&energy, &denergy, &graded, &new_sigma, &speed_sq}) v->resize(n);
@@ -761,6 +792,7 @@ struct FloaterSystem::Impl {
     new_pos.resize(n);
     fate.resize(n);
     near_flag.resize(n);
+    pair_sums.resize(n);
     const std::size_t chunks = (n + kChunk - 1) / kChunk;
     chunk_speed.resize(chunks);
     chunk_near.resize(chunks);
@@ -770,28 +802,51 @@ struct FloaterSystem::Impl {
                                    opt.radius_grading};
     const auto runs = hash.runs();
     const auto order = hash.order();
+    const std::span<detail::PairSums> sums(pair_sums);
 #pragma omp parallel num_threads(threads) if (n >= kParallelMin)
     {
       Scratch& c = scratch[static_cast<std::size_t>(thread_index())];
       Evaluator& ev = evaluators[static_cast<std::size_t>(thread_index())];
 #pragma omp for schedule(static)
-      for (std::int64_t slot = 0; slot < static_cast<std::int64_t>(n); ++slot)
-        pack_slot(static_cast<std::size_t>(slot));
-#pragma omp for schedule(dynamic, 16) nowait
-      for (std::int64_t r = 0; r < static_cast<std::int64_t>(runs.size()); ++r) {
-        const auto& run = runs[static_cast<std::size_t>(r)];
-        const std::uint32_t candidates = gather_block(run, c);
-        const detail::SpatialHash::Range all{0, candidates};
-        for (std::uint32_t s = run.first; s < run.last; ++s) {
-          const std::size_t kept =
-              detail::filter_near(filter, {&all, 1}, c.x.data(), c.y.data(), c.z.data(),
-                                  c.cut.data(), fx[s], fy[s], fz[s], fcut[s], c.near.data());
-          c.batch.add(s, c.slot.data(), c.near.data(), kept, mu[order[s]] * sigma_max());
-          if (c.batch.pairs() >= kPairBatch) sum_and_move(c.batch, pk, ev, k);
+      for (std::int64_t slot = 0; slot < static_cast<std::int64_t>(n); ++slot) {
+        const auto s = static_cast<std::size_t>(slot);
+        pack_slot(s);
+        sums[s] = {0, 0, 0, 0, 0, mu[order[s]] * sigma_max()};
+      }
+      const auto layers = static_cast<std::int64_t>(layer_z.size());
+      for (std::int64_t parity = 0; parity < 2; ++parity) {
+#pragma omp for schedule(dynamic, 1)
+        for (std::int64_t layer = 0; layer < layers; ++layer) {
+          if ((layer_z[static_cast<std::size_t>(layer)] & 1) != parity) continue;
+          for (std::uint32_t r = layer_first[static_cast<std::size_t>(layer)];
+               r < layer_first[static_cast<std::size_t>(layer) + 1]; ++r) {
+            const auto& run = runs[runs_by_layer[r]];
+            const std::uint32_t candidates = gather_block(run, c);
+            for (std::uint32_t s = run.first; s < run.last; ++s) {
+              // The later floaters of the cell and the forward cells' candidates.
+              const detail::SpatialHash::Range later{s - run.first + 1, candidates};
+              const std::size_t kept = detail::filter_near(
+                  filter, {&later, 1}, c.x.data(), c.y.data(), c.z.data(), c.cut.data(), fx[s],
+                  fy[s], fz[s], fcut[s], c.near.data());
+              c.batch.add(s, c.slot.data(), c.near.data(), kept);
+              if (c.batch.pairs() >= kPairBatch) accumulate(c.batch, pk);
+            }
+          }
+          accumulate(c.batch, pk);  // the layer's pairs are all in the sums
         }
       }
-      sum_and_move(c.batch, pk, ev, k);
-#pragma omp barrier
+#pragma omp for schedule(dynamic, 256)
+      for (std::int64_t slot = 0; slot < static_cast<std::int64_t>(n); ++slot) {
+        const auto s = static_cast<std::size_t>(slot);
+        const std::uint32_t i = order[s];
+        const detail::PairSums& sum = sums[s];
+        const double si = packed[s].sigma;
+        energy[i] = sum.e;
+        denergy[i] = sum.de / (si * si * si);
+        desired[i] = Vec3(sum.vx, sum.vy, sum.vz);
+        graded[i] = sum.limit;
+        move_one(i, sum.limit, ev, k);
+      }
       // Summed per chunk in index order: the same on any number of threads.
 #pragma omp for schedule(static)
       for (std::int64_t chunk = 0; chunk < static_cast<std::int64_t>(chunks); ++chunk) {
@@ -811,15 +866,16 @@ struct FloaterSystem::Impl {
 
   // The neighbour search tests single-precision distances first (detail::filter_box and
   // filter_near), keeping every pair within reach 3·max(σ_i, σ_j) and a few more (see
-  // detail::prefilter_threshold); the pair terms (detail::pair_term) then decide each
-  // exactly. This is the first test, per cell: the floaters of the 3×3×3 block within reach of
-  // the bounding box of the cell's floaters, copied into c (contiguous, for the second test,
-  // per floater); returns how many.
+  // detail::prefilter_threshold); the pair terms (detail::pair_terms) then decide each
+  // exactly. This is the first test, per cell: the cell's floaters, then those of its forward
+  // cells within reach of the bounding box of the cell's floaters, copied into c (contiguous,
+  // for the second test, per floater); returns how many.
   std::uint32_t gather_block(const detail::SpatialHash::Run& run, Scratch& c) const {
-    const auto block = std::span(c.ranges).first(
-        static_cast<std::size_t>(hash.block_ranges(run.key, c.ranges)));
-    std::size_t candidates = 0;
-    for (const auto& [first, last] : block) candidates += last - first;
+    const auto forward = std::span(c.ranges).first(
+        static_cast<std::size_t>(hash.forward_ranges(run.key, c.ranges)));
+    const std::uint32_t own = run.last - run.first;
+    std::size_t candidates = own;
+    for (const auto& [first, last] : forward) candidates += last - first;
     c.reserve_candidates(candidates);
     const float *x = fx.data(), *y = fy.data(), *z = fz.data(), *cut = fcut.data();
     float lo[3] = {x[run.first], y[run.first], z[run.first]}, hi[3] = {lo[0], lo[1], lo[2]};
@@ -832,9 +888,10 @@ struct FloaterSystem::Impl {
       lo[2] = std::min(lo[2], z[s]);
       hi[2] = std::max(hi[2], z[s]);
       reach = std::max(reach, cut[s]);
+      c.slot[s - run.first] = s;
     }
     const std::size_t m =
-        detail::filter_box(filter, block, x, y, z, cut, lo, hi, reach, c.slot.data());
+        own + detail::filter_box(filter, forward, x, y, z, cut, lo, hi, reach, c.slot.data() + own);
     for (std::size_t k = 0; k < m; ++k) {
       const std::uint32_t t = c.slot[k];
       c.x[k] = x[t];
@@ -845,24 +902,10 @@ struct FloaterSystem::Impl {
     return static_cast<std::uint32_t>(m);
   }
 
-  // The batch's floaters' E_i, ∂E_i/∂σ_i, desired velocities and graded fission radii from
-  // their pairs; then each moves (move_one()). Empties the batch.
-  void sum_and_move(detail::PairBatch& batch, const detail::PairConstants& k, Evaluator& ev,
-                    const MoveConstants& mc) {
-    const auto sums = batch.sum(opt.scaled_repulsion, k,
-                                reinterpret_cast<const double*>(packed.data()), pid.data());
-    const auto order = hash.order();
-    for (std::size_t b = 0; b < sums.size(); ++b) {
-      const std::uint32_t s = batch.floater(b).self, i = order[s];
-      const double si = packed[s].sigma;
-      const double limit = k.grading > 0 ? sums[b].limit : batch.floater(b).limit;
-      energy[i] = sums[b].e;
-      denergy[i] = sums[b].de / (si * si * si);
-      desired[i] = Vec3(sums[b].vx, sums[b].vy, sums[b].vz);
-      graded[i] = limit;
-      move_one(i, limit, ev, mc);
-    }
-    batch.clear();
+  // Adds the batch's pair terms to the floaters' sums and empties it.
+  void accumulate(detail::PairBatch& batch, const detail::PairConstants& k) {
+    batch.accumulate(opt.scaled_repulsion, k, reinterpret_cast<const double*>(packed.data()),
+                     pid.data(), pair_sums);
   }
 
   // F_q·q̇ at every floater (exact parameter derivatives).

@@ -21,32 +21,33 @@ bool has_normal(const double* record) {
   return !(record[5] == 0 && record[6] == 0 && record[7] == 0);
 }
 
-// The terms of the pair of floaters at slots s (i) and t (j).
+// The terms of the pair of floaters at slots s (i) and t (j), both ways.
 template <bool kScaled>
-PairTerms<double> one_pair(const PairConstants& k, const double* records,
-                           const std::uint64_t* ids, std::uint32_t s, std::uint32_t t) {
+PairTermsBoth<double> one_pair(const PairConstants& k, const double* records,
+                               const std::uint64_t* ids, std::uint32_t s, std::uint32_t t) {
   const double* me = records + kRecordFields * s;
   const double* other = records + kRecordFields * t;
-  const double si = me[3];
+  const double si = me[3], sj = other[3];
   const double cosine = std::abs(dot3(me[5], me[6], me[7], other[5], other[6], other[7]));
   const double no_normal = has_normal(me) && has_normal(other) ? 0.0 : 1.0;
   const double dx = me[0] - other[0], dy = me[1] - other[1], dz = me[2] - other[2];
   const double d2 = dot3(dx, dy, dz, dx, dy, dz);
-  if (!(d2 < 1e-18 * (si * si)))
-    return pair_term<kScaled>(dx, dy, dz, d2, std::sqrt(d2), si, other[3], other[4], cosine,
-                              no_normal, k);
-  // Coincident: a separating offset of 10⁻³σ_i in a direction from both ids, signed by which
-  // id is smaller, so the two floaters take opposite offsets.
+  const double larger = std::max(si, sj);
+  if (!(d2 < 1e-18 * (larger * larger)))
+    return pair_terms<kScaled>(dx, dy, dz, d2, std::sqrt(d2), si, sj, me[4], other[4], cosine,
+                               no_normal, k);
+  // Coincident: an offset r_ij of 10⁻³ the smaller radius in a direction from both ids (the
+  // same whichever floater is listed first).
   const std::uint64_t a = ids[s], b = ids[t];
   const std::uint64_t lo = std::min(a, b), hi = std::max(a, b);
   const std::uint64_t h = mix64(lo * 0x9e3779b97f4a7c15ULL ^ hi);
   const double sign = a < b ? 1.0 : -1.0;
   const double angle = 2 * std::numbers::pi * static_cast<double>(h >> 11) * 0x1.0p-53;
-  const double ox = sign * 1e-3 * si * std::cos(angle);
-  const double oy = sign * 1e-3 * si * std::sin(angle);
+  const double size = sign * 1e-3 * std::min(si, sj);
+  const double ox = size * std::cos(angle), oy = size * std::sin(angle);
   const double o2 = dot3(ox, oy, 0.0, ox, oy, 0.0);
-  return pair_term<kScaled>(ox, oy, 0.0, o2, std::sqrt(o2), si, other[3], other[4], cosine,
-                            no_normal, k);
+  return pair_terms<kScaled>(ox, oy, 0.0, o2, std::sqrt(o2), si, sj, me[4], other[4], cosine,
+                             no_normal, k);
 }
 
 using Terms = PairBatch::Terms;
@@ -56,8 +57,11 @@ Terms record_of(const PairTerms<double>& r) { return {r.e, r.de, r.fx, r.fy, r.f
 template <bool kScaled>
 void terms_scalar(const PairConstants& k, const double* records, const std::uint64_t* ids,
                   std::size_t m, const std::uint32_t* i, const std::uint32_t* j, Terms* out) {
-  for (std::size_t q = 0; q < m; ++q)
-    out[q] = record_of(one_pair<kScaled>(k, records, ids, i[q], j[q]));
+  for (std::size_t q = 0; q < m; ++q) {
+    const PairTermsBoth<double> both = one_pair<kScaled>(k, records, ids, i[q], j[q]);
+    out[2 * q] = record_of(both.i);
+    out[2 * q + 1] = record_of(both.j);
+  }
 }
 
 #ifdef ZS_PAIR_LANES4
@@ -94,53 +98,58 @@ __attribute__((target("avx2,fma"))) void terms_avx2(const PairConstants& k, cons
     transpose(records, j + q, b);
     const Double4 dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
     const Double4 d2 = dot3(dx, dy, dz, dx, dy, dz);
-    const Double4 si = a[3];
+    const Double4 si = a[3], sj = b[3];
     const Double4 cosine = magnitude(dot3(a[5], a[6], a[7], b[5], b[6], b[7]));
     const Mask4 free_i = (a[5] == zero) & (a[6] == zero) & (a[7] == zero);
     const Mask4 free_j = (b[5] == zero) & (b[6] == zero) & (b[7] == zero);
     const Double4 no_normal = (free_i | free_j) ? one : zero;
-    const PairTerms<Double4> r = pair_term<kScaled>(dx, dy, dz, d2, _mm256_sqrt_pd(d2), si,
-                                                    b[3], b[4], cosine, no_normal, k);
-    // Lane vectors back to one record per pair: two 4×4 transposes.
-    const Double4 rows[2][4] = {{r.e, r.de, r.fx, r.fy}, {r.fz, r.lim, zero, zero}};
-    for (int half = 0; half < 2; ++half) {
-      const Double4* v = rows[half];
-      const __m256d lo01 = _mm256_unpacklo_pd(v[0], v[1]), hi01 = _mm256_unpackhi_pd(v[0], v[1]);
-      const __m256d lo23 = _mm256_unpacklo_pd(v[2], v[3]), hi23 = _mm256_unpackhi_pd(v[2], v[3]);
-      _mm256_store_pd(&out[q].e + 4 * half, _mm256_permute2f128_pd(lo01, lo23, 0x20));
-      _mm256_store_pd(&out[q + 1].e + 4 * half, _mm256_permute2f128_pd(hi01, hi23, 0x20));
-      _mm256_store_pd(&out[q + 2].e + 4 * half, _mm256_permute2f128_pd(lo01, lo23, 0x31));
-      _mm256_store_pd(&out[q + 3].e + 4 * half, _mm256_permute2f128_pd(hi01, hi23, 0x31));
+    const PairTermsBoth<Double4> r = pair_terms<kScaled>(
+        dx, dy, dz, d2, _mm256_sqrt_pd(d2), si, sj, a[4], b[4], cosine, no_normal, k);
+    // Lane vectors back to one record per pair and floater: four 4×4 transposes.
+    for (int side = 0; side < 2; ++side) {
+      const PairTerms<Double4>& t = side == 0 ? r.i : r.j;
+      const Double4 rows[2][4] = {{t.e, t.de, t.fx, t.fy}, {t.fz, t.lim, zero, zero}};
+      for (int half = 0; half < 2; ++half) {
+        const Double4* v = rows[half];
+        const __m256d lo01 = _mm256_unpacklo_pd(v[0], v[1]);
+        const __m256d hi01 = _mm256_unpackhi_pd(v[0], v[1]);
+        const __m256d lo23 = _mm256_unpacklo_pd(v[2], v[3]);
+        const __m256d hi23 = _mm256_unpackhi_pd(v[2], v[3]);
+        double* o = &out[2 * q + side].e + 4 * half;
+        constexpr std::size_t kStride = 2 * sizeof(Terms) / sizeof(double);
+        _mm256_store_pd(o, _mm256_permute2f128_pd(lo01, lo23, 0x20));
+        _mm256_store_pd(o + kStride, _mm256_permute2f128_pd(hi01, hi23, 0x20));
+        _mm256_store_pd(o + 2 * kStride, _mm256_permute2f128_pd(lo01, lo23, 0x31));
+        _mm256_store_pd(o + 3 * kStride, _mm256_permute2f128_pd(hi01, hi23, 0x31));
+      }
     }
+    const Double4 larger = si < sj ? sj : si;
     const int coincident =
-        _mm256_movemask_pd(std::bit_cast<Double4>(d2 < 1e-18 * (si * si)));
+        _mm256_movemask_pd(std::bit_cast<Double4>(d2 < 1e-18 * (larger * larger)));
     for (int lane = 0; lane < 4; ++lane)
-      if (coincident >> lane & 1)
-        out[q + lane] = record_of(one_pair<kScaled>(k, records, ids, i[q + lane], j[q + lane]));
+      if (coincident >> lane & 1) {
+        const PairTermsBoth<double> both =
+            one_pair<kScaled>(k, records, ids, i[q + lane], j[q + lane]);
+        out[2 * (q + lane)] = record_of(both.i);
+        out[2 * (q + lane) + 1] = record_of(both.j);
+      }
   }
 }
 #endif
 
-// out[q] = slots[near[q]] for q < kept; returns the first q with out[q] == self, or kept.
-std::size_t list_slots_scalar(std::uint32_t* out, const std::uint32_t* slots,
-                              const std::uint32_t* near, std::size_t kept, std::uint32_t self) {
-  std::size_t own = kept;
-  for (std::size_t q = kept; q-- > 0;) {
-    out[q] = slots[near[q]];
-    own = out[q] == self ? q : own;
-  }
-  return own;
+// out[q] = slots[near[q]] for q < kept.
+void list_slots_scalar(std::uint32_t* out, const std::uint32_t* slots, const std::uint32_t* near,
+                       std::size_t kept) {
+  for (std::size_t q = 0; q < kept; ++q) out[q] = slots[near[q]];
 }
 
 #ifdef ZS_PAIR_LANES4
 // The same, eight at a time (lanes past `kept` neither read nor written).
-__attribute__((target("avx2"))) std::size_t list_slots_avx2(std::uint32_t* out,
-                                                            const std::uint32_t* slots,
-                                                            const std::uint32_t* near,
-                                                            std::size_t kept, std::uint32_t self) {
+__attribute__((target("avx2"))) void list_slots_avx2(std::uint32_t* out,
+                                                     const std::uint32_t* slots,
+                                                     const std::uint32_t* near,
+                                                     std::size_t kept) {
   const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-  const __m256i own = _mm256_set1_epi32(static_cast<int>(self));
-  std::size_t found = kept;
   for (std::size_t q = 0; q < kept; q += 8) {
     const __m256i mask = _mm256_cmpgt_epi32(
         _mm256_set1_epi32(static_cast<int>(std::min<std::size_t>(kept - q, 8))), lane);
@@ -148,54 +157,51 @@ __attribute__((target("avx2"))) std::size_t list_slots_avx2(std::uint32_t* out,
     const __m256i slot = _mm256_mask_i32gather_epi32(
         _mm256_setzero_si256(), reinterpret_cast<const int*>(slots), index, mask, 4);
     _mm256_maskstore_epi32(reinterpret_cast<int*>(out + q), mask, slot);
-    const __m256i hit = _mm256_and_si256(mask, _mm256_cmpeq_epi32(slot, own));
-    const auto hits = static_cast<unsigned>(_mm256_movemask_ps(_mm256_castsi256_ps(hit)));
-    if (hits != 0 && found == kept) found = q + static_cast<std::size_t>(std::countr_zero(hits));
   }
-  return found;
 }
 #endif
+
+// Adds one floater's terms of a pair to its sums.
+void add_terms(PairSums& s, const Terms& t, bool graded) {
+  s.e += t.e;
+  s.de += t.de;
+  s.vx += t.fx;
+  s.vy += t.fy;
+  s.vz += t.fz;
+  if (graded) s.limit = t.lim < s.limit ? t.lim : s.limit;
+}
 
 }  // namespace
 
 void PairBatch::add(std::uint32_t self, const std::uint32_t* slots, const std::uint32_t* near,
-                    std::size_t kept, double limit) {
+                    std::size_t kept) {
   const std::size_t first = pairs_;
-  if (j_.size() < first + kept + kLanes) {  // room for the pairs and the padding of sum()
+  if (j_.size() < first + kept + kLanes) {  // room for the pairs and the padding of accumulate()
     const std::size_t room = 2 * (first + kept + kLanes);
     i_.resize(room);
     j_.resize(room);
   }
-  // Every candidate in order, then the floater's own slot (there is at most one) replaced by
-  // the last candidate.
-  std::uint32_t* j = j_.data() + first;
 #ifdef ZS_PAIR_LANES4
-  const std::size_t own = path_ == FilterPath::kAvx2
-                              ? list_slots_avx2(j, slots, near, kept, self)
-                              : list_slots_scalar(j, slots, near, kept, self);
-#else
-  const std::size_t own = list_slots_scalar(j, slots, near, kept, self);
+  if (path_ == FilterPath::kAvx2)
+    list_slots_avx2(j_.data() + first, slots, near, kept);
+  else
 #endif
-  std::size_t m = first + kept;
-  if (own < kept) j[own] = j[--m - first];
+    list_slots_scalar(j_.data() + first, slots, near, kept);
   std::fill(i_.begin() + static_cast<std::ptrdiff_t>(first),
-            i_.begin() + static_cast<std::ptrdiff_t>(m), self);
-  pairs_ = m;
-  floaters_.push_back(
-      {self, static_cast<std::uint32_t>(first), static_cast<std::uint32_t>(m), limit});
+            i_.begin() + static_cast<std::ptrdiff_t>(first + kept), self);
+  pairs_ = first + kept;
 }
 
-std::span<const PairSums> PairBatch::sum(bool scaled, const PairConstants& k,
-                                         const double* records, const std::uint64_t* ids) {
+void PairBatch::accumulate(bool scaled, const PairConstants& k, const double* records,
+                           const std::uint64_t* ids, std::span<PairSums> sums) {
   const std::size_t m = pairs_;
-  sums_.resize(floaters_.size());
-  if (floaters_.empty()) return sums_;
+  if (m == 0) return;
   // Padded to whole groups with copies of a real pair, whose terms are not used.
   const std::size_t padded = (m + kLanes - 1) / kLanes * kLanes;
-  if (terms_.size() < padded) terms_.resize(2 * padded);
+  if (terms_.size() < 2 * padded) terms_.resize(4 * padded);
   Terms* out = terms_.data();
 #ifdef ZS_PAIR_LANES4
-  if (path_ == FilterPath::kAvx2 && m > 0) {
+  if (path_ == FilterPath::kAvx2) {
     std::fill(i_.begin() + static_cast<std::ptrdiff_t>(m),
               i_.begin() + static_cast<std::ptrdiff_t>(padded), i_[0]);
     std::fill(j_.begin() + static_cast<std::ptrdiff_t>(m),
@@ -208,24 +214,11 @@ std::span<const PairSums> PairBatch::sum(bool scaled, const PairConstants& k,
     (scaled ? terms_scalar<true> : terms_scalar<false>)(k, records, ids, m, i_.data(),
                                                          j_.data(), out);
   }
-  for (std::size_t f = 0; f < floaters_.size(); ++f) {
-    const Floater& fl = floaters_[f];
-    PairSums s{0, 0, 0, 0, 0, fl.limit};
-    for (std::uint32_t q = fl.first; q < fl.last; ++q) {
-      s.e += out[q].e;
-      s.de += out[q].de;
-      s.vx += out[q].fx;
-      s.vy += out[q].fy;
-      s.vz += out[q].fz;
-      s.limit = out[q].lim < s.limit ? out[q].lim : s.limit;
-    }
-    sums_[f] = s;
+  const bool graded = k.grading > 0;
+  for (std::size_t q = 0; q < m; ++q) {
+    add_terms(sums[i_[q]], out[2 * q], graded);
+    add_terms(sums[j_[q]], out[2 * q + 1], graded);
   }
-  return sums_;
-}
-
-void PairBatch::clear() {
-  floaters_.clear();
   pairs_ = 0;
 }
 

@@ -1,7 +1,7 @@
 #pragma once
 // The floaters' neighbour (repulsion) pass, the part worth testing on its own: the terms of a
-// pair of floaters and their sums over one floater's neighbours, with an exponential written
-// for it, and the single-precision prefilter threshold that never drops a pair within the
+// pair of floaters, both ways at once, and their sums over each floater's neighbours, with an
+// exponential written for it, and the single-precision prefilter threshold that never drops a pair within the
 // cutoff. The pair terms are written once, for a lane type that is either a double or four
 // doubles (GCC's vector extension, the AVX2 kernel's registers), with the same operations in
 // the same order in both, so both give the same bits. Private to the floaters module.
@@ -131,53 +131,63 @@ struct PairConstants {
   double grading;     // g
 };
 
-/// The terms of one pair: E_ij, |r|²·E_ij, the force along r_ij and the grading limit.
+/// What one floater of a pair gets from the other: E_ij, |r|²·E_ij, the force along r_ij and
+/// the grading limit.
 template <class V>
 struct PairTerms {
   V e, de, fx, fy, fz, lim;
 };
 
-/// The terms of the pair of floaters i and j with offset r_ij = (dx, dy, dz), |r_ij|² = d2 and
-/// |r_ij| = dist, radii σ_i = si and σ_j = sj, fission radius σ_max^j = pm, |n_i·n_j| = cosine
-/// for their unit normals and `no_normal` 1 when either has none, else 0 (ALGORITHMS A.1–A.2,
-/// B, and the scaled form, see FloaterOptions::scaled_repulsion). A pair beyond reach
-/// 3·max(σ_i, σ_j) adds exactly nothing: no energy or force, and an infinite limit.
+/// The terms of a pair, for each of its floaters.
+template <class V>
+struct PairTermsBoth {
+  PairTerms<V> i, j;
+};
+
+/// The terms of the pair of floaters i and j, both ways, with offset r_ij = (dx, dy, dz),
+/// |r_ij|² = d2 and |r_ij| = dist, radii σ_i = si and σ_j = sj, fission radii σ_max = pi and
+/// pj, |n_i·n_j| = cosine for their unit normals and `no_normal` 1 when either has none, else 0
+/// (ALGORITHMS A.1–A.2, B, and the scaled form, see FloaterOptions::scaled_repulsion). The
+/// energies E_ij = αw·e^{−u}(1 − 2u/9) with u = |r|²/2σ_i² (cut off at u = 9/2), and E_ji
+/// alike with σ_j. Forces along r_ij: scaled, 2(σ_i/σ_ij)·αw·e^{−x/2}(1 − x/9) with
+/// x = |r|²/σ_ij², σ_ij = (σ_i + σ_j)/2, one exponential for both floaters; A.2,
+/// E_ij + (σ_i/σ_j)² E_ji, whose E_ji is the other floater's energy: two exponentials in all.
+/// A pair beyond reach 3·max(σ_i, σ_j) adds exactly nothing: no energy or force, and infinite
+/// limits.
 template <bool kScaled, class V>
-[[gnu::always_inline]] inline PairTerms<V> pair_term(V dx, V dy, V dz, V d2, V dist, V si,
-                                                     V sj, V pm, V cosine, V no_normal,
-                                                     const PairConstants& k) {
-  const V zero = splat<V>(0.0);
+[[gnu::always_inline]] inline PairTermsBoth<V> pair_terms(V dx, V dy, V dz, V d2, V dist, V si,
+                                                         V sj, V pi, V pj, V cosine,
+                                                         V no_normal, const PairConstants& k) {
+  const V zero = splat<V>(0.0), one = splat<V>(1.0);
   // w_ij = |cos(∇F_i, ∇F_j)|, or 1 when either has no normal (then the cosine is exactly 0).
-  const V w = k.cos_weight > 0 ? cosine + no_normal : splat<V>(1.0);
+  const V w = k.cos_weight > 0 ? cosine + no_normal : one;
   const V reach_i = 9.0 * si * si, reach_j = 9.0 * sj * sj;
   const auto within = d2 < (reach_i < reach_j ? reach_j : reach_i);
   const V aw = within ? k.alpha * w : zero;
-  const V u = d2 * (1.0 / (2.0 * (si * si)));  // |r|²/2σ_i²: E_ij is cut off at u = 9/2
-  // Scaled: x = |r|²/σ_ij² with σ_ij = (σ_i + σ_j)/2; A.2: x = |r|²/σ_j² (the E_ji term).
-  V inv, amplitude;
-  if constexpr (kScaled) {
-    inv = 2.0 / (si + sj);
-    amplitude = 2.0 * si * inv;
-  } else {
-    inv = 1.0 / sj;
-    amplitude = si * si * inv * inv;
-  }
-  const V x = d2 * inv * inv;
+  const V ui = d2 * (1.0 / (2.0 * (si * si))), uj = d2 * (1.0 / (2.0 * (sj * sj)));
   // Both terms are finite for every listed pair; beyond its own cutoff each is dropped.
-  const V eij = aw * exp_cutoff(-u) * mul_add(u, splat<V>(-2.0 / 9), splat<V>(1.0));
-  const V pair =
-      amplitude * aw * exp_cutoff(-0.5 * x) * mul_add(x, splat<V>(-1.0 / 9), splat<V>(1.0));
-  const V e = u < splat<V>(4.5) ? eij : zero;
-  const V f = x < splat<V>(9.0) ? pair : zero;
-  V coef;
-  if constexpr (kScaled)
-    coef = f;
-  else
-    coef = f + e;
-  const V limit = mul_add(splat<V>(k.grading), dist, pm);
-  return {e,         d2 * e,
-          coef * dx, coef * dy,
-          coef * dz, within ? limit : splat<V>(std::numeric_limits<double>::infinity())};
+  const V ei_all = aw * exp_cutoff(-ui) * mul_add(ui, splat<V>(-2.0 / 9), one);
+  const V ej_all = aw * exp_cutoff(-uj) * mul_add(uj, splat<V>(-2.0 / 9), one);
+  const V ei = ui < splat<V>(4.5) ? ei_all : zero;
+  const V ej = uj < splat<V>(4.5) ? ej_all : zero;
+  V coef_i, coef_j;
+  if constexpr (kScaled) {
+    const V inv = 2.0 / (si + sj);
+    const V x = d2 * inv * inv;
+    const V f_all = aw * exp_cutoff(-0.5 * x) * mul_add(x, splat<V>(-1.0 / 9), one);
+    const V f = x < splat<V>(9.0) ? f_all : zero;
+    coef_i = (2.0 * si * inv) * f;
+    coef_j = (2.0 * sj * inv) * f;
+  } else {
+    const V ratio = si / sj;
+    coef_i = mul_add(ratio * ratio, ej, ei);
+    coef_j = mul_add(1.0 / (ratio * ratio), ei, ej);
+  }
+  const V far = splat<V>(std::numeric_limits<double>::infinity());
+  const V lim_i = within ? mul_add(splat<V>(k.grading), dist, pj) : far;
+  const V lim_j = within ? mul_add(splat<V>(k.grading), dist, pi) : far;
+  return {{ei, d2 * ei, coef_i * dx, coef_i * dy, coef_i * dz, lim_i},
+          {ej, d2 * ej, -(coef_j * dx), -(coef_j * dy), -(coef_j * dz), lim_j}};
 }
 
 /// Σ_j E_ij, Σ_j |r_ij|²·E_ij, the desired velocity Σ_j (force along r_ij), and the smallest
@@ -186,58 +196,49 @@ struct PairSums {
   double e, de, vx, vy, vz, limit;
 };
 
-/// The sums of the pair terms (pair_term(), scaled or not) of several floaters, each over its
-/// candidate neighbours. Floaters are added with their candidates, then all are summed at once:
-/// the terms of all their pairs first, four at a time whoever they belong to (independent work
-/// that keeps the processor's pipelines full; one floater alone has too few pairs for that),
-/// then each floater's terms, added in the order of its candidates (its own slot, if listed,
-/// taken out and replaced by the last), so every path gives the same bits.
+/// The pair terms of many pairs of floaters (pair_terms(), scaled or not), each pair listed
+/// once and its terms added to both floaters' sums. Pairs are listed, then computed all at
+/// once, four at a time whoever they belong to (independent work that keeps the processor's
+/// pipelines full), then added to the sums in the order listed, so every path gives the same
+/// bits, and a caller that lists the pairs of each floater in a fixed order gets sums that do
+/// not depend on how the work was split.
 ///
-/// A pair that is (nearly) coincident, |r_ij|² < 10⁻¹⁸σ_i², feels no force along r = 0: its
-/// terms are taken at a tiny offset along a direction both floaters derive from their ids,
-/// with opposite signs, so they separate.
+/// A pair that is (nearly) coincident, |r_ij|² < 10⁻¹⁸ max(σ_i, σ_j)², feels no force along
+/// r = 0: its terms are taken at a tiny offset along a direction both floaters derive from
+/// their ids, so they separate.
 class PairBatch {
  public:
   /// Computes with `path`, which must be available (filter_path_available); AVX2 lists and
   /// computes the pairs four and eight at a time.
   explicit PairBatch(FilterPath path = best_filter_path()) : path_(path) {}
 
-  /// Adds the floater at slot `self` (of the records and ids given to sum()) whose candidates
-  /// are the slots slots[near[q]] for q < kept; its own slot may be among them, and is
-  /// skipped. `limit` is its own fission radius, the start of its smallest grading limit.
+  /// Lists the pairs of the floater at slot `self` (of the records and ids given to
+  /// accumulate()) with the slots slots[near[q]] for q < kept, none of them `self`.
   void add(std::uint32_t self, const std::uint32_t* slots, const std::uint32_t* near,
-           std::size_t kept, double limit);
+           std::size_t kept);
 
-  /// A floater added: its slot, its pairs [first, last) and its own limit.
-  struct Floater {
-    std::uint32_t self, first, last;
-    double limit;
-  };
-  /// The k-th floater added since the last clear().
-  const Floater& floater(std::size_t k) const { return floaters_[k]; }
-  /// Pairs listed since the last clear().
+  /// Pairs listed since the last accumulate().
   std::size_t pairs() const { return pairs_; }
 
-  /// The sums of every floater added, in the order added. `records` holds every floater's
-  /// record by slot (kRecordFields doubles, 64-byte aligned: x, y, z, σ, σ_max and the unit
-  /// normal, or 0 when it has none), `ids` its id. Valid until the next add(), sum() or
-  /// clear().
-  std::span<const PairSums> sum(bool scaled, const PairConstants& k, const double* records,
-                                const std::uint64_t* ids);
-  void clear();
+  /// Adds the terms of every pair listed to the sums of both its floaters, sums[slot], in the
+  /// order listed, for each floater: its energy, |r|²-weighted energy and force to e, de and
+  /// (vx, vy, vz), and (when k.grading > 0) its grading limit into limit, the smaller kept.
+  /// `records` holds every floater's record by slot (kRecordFields doubles, 64-byte aligned:
+  /// x, y, z, σ, σ_max and the unit normal, or 0 when it has none), `ids` its id. Then the
+  /// list is empty again.
+  void accumulate(bool scaled, const PairConstants& k, const double* records,
+                  const std::uint64_t* ids, std::span<PairSums> sums);
 
-  /// The terms of one pair, as sum() keeps them: one cache line each.
+  /// The terms of one pair for one of its floaters, as accumulate() keeps them: one cache line.
   struct alignas(64) Terms {
     double e, de, fx, fy, fz, lim, unused[2];
   };
 
  private:
   FilterPath path_;
-  std::vector<Floater> floaters_;
   std::size_t pairs_ = 0;
   std::vector<std::uint32_t> i_, j_;  // each pair's slots (the first pairs_ of them)
-  std::vector<Terms> terms_;  // each pair's E_ij, |r|²E_ij, force, limit
-  std::vector<PairSums> sums_;
+  std::vector<Terms> terms_;  // per pair: the terms for i, then for j
 };
 
 }  // namespace zeroset::detail

@@ -21,22 +21,46 @@ constexpr std::int64_t kParallelMin = 4096;
 
 void SpatialHash::build(std::span<const Vec3> points, const Box3& box, double cell,
                         int threads) {
-  origin_ = box.lo;
-  const Vec3 extent = (box.hi - box.lo).cwiseMax(Vec3::Zero());
+  const std::int64_t n = static_cast<std::int64_t>(points.size());
+  const int team = n >= kParallelMin ? std::max(threads, 1) : 1;
+  // The grid covers the points' bounding box within `box` (non-finite coordinates do not
+  // count), not all of `box`: a surface that lies flat in its box gets few cells across it.
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  double lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
+#pragma omp parallel for num_threads(team) reduction(min : lo[:3]) reduction(max : hi[:3])
+  for (std::int64_t i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k) {
+      const double v = points[static_cast<std::size_t>(i)][k];
+      lo[k] = v < lo[k] ? v : lo[k];
+      hi[k] = v > hi[k] ? v : hi[k];
+    }
+  Vec3 extent;
+  for (int k = 0; k < 3; ++k) {
+    const double first = lo[k] <= hi[k] ? std::max(lo[k], box.lo[k]) : box.lo[k];
+    const double last = lo[k] <= hi[k] ? std::min(hi[k], box.hi[k]) : box.hi[k];
+    origin_[k] = std::min(first, last);
+    extent[k] = std::max(last - first, 0.0);
+  }
   const double max_extent = std::max(extent.maxCoeff(), 1e-300);
   const double min_cell = max_extent / static_cast<double>(std::int64_t{1} << (kBits - 1));
   if (!std::isfinite(cell) || cell <= 0) cell = max_extent;
   cell_ = std::max(cell, min_cell);
   inv_cell_ = 1 / cell_;
+  std::array<std::int64_t, 3> across;
+  for (int k = 0; k < 3; ++k)
+    across[k] =
+        std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(extent[k] * inv_cell_)));
+  // The axis with the most cells (z on a tie) is the key's most significant: the one
+  // forward_ranges() works across in layers.
+  const int major = across[2] >= std::max(across[0], across[1]) ? 2 : across[1] >= across[0] ? 1 : 0;
+  axis_ = major == 2 ? std::array{0, 1, 2} : major == 1 ? std::array{0, 2, 1} : std::array{1, 2, 0};
   std::int64_t cells = 1;
   for (int k = 0; k < 3; ++k) {
-    dims_[k] =
-        std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(extent[k] * inv_cell_)));
+    dims_[k] = across[axis_[k]];
     cells = cells > std::numeric_limits<std::int64_t>::max() / dims_[k]
                 ? std::numeric_limits<std::int64_t>::max()
                 : cells * dims_[k];
   }
-  const std::int64_t n = static_cast<std::int64_t>(points.size());
   dense_ = cells <= std::max(kDenseCellsPerPoint * n, kDenseMinCells);
   std::size_t buckets;
   if (dense_) {
@@ -56,7 +80,6 @@ void SpatialHash::build(std::span<const Vec3> points, const Box3& box, double ce
   key_in_.resize(points.size());
   bucket_in_.resize(points.size());
   // Keys, counts and prefix sums in one parallel region (its threads wake once).
-  const int team = n >= kParallelMin ? std::max(threads, 1) : 1;
   std::vector<std::uint32_t> totals(static_cast<std::size_t>(team) + 1, 0);
 #pragma omp parallel num_threads(team)
   {
@@ -145,7 +168,8 @@ std::pair<std::uint32_t, std::uint32_t> SpatialHash::cell_range(std::uint64_t ke
 std::array<std::int64_t, 3> SpatialHash::cell_of(const Vec3& p) const {
   std::array<std::int64_t, 3> c;
   for (int k = 0; k < 3; ++k) {
-    const double t = (p[k] - origin_[k]) * inv_cell_;
+    const int a = axis_[k];
+    const double t = (p[a] - origin_[a]) * inv_cell_;
     // Clamp before converting: a point outside the box (or a huge coordinate) must not
     // overflow the integer.
     const double clamped = std::clamp(t, 0.0, static_cast<double>(dims_[k] - 1));
@@ -162,31 +186,30 @@ std::uint64_t SpatialHash::bucket_index(std::uint64_t key) const {
   return mix64(key) & mask_;
 }
 
-int SpatialHash::block_ranges(std::uint64_t key, std::span<Range> out) const {
+int SpatialHash::forward_ranges(std::uint64_t key, std::span<Range> out) const {
   const auto [x, y, z] = unpack(key);
-  const std::int64_t x0 = std::max<std::int64_t>(0, x - 1), x1 = std::min(dims_[0] - 1, x + 1);
-  const std::int64_t y0 = std::max<std::int64_t>(0, y - 1), y1 = std::min(dims_[1] - 1, y + 1);
-  const std::int64_t z0 = std::max<std::int64_t>(0, z - 1), z1 = std::min(dims_[2] - 1, z + 1);
   int count = 0;
-  if (dense_) {
-    // A row of cells is a run of consecutive buckets, hence of consecutive slots.
-    const std::int64_t row = dims_[0], plane = dims_[0] * dims_[1];
-    for (std::int64_t cz = z0; cz <= z1; ++cz)
-      for (std::int64_t cy = y0; cy <= y1; ++cy) {
-        const auto b = static_cast<std::size_t>(x0 + row * cy + plane * cz);
-        const Range r{start_[b], start_[b + static_cast<std::size_t>(x1 - x0) + 1]};
-        out[static_cast<std::size_t>(count)] = r;
-        count += r.first < r.second;
-      }
-    return count;
+  auto add = [&](Range r) {
+    out[static_cast<std::size_t>(count)] = r;
+    count += r.first < r.second;
+  };
+  // The cells after (x, y, z): x + 1 in its row, the row y + 1 of its plane, the plane z + 1.
+  struct Row {
+    std::int64_t dy, dz, x0;
+  };
+  for (const Row row : {Row{0, 0, x + 1}, Row{1, 0, x - 1}, Row{-1, 1, x - 1}, Row{0, 1, x - 1},
+                        Row{1, 1, x - 1}}) {
+    const std::int64_t cy = y + row.dy, cz = z + row.dz;
+    if (cy < 0 || cy >= dims_[1] || cz < 0 || cz >= dims_[2]) continue;
+    const std::int64_t x0 = std::max<std::int64_t>(0, row.x0), x1 = std::min(dims_[0] - 1, x + 1);
+    if (x0 > x1) continue;
+    if (dense_) {
+      const auto b = static_cast<std::size_t>(x0 + dims_[0] * (cy + dims_[1] * cz));
+      add({start_[b], start_[b + static_cast<std::size_t>(x1 - x0) + 1]});
+    } else {
+      for (std::int64_t cx = x0; cx <= x1; ++cx) add(cell_range(pack(cx, cy, cz)));
+    }
   }
-  for (std::int64_t cz = z0; cz <= z1; ++cz)
-    for (std::int64_t cy = y0; cy <= y1; ++cy)
-      for (std::int64_t cx = x0; cx <= x1; ++cx) {
-        const Range r = cell_range(pack(cx, cy, cz));
-        out[static_cast<std::size_t>(count)] = r;
-        count += r.first < r.second;
-      }
   return count;
 }
 

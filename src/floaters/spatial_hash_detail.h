@@ -16,9 +16,11 @@ namespace zeroset::detail {
 
 class SpatialHash {
  public:
-  /// Sorts `points` into cubic cells of edge `cell` laid over `box` (points outside it fall
-  /// into the border cells). The edge is enlarged when an axis would need more than 2^20
-  /// cells, and when it is not a positive finite number. Stable: equal cells keep input order.
+  /// Sorts `points` into cubic cells of edge `cell` laid over the part of `box` they span
+  /// (points outside `box` fall into the border cells). Cell keys order the cells along the
+  /// axis with the most cells last (most significant): the layers of forward_ranges(). The
+  /// edge is enlarged when an axis would need more than 2^20 cells, and when it is not a
+  /// positive finite number. Stable: equal cells keep input order.
   /// Parts run on up to `threads` OpenMP threads (from 4,096 points on); the result does not
   /// depend on how many.
   void build(std::span<const Vec3> points, const Box3& box, double cell, int threads = 1);
@@ -37,13 +39,17 @@ class SpatialHash {
 
   /// A range [first, last) of slots.
   using Range = std::pair<std::uint32_t, std::uint32_t>;
-  /// Most slot ranges block_ranges() writes.
-  static constexpr int kMaxBlockRanges = 27;
-  /// Slot ranges holding the points of the 3×3×3 cells around cell `key`: one range per row
-  /// of three cells in a dense grid (their buckets are consecutive), one per cell in a hashed
-  /// one. Returns how many were written to `out` (kMaxBlockRanges long); empty ranges are
-  /// left out.
-  int block_ranges(std::uint64_t key, std::span<Range> out) const;
+  /// Most slot ranges forward_ranges() writes.
+  static constexpr int kMaxForwardRanges = 13;
+  /// Slot ranges holding the points of the 13 cells of the 3×3×3 block around cell `key` that
+  /// come after it in key order: every pair of neighbouring cells once, seen from the
+  /// one that comes first. One range per row of cells in a dense grid, one per cell in a hashed
+  /// one; empty ranges are left out. Returns how many were written to `out`
+  /// (kMaxForwardRanges long).
+  int forward_ranges(std::uint64_t key, std::span<Range> out) const;
+  /// The layer of cell `key`: its coordinate along the key's most significant axis, which
+  /// forward_ranges() reaches at most one beyond.
+  static std::int64_t layer(std::uint64_t key) { return unpack(key)[2]; }
 
   /// The point nearest to p among those built, skipping input index `skip` (pass -1 to skip
   /// none): its input index and distance, or {-1, +∞} when there is none. `points` must be the
@@ -83,9 +89,11 @@ class SpatialHash {
   bool visit_ring(const std::array<std::int64_t, 3>& c, std::int64_t ring, Visit&& visit) const;
 
   Vec3 origin_ = Vec3::Zero();
+  // The world axes of the key's three coordinates, least significant first.
+  std::array<int, 3> axis_{0, 1, 2};
   double cell_ = 1;
   double inv_cell_ = 1;
-  std::array<std::int64_t, 3> dims_{1, 1, 1};
+  std::array<std::int64_t, 3> dims_{1, 1, 1};  // cells along the key's coordinates
   bool dense_ = true;
   std::uint64_t mask_ = 0;
   std::vector<std::uint32_t> start_;  // bucket -> first slot; size buckets + 1

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -67,13 +68,21 @@ TEST(FloaterSystem, SettlesOnKummerWithEveryNodeCovered) {
 
 TEST(FloaterSystem, NodesAreCoveredWithoutSnappingToo) {
   // The dynamics alone (denser sampling near nodes) already bring floaters close to them;
-  // snapping makes it exact.
+  // snapping makes it exact. The least covered of the 16 nodes varies from run to run (its
+  // distance to the nearest floater from 0.8 to 1.9 local spacings over 40 seeds), so this
+  // looks at five.
   const Surface kummer = catalog_surface("kummer", {{"mu", 1.5}});
-  FloaterSystem sys(kummer, {.seed = 2, .snap_to_nodes = false});
-  settle(sys, 600);
-  const SampleMetrics m = measure_samples(kummer, sys.positions(), {.covering = false});
-  ASSERT_EQ(m.singular.size(), 16u);
-  EXPECT_LE(m.singular_ratio_max, 1.5);
+  std::vector<double> worst;
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+    FloaterSystem sys(kummer, {.seed = seed, .snap_to_nodes = false});
+    settle(sys, 600);
+    const SampleMetrics m = measure_samples(kummer, sys.positions(), {.covering = false});
+    ASSERT_EQ(m.singular.size(), 16u);
+    EXPECT_LE(m.singular_ratio_max, 2.0) << "seed " << seed;
+    worst.push_back(m.singular_ratio_max);
+  }
+  std::nth_element(worst.begin(), worst.begin() + 2, worst.end());
+  EXPECT_LE(worst[2], 1.25);  // the median
 }
 
 TEST(FloaterSystem, ConeIsDenserNearTheCusp) {

@@ -124,8 +124,9 @@ Scene make_scene(std::uint64_t seed, std::size_t count) {
   return scene;
 }
 
-// Every floater of the scene with its candidates: all others, its own slot among them, in a
-// shuffled order, some lists cut short (so lists of every length, and of none, occur).
+// Every floater of the scene with its candidates: the floaters after it, in a shuffled order,
+// some lists cut short (so lists of every length, and of none, occur). Each pair is listed
+// once, by the floater that comes first.
 struct Candidates {
   std::vector<std::uint32_t> slots, near;
   std::vector<std::size_t> first, kept;
@@ -136,10 +137,10 @@ Candidates make_candidates(std::uint64_t seed, std::size_t count) {
   Candidates c;
   for (std::uint32_t t = 0; t < count; ++t) c.slots.push_back(t);
   for (std::size_t s = 0; s < count; ++s) {
-    std::vector<std::uint32_t> near(count);
-    for (std::uint32_t t = 0; t < count; ++t) near[t] = t;
+    std::vector<std::uint32_t> near;
+    for (auto t = static_cast<std::uint32_t>(s + 1); t < count; ++t) near.push_back(t);
     std::shuffle(near.begin(), near.end(), rng);
-    near.resize(std::min(count, s));
+    near.resize(std::min(near.size(), s % 2 == 0 ? near.size() : s / 2));
     c.first.push_back(c.near.size());
     c.kept.push_back(near.size());
     c.near.insert(c.near.end(), near.begin(), near.end());
@@ -147,18 +148,17 @@ Candidates make_candidates(std::uint64_t seed, std::size_t count) {
   return c;
 }
 
+constexpr double kOwnLimit = 0.75;
+
 std::vector<PairSums> sums(FilterPath path, bool scaled, const PairConstants& k,
                            const Scene& scene, const Candidates& c) {
   PairBatch batch(path);
-  std::vector<PairSums> out;
+  std::vector<PairSums> out(scene.count, PairSums{0, 0, 0, 0, 0, kOwnLimit});
   for (std::size_t s = 0; s < scene.count; ++s) {
     batch.add(static_cast<std::uint32_t>(s), c.slots.data(), c.near.data() + c.first[s],
-              c.kept[s], 0.75);
-    if (batch.pairs() > 40 || s + 1 == scene.count) {
-      const auto part = batch.sum(scaled, k, scene.records.get(), scene.ids.data());
-      out.insert(out.end(), part.begin(), part.end());
-      batch.clear();
-    }
+              c.kept[s]);
+    if (batch.pairs() > 40 || s + 1 == scene.count)
+      batch.accumulate(scaled, k, scene.records.get(), scene.ids.data(), out);
   }
   return out;
 }
@@ -182,14 +182,20 @@ TEST(PairBatch, EveryPathGivesTheSameBits) {
     }
 }
 
-// The terms written out from ALGORITHMS A.1–A.2 and B with std::exp.
+// The sums of floater s over every listed pair it is in, from ALGORITHMS A.1–A.2 and B
+// written out with std::exp, one way at a time.
 PairSums expected(const Scene& scene, const Candidates& c, std::size_t s, bool scaled,
-                  const PairConstants& k, double limit) {
+                  const PairConstants& k) {
+  std::vector<std::uint32_t> partners;
+  for (std::size_t f = 0; f < scene.count; ++f)
+    for (std::size_t q = 0; q < c.kept[f]; ++q) {
+      const std::uint32_t t = c.slots[c.near[c.first[f] + q]];
+      if (f == s) partners.push_back(t);
+      if (t == s) partners.push_back(static_cast<std::uint32_t>(f));
+    }
   const double* me = scene.records.get() + kRecordFields * s;
-  PairSums sum{0, 0, 0, 0, 0, limit};
-  for (std::size_t q = 0; q < c.kept[s]; ++q) {
-    const std::uint32_t t = c.slots[c.near[c.first[s] + q]];
-    if (t == s) continue;
+  PairSums sum{0, 0, 0, 0, 0, kOwnLimit};
+  for (const std::uint32_t t : partners) {
     const double* other = scene.records.get() + kRecordFields * t;
     const double r[3] = {me[0] - other[0], me[1] - other[1], me[2] - other[2]};
     const double d2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
@@ -217,7 +223,7 @@ PairSums expected(const Scene& scene, const Candidates& c, std::size_t s, bool s
     sum.vx += force * r[0];
     sum.vy += force * r[1];
     sum.vz += force * r[2];
-    sum.limit = std::min(sum.limit, other[4] + k.grading * std::sqrt(d2));
+    if (k.grading > 0) sum.limit = std::min(sum.limit, other[4] + k.grading * std::sqrt(d2));
   }
   return sum;
 }
@@ -227,35 +233,35 @@ TEST(PairBatch, SumsFollowTheFormulas) {
   // No coincident floaters here (the next test is about those).
   for (std::size_t s = 7; s < scene.count; s += 7) scene.records[kRecordFields * s] += 0.01;
   const Candidates c = make_candidates(8, scene.count);
-  const PairConstants k{1.5, 1.0, 0.2};
-  for (bool scaled : {true, false}) {
-    const auto got = sums(best_filter_path(), scaled, k, scene, c);
-    for (std::size_t s = 0; s < scene.count; ++s) {
-      SCOPED_TRACE(s);
-      const PairSums want = expected(scene, c, s, scaled, k, 0.75);
-      const double scale = 1 + std::abs(want.e) + std::abs(want.vx) + std::abs(want.vy);
-      EXPECT_NEAR(got[s].e, want.e, 1e-9 * scale);
-      EXPECT_NEAR(got[s].de, want.de, 1e-9 * scale);
-      EXPECT_NEAR(got[s].vx, want.vx, 1e-9 * scale);
-      EXPECT_NEAR(got[s].vy, want.vy, 1e-9 * scale);
-      EXPECT_NEAR(got[s].vz, want.vz, 1e-9 * scale);
-      EXPECT_DOUBLE_EQ(got[s].limit, want.limit);
+  for (const PairConstants k : {PairConstants{1.5, 1.0, 0.2}, PairConstants{0.5, 0.0, 0.0}})
+    for (bool scaled : {true, false}) {
+      const auto got = sums(best_filter_path(), scaled, k, scene, c);
+      for (std::size_t s = 0; s < scene.count; ++s) {
+        SCOPED_TRACE(s);
+        const PairSums want = expected(scene, c, s, scaled, k);
+        const double scale = 1 + std::abs(want.e) + std::abs(want.vx) + std::abs(want.vy);
+        EXPECT_NEAR(got[s].e, want.e, 1e-9 * scale);
+        EXPECT_NEAR(got[s].de, want.de, 1e-9 * scale);
+        EXPECT_NEAR(got[s].vx, want.vx, 1e-9 * scale);
+        EXPECT_NEAR(got[s].vy, want.vy, 1e-9 * scale);
+        EXPECT_NEAR(got[s].vz, want.vz, 1e-9 * scale);
+        EXPECT_DOUBLE_EQ(got[s].limit, want.limit);
+      }
     }
-  }
 }
 
 TEST(PairBatch, CoincidentFloatersArePushedApart) {
   // Two floaters at one point: each feels a finite force, opposite to the other's.
   Scene scene = make_scene(9, 2);
   std::copy(scene.records.get(), scene.records.get() + 3, scene.records.get() + kRecordFields);
-  const std::uint32_t slots[2] = {0, 1}, near[2] = {0, 1};
+  const std::uint32_t slots[2] = {0, 1}, near[1] = {1};
   for (FilterPath path : {FilterPath::kScalar, FilterPath::kAvx2}) {
     if (!filter_path_available(path)) continue;
     PairBatch batch(path);
-    batch.add(0, slots, near, 2, 1.0);
-    batch.add(1, slots, near, 2, 1.0);
-    const auto s = batch.sum(true, {1.0, 1.0, 0.1}, scene.records.get(), scene.ids.data());
-    ASSERT_EQ(s.size(), 2u);
+    batch.add(0, slots, near, 1);
+    std::vector<PairSums> s(2, PairSums{0, 0, 0, 0, 0, 1.0});
+    batch.accumulate(true, {1.0, 1.0, 0.1}, scene.records.get(), scene.ids.data(), s);
+    EXPECT_EQ(batch.pairs(), 0u);
     const double push = std::hypot(s[0].vx, s[0].vy, s[0].vz);
     EXPECT_GT(push, 0);
     EXPECT_TRUE(std::isfinite(push));

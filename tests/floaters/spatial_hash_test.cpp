@@ -1,11 +1,12 @@
-// The floaters' spatial hash: cells as runs of slots, and the 3×3×3 blocks around them, checked
-// against brute force on a dense grid and on a hashed one.
+// The floaters' spatial hash: cells as runs of slots, and the forward halves of the 3×3×3
+// blocks around them, checked against brute force on a dense grid and on a hashed one.
 #include "spatial_hash_detail.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <random>
 #include <vector>
 
@@ -21,71 +22,85 @@ std::vector<Vec3> random_points(std::size_t n, std::uint64_t seed, double size =
   return points;
 }
 
-// Every pair closer than a cell edge lies in one block, whose ranges do not overlap and hold
-// nothing farther than the block reaches.
-void expect_blocks_cover_neighbours(const std::vector<Vec3>& points, double cell, int threads) {
+// Every pair closer than a cell edge is listed exactly once when each cell lists its later
+// floaters and its forward ranges, which lie in its own layer or the next.
+void expect_forward_ranges_list_each_pair_once(const std::vector<Vec3>& points, double cell,
+                                               int threads = 1) {
   const Box3 box{Vec3(-1, -1, -1), Vec3(1, 1, 1)};
   SpatialHash hash;
   hash.build(points, box, cell, threads);
   const auto order = hash.order();
-  ASSERT_EQ(order.size(), points.size());
-  std::vector<std::uint32_t> slot_of(points.size());
-  for (std::size_t s = 0; s < order.size(); ++s) slot_of[order[s]] = static_cast<std::uint32_t>(s);
-  std::size_t covered = 0;
+  std::vector<std::uint32_t> run_of(points.size());
+  for (std::uint32_t r = 0; r < hash.runs().size(); ++r)
+    for (std::uint32_t s = hash.runs()[r].first; s < hash.runs()[r].last; ++s) run_of[s] = r;
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> listed;  // by input indices, lower first
   for (const SpatialHash::Run& run : hash.runs()) {
-    std::array<SpatialHash::Range, SpatialHash::kMaxBlockRanges> ranges;
-    const int count = hash.block_ranges(run.key, ranges);
-    std::vector<bool> in_block(points.size(), false);
-    for (int r = 0; r < count; ++r) {
-      ASSERT_LT(ranges[r].first, ranges[r].second);
-      for (std::uint32_t s = ranges[r].first; s < ranges[r].second; ++s) {
-        ASSERT_FALSE(in_block[s]) << "ranges overlap";
-        in_block[s] = true;
-      }
-    }
+    std::array<SpatialHash::Range, SpatialHash::kMaxForwardRanges> ranges;
+    const int count = hash.forward_ranges(run.key, ranges);
     for (std::uint32_t s = run.first; s < run.last; ++s) {
-      const Vec3& p = points[order[s]];
-      for (std::size_t j = 0; j < points.size(); ++j) {
-        const double d = (points[j] - p).norm();
-        if (d < cell) {
-          ASSERT_TRUE(in_block[slot_of[j]]) << "a point at " << d / cell << " cells is missing";
-          covered += j != order[s];
+      std::vector<std::uint32_t> partners;
+      for (std::uint32_t t = s + 1; t < run.last; ++t) partners.push_back(t);
+      for (int r = 0; r < count; ++r) {
+        ASSERT_LT(ranges[r].first, ranges[r].second);
+        for (std::uint32_t t = ranges[r].first; t < ranges[r].second; ++t) {
+          const std::int64_t dz = SpatialHash::layer(hash.runs()[run_of[t]].key) -
+                                  SpatialHash::layer(run.key);
+          ASSERT_TRUE(dz == 0 || dz == 1) << "a forward cell " << dz << " layers away";
+          ASSERT_NE(run_of[t], run_of[s]);
+          partners.push_back(t);
         }
-        if (in_block[slot_of[j]]) {
-          ASSERT_LT(d, 2 * std::sqrt(3.0) * cell * 1.0001);
-        }
+      }
+      for (std::uint32_t t : partners) {
+        const auto a = order[s], b = order[t];
+        ++listed[{std::min(a, b), std::max(a, b)}];
       }
     }
   }
-  EXPECT_GT(covered, points.size() / 4);  // there are pairs to check
+  for (const auto& [pair, times] : listed) ASSERT_EQ(times, 1) << "a pair listed twice";
+  std::size_t pairs = 0;
+  for (std::uint32_t a = 0; a < points.size(); ++a)
+    for (std::uint32_t b = a + 1; b < points.size(); ++b)
+      if ((points[a] - points[b]).norm() < cell) {
+        ASSERT_TRUE(listed.contains({a, b}))
+            << "a pair at " << (points[a] - points[b]).norm() / cell << " cells is missing";
+        ++pairs;
+      }
+  EXPECT_GE(pairs, points.size() / 4);  // there are pairs to check
 }
 
-TEST(SpatialHash, BlocksHoldEveryNeighbourOnADenseGrid) {
-  expect_blocks_cover_neighbours(random_points(3000, 1), 0.1, 1);
+TEST(SpatialHash, ForwardRangesListEveryNeighbourPairOnceOnADenseGrid) {
+  expect_forward_ranges_list_each_pair_once(random_points(2000, 4), 0.1);
 }
 
-TEST(SpatialHash, BlocksHoldEveryNeighbourOnAHashedGrid) {
-  // Tiny cells over the unit box: far more cells than points, so cell keys are hashed.
-  expect_blocks_cover_neighbours(random_points(3000, 2, 0.04), 0.004, 1);
+TEST(SpatialHash, ForwardRangesListEveryNeighbourPairOnceOnAHashedGrid) {
+  expect_forward_ranges_list_each_pair_once(random_points(2000, 5, 0.04), 0.004);
 }
 
 TEST(SpatialHash, OrderIsStableAndTheSameOnAnyNumberOfThreads) {
   // Duplicated points share a cell and must keep their input order; from 4,096 points on the
-  // sort runs in parallel.
+  // sort runs in parallel, in as many parts as there are threads.
   std::vector<Vec3> points = random_points(6000, 3);
   points.insert(points.end(), points.begin(), points.begin() + 2000);
   const Box3 box{Vec3(-1, -1, -1), Vec3(1, 1, 1)};
   for (double cell : {0.05, 0.002}) {
     SCOPED_TRACE(cell);
-    SpatialHash one, two;
+    SpatialHash one;
     one.build(points, box, cell, 1);
-    two.build(points, box, cell, 2);
-    ASSERT_TRUE(std::equal(one.order().begin(), one.order().end(), two.order().begin(),
-                           two.order().end()));
     for (const SpatialHash::Run& run : one.runs())
       for (std::uint32_t s = run.first + 1; s < run.last; ++s)
         ASSERT_LT(one.order()[s - 1], one.order()[s]);
-    expect_blocks_cover_neighbours(points, cell, 2);
+    if (cell == 0.05) {  // a dense grid: its cells follow each other in key order
+      const auto runs = one.runs();
+      for (std::size_t r = 1; r < runs.size(); ++r) ASSERT_LT(runs[r - 1].key, runs[r].key);
+    }
+    for (int threads : {2, 3}) {
+      SCOPED_TRACE(threads);
+      SpatialHash many;
+      many.build(points, box, cell, threads);
+      ASSERT_TRUE(std::equal(one.order().begin(), one.order().end(), many.order().begin(),
+                             many.order().end()));
+      expect_forward_ranges_list_each_pair_once(points, cell, threads);
+    }
   }
 }
 
