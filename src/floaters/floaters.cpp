@@ -778,8 +778,8 @@ struct FloaterSystem::Impl {
   // cells (z) and the next. So layers of one parity can be worked on at once, each by one
   // thread in slot order, without two threads adding to the same sums: the even layers first,
   // then the odd ones. Each floater's sums take its pairs in a fixed order (those listed by
-  // the layer below, then by its own; in each, in listing order): the result does not depend
-  // on the number of threads.
+  // even layers, then by odd ones; in each, in listing order): the result does not depend on
+  // the number of threads.
   // The same pass grades the fission radii: σ_max^i ≤ σ_max^j + g·|r_ij| for every neighbour
   // j (one relaxation sweep per step). Without it, where μ_i jumps (α_i drops from ~1 to ~0
   // once a floater's perimeter reaches across a node) the density wanted on either side

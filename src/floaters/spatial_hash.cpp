@@ -19,21 +19,8 @@ constexpr std::int64_t kDenseMinCells = 1 << 16;
 constexpr std::int64_t kParallelMin = 4096;
 }  // namespace
 
-void SpatialHash::build(std::span<const Vec3> points, const Box3& box, double cell,
-                        int threads) {
-  const std::int64_t n = static_cast<std::int64_t>(points.size());
-  const int team = n >= kParallelMin ? std::max(threads, 1) : 1;
-  // The grid covers the points' bounding box within `box` (non-finite coordinates do not
-  // count), not all of `box`: a surface that lies flat in its box gets few cells across it.
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  double lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
-#pragma omp parallel for num_threads(team) reduction(min : lo[:3]) reduction(max : hi[:3])
-  for (std::int64_t i = 0; i < n; ++i)
-    for (int k = 0; k < 3; ++k) {
-      const double v = points[static_cast<std::size_t>(i)][k];
-      lo[k] = v < lo[k] ? v : lo[k];
-      hi[k] = v > hi[k] ? v : hi[k];
-    }
+std::size_t SpatialHash::lay_grid(const double* lo, const double* hi, const Box3& box,
+                                  double cell, std::size_t points) {
   Vec3 extent;
   for (int k = 0; k < 3; ++k) {
     const double first = lo[k] <= hi[k] ? std::max(lo[k], box.lo[k]) : box.lo[k];
@@ -52,37 +39,59 @@ void SpatialHash::build(std::span<const Vec3> points, const Box3& box, double ce
         std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(extent[k] * inv_cell_)));
   // The axis with the most cells (z on a tie) is the key's most significant: the one
   // forward_ranges() works across in layers.
-  const int major = across[2] >= std::max(across[0], across[1]) ? 2 : across[1] >= across[0] ? 1 : 0;
-  axis_ = major == 2 ? std::array{0, 1, 2} : major == 1 ? std::array{0, 2, 1} : std::array{1, 2, 0};
+  const int major =
+      across[2] >= std::max(across[0], across[1]) ? 2 : (across[1] >= across[0] ? 1 : 0);
+  axis_ = major == 2   ? std::array{0, 1, 2}
+          : major == 1 ? std::array{0, 2, 1}
+                       : std::array{1, 2, 0};
   std::int64_t cells = 1;
   for (int k = 0; k < 3; ++k) {
-    dims_[k] = across[axis_[k]];
+    dims_[k] = across[static_cast<std::size_t>(axis_[k])];
     cells = cells > std::numeric_limits<std::int64_t>::max() / dims_[k]
                 ? std::numeric_limits<std::int64_t>::max()
                 : cells * dims_[k];
   }
+  const auto n = static_cast<std::int64_t>(points);
   dense_ = cells <= std::max(kDenseCellsPerPoint * n, kDenseMinCells);
-  std::size_t buckets;
-  if (dense_) {
-    buckets = static_cast<std::size_t>(cells);
-  } else {
-    buckets = std::bit_ceil(static_cast<std::size_t>(std::max<std::int64_t>(2 * n, 16)));
-    mask_ = buckets - 1;
-  }
+  if (dense_) return static_cast<std::size_t>(cells);
+  const std::size_t buckets = std::bit_ceil(static_cast<std::size_t>(std::max<std::int64_t>(2 * n, 16)));
+  mask_ = buckets - 1;
+  return buckets;
+}
 
+void SpatialHash::build(std::span<const Vec3> points, const Box3& box, double cell,
+                        int threads) {
+  const std::int64_t n = static_cast<std::int64_t>(points.size());
+  const int team = n >= kParallelMin ? std::max(threads, 1) : 1;
+  keys_.resize(points.size());
+  order_.resize(points.size());
+  key_in_.resize(points.size());
+  bucket_in_.resize(points.size());
+  // The grid covers the points' bounding box within `box` (non-finite coordinates do not
+  // count), not all of `box`: a surface that lies flat in its box gets few cells across it.
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  double lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
+  std::size_t buckets = 0;
   // Counting sort by bucket: count, prefix sums, then place from the back, each bucket's
   // cursor moving down from its end (stable: equal cells keep input order), which leaves
   // start_[b] at bucket b's first slot. Floaters come kept in cell order, so the counting and
-  // placing walk the bucket array almost in order.
-  keys_.resize(points.size());
-  order_.resize(points.size());
-  start_.resize(buckets + 1);
-  key_in_.resize(points.size());
-  bucket_in_.resize(points.size());
-  // Keys, counts and prefix sums in one parallel region (its threads wake once).
+  // placing walk the bucket array almost in order. The bounding box, keys, counts and prefix
+  // sums in one parallel region (its threads wake once).
   std::vector<std::uint32_t> totals(static_cast<std::size_t>(team) + 1, 0);
 #pragma omp parallel num_threads(team)
   {
+#pragma omp for schedule(static) reduction(min : lo[:3]) reduction(max : hi[:3])
+    for (std::int64_t i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k) {
+        const double v = points[static_cast<std::size_t>(i)][k];
+        lo[k] = v < lo[k] ? v : lo[k];
+        hi[k] = v > hi[k] ? v : hi[k];
+      }
+#pragma omp single
+    {
+      buckets = lay_grid(lo, hi, box, cell, points.size());
+      start_.resize(buckets + 1);
+    }
 #pragma omp for schedule(static)
     for (std::int64_t i = 0; i < n; ++i) {
       const auto k = static_cast<std::size_t>(i);

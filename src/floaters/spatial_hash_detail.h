@@ -64,6 +64,11 @@ class SpatialHash {
   static constexpr int kBits = 21;
   static constexpr std::uint64_t kAxisMask = (std::uint64_t{1} << kBits) - 1;
 
+  // Lays the grid over the box [lo, hi] within `box` (lo > hi on an axis: all of `box`'s
+  // extent there) for `points` points: origin, cell, axes, dimensions and whether it is
+  // dense; returns the number of buckets.
+  std::size_t lay_grid(const double* lo, const double* hi, const Box3& box, double cell,
+                       std::size_t points);
   std::array<std::int64_t, 3> cell_of(const Vec3& p) const;
   static std::uint64_t pack(std::int64_t x, std::int64_t y, std::int64_t z) {
     return static_cast<std::uint64_t>(x) | (static_cast<std::uint64_t>(y) << kBits) |
