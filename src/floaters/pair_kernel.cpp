@@ -214,10 +214,23 @@ void PairBatch::accumulate(bool scaled, const PairConstants& k, const double* re
     (scaled ? terms_scalar<true> : terms_scalar<false>)(k, records, ids, m, i_.data(),
                                                          j_.data(), out);
   }
+  // A floater's pairs are listed together: its own terms are summed in registers, then added
+  // to its sums once (none of its pairs has it as the other floater).
   const bool graded = k.grading > 0;
-  for (std::size_t q = 0; q < m; ++q) {
-    add_terms(sums[i_[q]], out[2 * q], graded);
-    add_terms(sums[j_[q]], out[2 * q + 1], graded);
+  for (std::size_t q = 0; q < m;) {
+    const std::uint32_t self = i_[q];
+    PairSums own{0, 0, 0, 0, 0, std::numeric_limits<double>::infinity()};
+    for (; q < m && i_[q] == self; ++q) {
+      add_terms(own, out[2 * q], graded);
+      add_terms(sums[j_[q]], out[2 * q + 1], graded);
+    }
+    PairSums& total = sums[self];
+    total.e += own.e;
+    total.de += own.de;
+    total.vx += own.vx;
+    total.vy += own.vy;
+    total.vz += own.vz;
+    total.limit = std::min(total.limit, own.limit);
   }
   pairs_ = 0;
 }

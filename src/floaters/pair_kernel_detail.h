@@ -220,9 +220,10 @@ class PairBatch {
   /// Pairs listed since the last accumulate().
   std::size_t pairs() const { return pairs_; }
 
-  /// Adds the terms of every pair listed to the sums of both its floaters, sums[slot], in the
-  /// order listed, for each floater: its energy, |r|²-weighted energy and force to e, de and
-  /// (vx, vy, vz), and (when k.grading > 0) its grading limit into limit, the smaller kept.
+  /// Adds the terms of every pair listed to the sums of both its floaters, sums[slot], for
+  /// each floater: its energy, |r|²-weighted energy and force to e, de and (vx, vy, vz), and
+  /// (when k.grading > 0) its grading limit into limit, the smaller kept. In a fixed order:
+  /// pair by pair as listed, those of the floater listing them first summed on their own.
   /// `records` holds every floater's record by slot (kRecordFields doubles, 64-byte aligned:
   /// x, y, z, σ, σ_max and the unit normal, or 0 when it has none), `ids` its id. Then the
   /// list is empty again.
