@@ -54,7 +54,8 @@ std::size_t SpatialHash::lay_grid(const double* lo, const double* hi, const Box3
   const auto n = static_cast<std::int64_t>(points);
   dense_ = cells <= std::max(kDenseCellsPerPoint * n, kDenseMinCells);
   if (dense_) return static_cast<std::size_t>(cells);
-  const std::size_t buckets = std::bit_ceil(static_cast<std::size_t>(std::max<std::int64_t>(2 * n, 16)));
+  const std::size_t buckets =
+      std::bit_ceil(static_cast<std::size_t>(std::max<std::int64_t>(2 * n, 16)));
   mask_ = buckets - 1;
   return buckets;
 }
