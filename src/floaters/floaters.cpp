@@ -683,25 +683,6 @@ struct FloaterSystem::Impl {
       permute_state(hash.order());
       hash.build(pos, box, 3 * largest, threads);
     }
-    // The runs by layer (a stable sort: a dense grid's runs come in layer order already).
-    const auto runs = hash.runs();
-    runs_by_layer.resize(runs.size());
-    for (std::uint32_t r = 0; r < runs.size(); ++r) runs_by_layer[r] = r;
-    const auto by_layer = [&](std::uint32_t a, std::uint32_t b) {
-      return detail::SpatialHash::layer(runs[a].key) < detail::SpatialHash::layer(runs[b].key);
-    };
-    if (!std::is_sorted(runs_by_layer.begin(), runs_by_layer.end(), by_layer))
-      std::stable_sort(runs_by_layer.begin(), runs_by_layer.end(), by_layer);
-    layer_first.clear();
-    layer_z.clear();
-    for (std::uint32_t k = 0; k < runs_by_layer.size(); ++k) {
-      const std::int64_t z = detail::SpatialHash::layer(runs[runs_by_layer[k]].key);
-      if (layer_z.empty() || layer_z.back() != z) {
-        layer_z.push_back(z);
-        layer_first.push_back(k);
-      }
-    }
-    layer_first.push_back(static_cast<std::uint32_t>(runs_by_layer.size()));
     packed.resize(n);
     pid.resize(n);
     // The filter reads whole groups of slots past a range's end: padding keeps that in bounds.
@@ -764,18 +745,13 @@ struct FloaterSystem::Impl {
   };
   std::vector<Scratch> scratch;  // one per thread, kept from step to step
   std::vector<detail::PairSums> pair_sums;  // per slot
-  // The runs of the hash (its occupied cells) by layer: the runs of the k-th occupied layer
-  // of cells (z = layer_z[k]) are runs_by_layer[layer_first[k] .. layer_first[k + 1]), in slot
-  // order.
-  std::vector<std::uint32_t> runs_by_layer, layer_first;
-  std::vector<std::int64_t> layer_z;
 
   // Pair pass (ALGORITHMS A.1–A.3, B): for floater i, E_i = Σ_j E_ij, ∂E_i/∂σ_i and the
   // desired velocity P_i = Σ_j r_ij (E_ij + (σ_i/σ_j)² E_ji) (or its scaled form). Each pair
   // is computed once, for both its floaters, by the cell of the one that comes first (in the
   // cell's own slot order, or by cell order): a cell pairs its floaters with its later
   // floaters and with the floaters of its 13 forward cells, which lie in its own layer of
-  // cells (z) and the next. So layers of one parity can be worked on at once, each by one
+  // cells (SpatialHash::layers) and the next. So layers of one parity can be worked on at once, each by one
   // thread in slot order, without two threads adding to the same sums: the even layers first,
   // then the odd ones. Each floater's sums take its pairs in a fixed order (those listed by
   // even layers, then by odd ones; in each, in listing order): the result does not depend on
@@ -813,14 +789,15 @@ struct FloaterSystem::Impl {
         pack_slot(s);
         sums[s] = {0, 0, 0, 0, 0, mu[order[s]] * sigma_max()};
       }
-      const auto layers = static_cast<std::int64_t>(layer_z.size());
+      const auto layers = hash.layers();
+      const auto layer_runs = hash.layer_runs();
       for (std::int64_t parity = 0; parity < 2; ++parity) {
 #pragma omp for schedule(dynamic, 1)
-        for (std::int64_t layer = 0; layer < layers; ++layer) {
-          if ((layer_z[static_cast<std::size_t>(layer)] & 1) != parity) continue;
-          for (std::uint32_t r = layer_first[static_cast<std::size_t>(layer)];
-               r < layer_first[static_cast<std::size_t>(layer) + 1]; ++r) {
-            const auto& run = runs[runs_by_layer[r]];
+        for (std::int64_t l = 0; l < static_cast<std::int64_t>(layers.size()); ++l) {
+          const auto& layer = layers[static_cast<std::size_t>(l)];
+          if ((layer.layer & 1) != parity) continue;
+          for (std::uint32_t r = layer.first; r < layer.last; ++r) {
+            const auto& run = runs[layer_runs[r]];
             const std::uint32_t candidates = gather_block(run, c);
             for (std::uint32_t s = run.first; s < run.last; ++s) {
               // The later floaters of the cell and the forward cells' candidates.

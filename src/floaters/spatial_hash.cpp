@@ -140,6 +140,22 @@ void SpatialHash::build(std::span<const Vec3> points, const Box3& box, double ce
     runs_.push_back({keys_[s], s, e});
     s = e;
   }
+  // The runs by layer: a dense grid's come in key order, hence in layer order, already.
+  layer_runs_.resize(runs_.size());
+  for (std::uint32_t r = 0; r < runs_.size(); ++r) layer_runs_[r] = r;
+  const auto by_layer = [&](std::uint32_t a, std::uint32_t b) {
+    return layer(runs_[a].key) < layer(runs_[b].key);
+  };
+  if (!dense_) std::stable_sort(layer_runs_.begin(), layer_runs_.end(), by_layer);
+  layers_.clear();
+  for (std::uint32_t k = 0; k < layer_runs_.size(); ++k) {
+    const std::int64_t at = layer(runs_[layer_runs_[k]].key);
+    if (layers_.empty() || layers_.back().layer != at) {
+      if (!layers_.empty()) layers_.back().last = k;
+      layers_.push_back({at, k, k});
+    }
+  }
+  if (!layers_.empty()) layers_.back().last = static_cast<std::uint32_t>(layer_runs_.size());
 }
 
 void SpatialHash::prefix_sums(std::vector<std::uint32_t>& totals) {

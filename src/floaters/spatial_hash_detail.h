@@ -50,6 +50,16 @@ class SpatialHash {
   /// The layer of cell `key`: its coordinate along the key's most significant axis, which
   /// forward_ranges() reaches at most one beyond.
   static std::int64_t layer(std::uint64_t key) { return unpack(key)[2]; }
+  /// An occupied layer of cells: its coordinate, and its runs: runs()[layer_runs()[k]] for k
+  /// in [first, last).
+  struct Layer {
+    std::int64_t layer;
+    std::uint32_t first, last;
+  };
+  /// Every occupied layer once, in increasing order.
+  std::span<const Layer> layers() const { return layers_; }
+  /// Indices into runs(), grouped by layer (see layers()), in slot order within each.
+  std::span<const std::uint32_t> layer_runs() const { return layer_runs_; }
 
   /// The point nearest to p among those built, skipping input index `skip` (pass -1 to skip
   /// none): its input index and distance, or {-1, +∞} when there is none. `points` must be the
@@ -105,6 +115,8 @@ class SpatialHash {
   std::vector<std::uint32_t> order_;  // slot -> input index
   std::vector<std::uint64_t> keys_;   // slot -> cell key
   std::vector<Run> runs_;
+  std::vector<Layer> layers_;
+  std::vector<std::uint32_t> layer_runs_;
   std::vector<std::uint64_t> key_in_;  // build() scratch, kept to avoid reallocation
   std::vector<std::uint32_t> bucket_in_;
 };

@@ -57,6 +57,24 @@ void expect_forward_ranges_list_each_pair_once(const std::vector<Vec3>& points, 
     }
   }
   for (const auto& [pair, times] : listed) ASSERT_EQ(times, 1) << "a pair listed twice";
+  // The layers list every run once, in increasing layer order, runs in slot order within one.
+  std::vector<int> seen(hash.runs().size(), 0);
+  for (std::size_t l = 0; l < hash.layers().size(); ++l) {
+    const SpatialHash::Layer& layer = hash.layers()[l];
+    ASSERT_LT(layer.first, layer.last);
+    if (l > 0) {
+      ASSERT_LT(hash.layers()[l - 1].layer, layer.layer);
+    }
+    for (std::uint32_t k = layer.first; k < layer.last; ++k) {
+      const std::uint32_t r = hash.layer_runs()[k];
+      ASSERT_EQ(SpatialHash::layer(hash.runs()[r].key), layer.layer);
+      if (k > layer.first) {
+        ASSERT_LT(hash.layer_runs()[k - 1], r);
+      }
+      ++seen[r];
+    }
+  }
+  for (int times : seen) ASSERT_EQ(times, 1) << "a run in no layer or in two";
   std::size_t pairs = 0;
   for (std::uint32_t a = 0; a < points.size(); ++a)
     for (std::uint32_t b = a + 1; b < points.size(); ++b)
