@@ -43,6 +43,19 @@ constexpr std::size_t kChunk = 256;
 constexpr std::size_t kParallelMin = 4096;
 // Storage is re-sorted by spatial cell this often, so neighbours stay close in memory.
 constexpr std::size_t kResortInterval = 16;
+
+// A box that widen() grows to the points given to it.
+Box3 empty_bounds() {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  return {Vec3::Constant(kInf), Vec3::Constant(-kInf)};
+}
+// Widens b to hold p; a NaN coordinate does not count.
+void widen(Box3& b, const Vec3& p) {
+  for (int k = 0; k < 3; ++k) {
+    b.lo[k] = p[k] < b.lo[k] ? p[k] : b.lo[k];
+    b.hi[k] = p[k] > b.hi[k] ? p[k] : b.hi[k];
+  }
+}
 // A floater still far from F = 0 after this many steps is a stray (it never settles).
 constexpr std::uint32_t kStrayAge = 200;
 // Snapping to nodes: a floater whose Newton step towards ∇F = 0 is shorter than this fraction
@@ -233,11 +246,13 @@ struct FloaterSystem::Impl {
   // (evaluate_all()), the largest per thread, and the residuals in the median's octave.
   std::vector<double> residuals, thread_largest, median_octave;
   std::vector<std::array<std::size_t, kOctaves>> octave_counts;
-  // The largest σ_i, and the largest coordinate of a floater relative to the box centre, at
+  // The largest σ_i, and the floaters' bounding box (non-finite coordinates do not count), at
   // the last evaluate_all() (node snapping, which moves floaters after it, widens the latter);
   // per thread while they are found.
-  double largest_sigma = 0, largest_extent = 0;
-  std::vector<double> thread_sigma, thread_extent;
+  double largest_sigma = 0;
+  Box3 bounds;
+  std::vector<double> thread_sigma;
+  std::vector<Box3> thread_bounds;
   std::vector<Neighbour> packed;  // in slot order
   double prefilter_scale = 0;     // single-precision coordinates are scaled by it
   std::vector<std::uint64_t> pid;
@@ -413,8 +428,7 @@ struct FloaterSystem::Impl {
     for (auto& counts : octave_counts) counts.fill(0);
     thread_largest.assign(team, 0.0);
     thread_sigma.assign(team, 0.0);
-    thread_extent.assign(team, 0.0);
-    const Vec3 centre = box.center();
+    thread_bounds.assign(team, empty_bounds());
     parallel_chunks(n, [&](std::size_t b, std::size_t e, Evaluator& ev) {
       std::array<double, kChunk> x, y, z, f, gx, gy, gz;
       const std::size_t m = e - b;
@@ -443,17 +457,21 @@ struct FloaterSystem::Impl {
         largest = std::max(largest, r);
       }
       thread_largest[t] = largest;
-      double sigma_bound = thread_sigma[t], extent_bound = thread_extent[t];
+      double sigma_bound = thread_sigma[t];
       for (std::size_t i = b; i < e; ++i) {
         sigma_bound = std::max(sigma_bound, sigma[i]);
-        extent_bound = std::max(extent_bound, (pos[i] - centre).cwiseAbs().maxCoeff());
+        widen(thread_bounds[t], pos[i]);
       }
       thread_sigma[t] = sigma_bound;
-      thread_extent[t] = extent_bound;
     });
-    // Maxima do not depend on which thread saw which floater.
+    // Maxima and minima do not depend on which thread saw which floater.
     largest_sigma = *std::max_element(thread_sigma.begin(), thread_sigma.end());
-    largest_extent = *std::max_element(thread_extent.begin(), thread_extent.end());
+    bounds = empty_bounds();
+    for (const Box3& part : thread_bounds) {
+      if (part.is_empty()) continue;  // a thread that had no chunk (or only NaN positions)
+      widen(bounds, part.lo);
+      widen(bounds, part.hi);
+    }
     shown_normals_valid = false;
   }
 
@@ -586,7 +604,7 @@ struct FloaterSystem::Impl {
       pos[i] = *node;
       pinned[i] = 1;
       held.push_back(*node);
-      largest_extent = std::max(largest_extent, (*node - box.center()).cwiseAbs().maxCoeff());
+      widen(bounds, *node);
     }
   }
 
@@ -671,17 +689,23 @@ struct FloaterSystem::Impl {
   // filled by pack_slot() in repulsion_and_move()'s parallel region).
   void build_neighbours() {
     const std::size_t n = size();
-    // The largest σ, and the largest coordinate relative to the box centre (for the
-    // prefilter's scale below), as evaluate_all() found them.
+    // The largest σ and the floaters' bounding box, as evaluate_all() found them.
     const double largest = largest_sigma;
-    double extent = largest_extent;
+    // The grid covers the floaters' bounding box within the clip's: a surface that lies flat
+    // in its box gets few cells across it.
+    Box3 region = box;
+    for (int k = 0; k < 3; ++k) {
+      region.lo[k] = std::max(region.lo[k], bounds.lo[k]);
+      region.hi[k] = std::min(region.hi[k], bounds.hi[k]);
+    }
+    if (region.is_empty()) region = box;
     // Cells as large as the largest reach 3σ: a floater's neighbours lie in the 3×3×3 cells
     // around its own. (Smaller cells hold fewer candidates; measured on the Kummer scene, the
     // extra ranges and the larger grid cost as much as they save.)
-    hash.build(pos, box, 3 * largest, threads);
+    hash.build(pos, region, 3 * largest, threads);
     if (step_count % kResortInterval == 0) {
       permute_state(hash.order());
-      hash.build(pos, box, 3 * largest, threads);
+      hash.build(pos, region, 3 * largest, threads);
     }
     packed.resize(n);
     pid.resize(n);
@@ -693,7 +717,11 @@ struct FloaterSystem::Impl {
     // Single-precision coordinates for the prefilter: relative to the box centre, scaled into
     // [−1, 1] (see detail::prefilter_threshold). An infinite coordinate makes the scale 0, and
     // then every candidate passes to the exact test (a NaN one never passes either test).
-    extent = std::max(extent, 3 * largest);
+    const Vec3 centre = box.center();
+    double extent = 3 * largest;
+    if (!bounds.is_empty())
+      extent = std::max({extent, (bounds.lo - centre).cwiseAbs().maxCoeff(),
+                         (bounds.hi - centre).cwiseAbs().maxCoeff()});
     prefilter_scale = extent > 0 && std::isfinite(extent) ? 1 / extent : 0;
   }
 
@@ -726,7 +754,7 @@ struct FloaterSystem::Impl {
   static constexpr std::size_t kPairBatch = 256;
 
   // Per-thread scratch of the pair pass: a cell's floaters, then those of its forward cells
-  // (detail::SpatialHash::forward_ranges) that may be within reach of one of them, their slots
+  // (detail::SpatialHash::ForwardWalk) that may be within reach of one of them, their slots
   // and their single-precision coordinates and thresholds, contiguous; the indices into these
   // one floater's test kept; and the batch.
   struct Scratch {
@@ -791,6 +819,7 @@ struct FloaterSystem::Impl {
       }
       const auto layers = hash.layers();
       const auto layer_runs = hash.layer_runs();
+      detail::SpatialHash::ForwardWalk walk(hash);
       for (std::int64_t parity = 0; parity < 2; ++parity) {
 #pragma omp for schedule(dynamic, 1)
         for (std::int64_t l = 0; l < static_cast<std::int64_t>(layers.size()); ++l) {
@@ -798,7 +827,7 @@ struct FloaterSystem::Impl {
           if ((layer.layer & 1) != parity) continue;
           for (std::uint32_t r = layer.first; r < layer.last; ++r) {
             const auto& run = runs[layer_runs[r]];
-            const std::uint32_t candidates = gather_block(run, c);
+            const std::uint32_t candidates = gather_block(run, walk, c);
             for (std::uint32_t s = run.first; s < run.last; ++s) {
               // The later floaters of the cell and the forward cells' candidates.
               const detail::SpatialHash::Range later{s - run.first + 1, candidates};
@@ -847,9 +876,10 @@ struct FloaterSystem::Impl {
   // exactly. This is the first test, per cell: the cell's floaters, then those of its forward
   // cells within reach of the bounding box of the cell's floaters, copied into c (contiguous,
   // for the second test, per floater); returns how many.
-  std::uint32_t gather_block(const detail::SpatialHash::Run& run, Scratch& c) const {
+  std::uint32_t gather_block(const detail::SpatialHash::Run& run,
+                             detail::SpatialHash::ForwardWalk& walk, Scratch& c) const {
     const auto forward = std::span(c.ranges).first(
-        static_cast<std::size_t>(hash.forward_ranges(run.key, c.ranges)));
+        static_cast<std::size_t>(walk.ranges(run.key, c.ranges)));
     const std::uint32_t own = run.last - run.first;
     std::size_t candidates = own;
     for (const auto& [first, last] : forward) candidates += last - first;

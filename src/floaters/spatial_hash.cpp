@@ -12,21 +12,18 @@
 
 namespace zeroset::detail {
 namespace {
-// A dense grid may have this many cells per point before hashing is cheaper in memory.
-constexpr std::int64_t kDenseCellsPerPoint = 64;
-constexpr std::int64_t kDenseMinCells = 1 << 16;
+// A dense grid may have this many rows of cells per point before hashing them is cheaper.
+constexpr std::int64_t kDenseRowsPerPoint = 8;
+constexpr std::int64_t kDenseMinRows = 1 << 14;
 // Fewer points than this are sorted on one thread.
 constexpr std::int64_t kParallelMin = 4096;
 }  // namespace
 
-std::size_t SpatialHash::lay_grid(const double* lo, const double* hi, const Box3& box,
-                                  double cell, std::size_t points) {
+std::size_t SpatialHash::lay_grid(const Box3& region, double cell, std::size_t points) {
   Vec3 extent;
   for (int k = 0; k < 3; ++k) {
-    const double first = lo[k] <= hi[k] ? std::max(lo[k], box.lo[k]) : box.lo[k];
-    const double last = lo[k] <= hi[k] ? std::min(hi[k], box.hi[k]) : box.hi[k];
-    origin_[k] = std::min(first, last);
-    extent[k] = std::max(last - first, 0.0);
+    origin_[k] = std::min(region.lo[k], region.hi[k]);
+    extent[k] = std::max(region.hi[k] - region.lo[k], 0.0);
   }
   const double max_extent = std::max(extent.maxCoeff(), 1e-300);
   const double min_cell = max_extent / static_cast<double>(std::int64_t{1} << (kBits - 1));
@@ -44,101 +41,129 @@ std::size_t SpatialHash::lay_grid(const double* lo, const double* hi, const Box3
   axis_ = major == 2   ? std::array{0, 1, 2}
           : major == 1 ? std::array{0, 2, 1}
                        : std::array{1, 2, 0};
-  std::int64_t cells = 1;
   for (int k = 0; k < 3; ++k) {
     dims_[k] = across[static_cast<std::size_t>(axis_[k])];
-    cells = cells > std::numeric_limits<std::int64_t>::max() / dims_[k]
-                ? std::numeric_limits<std::int64_t>::max()
-                : cells * dims_[k];
+    limit_[k] = static_cast<double>(dims_[k] - 1);
   }
+  const std::int64_t rows = dims_[1] * dims_[2];  // each at most 2^21: no overflow
   const auto n = static_cast<std::int64_t>(points);
-  dense_ = cells <= std::max(kDenseCellsPerPoint * n, kDenseMinCells);
-  if (dense_) return static_cast<std::size_t>(cells);
+  dense_ = rows <= std::max(kDenseRowsPerPoint * n, kDenseMinRows);
+  if (dense_) return static_cast<std::size_t>(rows);
   const std::size_t buckets =
       std::bit_ceil(static_cast<std::size_t>(std::max<std::int64_t>(2 * n, 16)));
   mask_ = buckets - 1;
   return buckets;
 }
 
-void SpatialHash::build(std::span<const Vec3> points, const Box3& box, double cell,
+namespace {
+int thread_number() {
+#ifdef _OPENMP
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+int thread_count() {
+#ifdef _OPENMP
+  return omp_get_num_threads();
+#else
+  return 1;
+#endif
+}
+}  // namespace
+
+void SpatialHash::build(std::span<const Vec3> points, const Box3& region, double cell,
                         int threads) {
-  const std::int64_t n = static_cast<std::int64_t>(points.size());
+  const std::size_t n = points.size();
   const int team = n >= kParallelMin ? std::max(threads, 1) : 1;
-  keys_.resize(points.size());
-  order_.resize(points.size());
-  key_in_.resize(points.size());
-  bucket_in_.resize(points.size());
-  // The grid covers the points' bounding box within `box` (non-finite coordinates do not
-  // count), not all of `box`: a surface that lies flat in its box gets few cells across it.
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  double lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
-  std::size_t buckets = 0;
-  // Counting sort by bucket: count, prefix sums, then place from the back, each bucket's
-  // cursor moving down from its end (stable: equal cells keep input order), which leaves
-  // start_[b] at bucket b's first slot. Floaters come kept in cell order, so the counting and
-  // placing walk the bucket array almost in order. The bounding box, keys, counts and prefix
-  // sums in one parallel region (its threads wake once).
-  std::vector<std::uint32_t> totals(static_cast<std::size_t>(team) + 1, 0);
+  keys_.resize(n);
+  order_.resize(n);
+  key_in_.resize(n);
+  const std::size_t buckets = lay_grid(region, cell, n);
+  start_.resize(buckets + 1);
+  bucket_run_.resize(buckets + 1);
+  // A counting sort by bucket (a row of cells, or a hash of one), then each bucket sorted by
+  // key. Each thread counts its contiguous part of the input per bucket; the prefix sums run
+  // over (bucket, part), so each thread places its part at cursors of its own, in input order:
+  // stable, and the same slots whatever the team. Floaters come kept in cell order, so the
+  // counting and placing walk the buckets almost in order and the buckets come out almost
+  // sorted. All in one parallel region (its threads wake once).
 #pragma omp parallel num_threads(team)
   {
-#pragma omp for schedule(static) reduction(min : lo[:3]) reduction(max : hi[:3])
-    for (std::int64_t i = 0; i < n; ++i)
-      for (int k = 0; k < 3; ++k) {
-        const double v = points[static_cast<std::size_t>(i)][k];
-        lo[k] = v < lo[k] ? v : lo[k];
-        hi[k] = v > hi[k] ? v : hi[k];
-      }
+    const auto part = static_cast<std::size_t>(thread_number());
+    const auto parts = static_cast<std::size_t>(thread_count());
 #pragma omp single
     {
-      buckets = lay_grid(lo, hi, box, cell, points.size());
-      start_.resize(buckets + 1);
+      cursor_.assign(parts * buckets, 0);
+      part_sums_.assign(parts + 1, 0);
+      part_runs_.resize(parts);
     }
-#pragma omp for schedule(static)
-    for (std::int64_t i = 0; i < n; ++i) {
-      const auto k = static_cast<std::size_t>(i);
-      const auto c = cell_of(points[k]);
-      key_in_[k] = pack(c[0], c[1], c[2]);
-      bucket_in_[k] = static_cast<std::uint32_t>(bucket_index(key_in_[k]));
-    }
-#pragma omp single
-    {
-      std::fill(start_.begin(), start_.end(), 0);
-      for (std::uint32_t b : bucket_in_) ++start_[b];
-    }
-    prefix_sums(totals);
-  }
-  start_[buckets] = buckets > 0 ? start_[buckets - 1] : 0;
-  for (std::size_t i = points.size(); i-- > 0;) {
-    const std::uint32_t slot = --start_[bucket_in_[i]];
-    order_[slot] = static_cast<std::uint32_t>(i);
-    keys_[slot] = key_in_[i];
-  }
-  // A hashed bucket may mix cells: order its slots by key (stably, so equal cells keep input
-  // order) to make every cell one run of slots. A dense grid has one cell per bucket already.
-  if (!dense_) {
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> mixed;
-    for (std::size_t b = 0; b < buckets; ++b) {
-      const std::uint32_t first = start_[b], last = start_[b + 1];
-      if (last - first < 2 || std::all_of(keys_.begin() + first, keys_.begin() + last,
-                                          [&](std::uint64_t k) { return k == keys_[first]; }))
-        continue;
-      mixed.clear();
-      for (std::uint32_t s = first; s < last; ++s) mixed.emplace_back(keys_[s], order_[s]);
-      std::stable_sort(mixed.begin(), mixed.end(),
-                       [](const auto& a, const auto& b) { return a.first < b.first; });
-      for (std::uint32_t s = first; s < last; ++s) {
-        keys_[s] = mixed[s - first].first;
-        order_[s] = mixed[s - first].second;
+    // This thread's part of the input, and of the buckets.
+    const std::size_t first = n * part / parts, last = n * (part + 1) / parts;
+    const std::size_t bucket_first = buckets * part / parts;
+    const std::size_t bucket_last = buckets * (part + 1) / parts;
+    std::uint32_t* cursor = cursor_.data() + part * buckets;
+    const CellOf cell_of(*this);
+    with_density([&](auto dense) {
+      for (std::size_t i = first; i < last; ++i) {
+        const std::uint64_t key = cell_of.key(points[i]);
+        key_in_[i] = key;
+        ++cursor[bucket_index<dense()>(key)];
+      }
+    });
+#pragma omp barrier
+    std::uint32_t sum = 0;
+    for (std::size_t b = bucket_first; b < bucket_last; ++b)
+      for (std::size_t u = 0; u < parts; ++u) sum += cursor_[u * buckets + b];
+    part_sums_[part + 1] = sum;
+#pragma omp barrier
+    std::uint32_t offset = 0;
+    for (std::size_t k = 0; k <= part; ++k) offset += part_sums_[k];
+    for (std::size_t b = bucket_first; b < bucket_last; ++b) {
+      start_[b] = offset;
+      for (std::size_t u = 0; u < parts; ++u) {
+        const std::uint32_t count = cursor_[u * buckets + b];
+        cursor_[u * buckets + b] = offset;
+        offset += count;
       }
     }
-  }
-  runs_.clear();
-  const auto slots = static_cast<std::uint32_t>(keys_.size());
-  for (std::uint32_t s = 0; s < slots;) {
-    std::uint32_t e = s + 1;
-    while (e < slots && keys_[e] == keys_[s]) ++e;
-    runs_.push_back({keys_[s], s, e});
-    s = e;
+#pragma omp barrier
+    with_density([&](auto dense) {
+      for (std::size_t i = first; i < last; ++i) {
+        const std::uint64_t key = key_in_[i];
+        const std::uint32_t slot = cursor[bucket_index<dense()>(key)]++;
+        order_[slot] = static_cast<std::uint32_t>(i);
+        keys_[slot] = key;
+      }
+    });
+    start_[buckets] = static_cast<std::uint32_t>(n);
+#pragma omp barrier
+    // Each bucket sorted by key (a row's cells in order; a hashed bucket's rows apart), and its
+    // runs listed by this thread, then copied to runs_ after the runs of the parts before.
+    std::vector<Run>& runs = part_runs_[part];
+    runs.clear();
+    for (std::size_t b = bucket_first; b < bucket_last; ++b) {
+      const std::uint32_t begin = start_[b], end = start_[b + 1];
+      sort_slots(begin, end);
+      bucket_run_[b] = static_cast<std::uint32_t>(runs.size());
+      for (std::uint32_t s = begin; s < end;) {
+        std::uint32_t e = s + 1;
+        while (e < end && keys_[e] == keys_[s]) ++e;
+        runs.push_back({keys_[s], s, e});
+        s = e;
+      }
+    }
+    part_sums_[part + 1] = static_cast<std::uint32_t>(runs.size());
+#pragma omp barrier
+#pragma omp single
+    {
+      for (std::size_t k = 0; k < parts; ++k) part_sums_[k + 1] += part_sums_[k];
+      runs_.resize(part_sums_[parts]);
+      bucket_run_[buckets] = part_sums_[parts];
+    }
+    const std::uint32_t run_offset = part_sums_[part];
+    for (std::size_t b = bucket_first; b < bucket_last; ++b) bucket_run_[b] += run_offset;
+    std::copy(runs.begin(), runs.end(), runs_.begin() + run_offset);
   }
   // The runs by layer: a dense grid's come in key order, hence in layer order, already.
   layer_runs_.resize(runs_.size());
@@ -158,83 +183,102 @@ void SpatialHash::build(std::span<const Vec3> points, const Box3& box, double ce
   if (!layers_.empty()) layers_.back().last = static_cast<std::uint32_t>(layer_runs_.size());
 }
 
-void SpatialHash::prefix_sums(std::vector<std::uint32_t>& totals) {
-  // In place over the bucket counts start_[0, buckets). A grid may have several buckets per
-  // point, so the sums run in contiguous parts, one per thread of the enclosing region: each
-  // part's total first, then each part adds the totals before it (integers: the same result
-  // whatever the team). totals has one entry more than the team.
-  const std::size_t buckets = start_.size() - 1;
-#ifdef _OPENMP
-  const auto part = static_cast<std::size_t>(omp_get_thread_num());
-  const auto parts = static_cast<std::size_t>(omp_get_num_threads());
-#else
-  const std::size_t part = 0, parts = 1;
-#endif
-  const std::size_t begin = buckets * part / parts, end = buckets * (part + 1) / parts;
-  if (part + 1 < parts) {  // the last part's total is never needed
-    std::uint32_t sum = 0;
-    for (std::size_t b = begin; b < end; ++b) sum += start_[b];
-    totals[part + 1] = sum;
+void SpatialHash::sort_slots(std::uint32_t first, std::uint32_t last) {
+  // Stable, by key. Buckets come almost sorted and small: insertion sort; a long unsorted
+  // one (a first build from random input, say) gets a merge sort.
+  constexpr std::uint32_t kInsertionMax = 128;
+  if (last - first > kInsertionMax) {
+    if (std::is_sorted(keys_.begin() + first, keys_.begin() + last)) return;
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> mixed;
+    for (std::uint32_t s = first; s < last; ++s) mixed.emplace_back(keys_[s], order_[s]);
+    std::stable_sort(mixed.begin(), mixed.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (std::uint32_t s = first; s < last; ++s) {
+      keys_[s] = mixed[s - first].first;
+      order_[s] = mixed[s - first].second;
+    }
+    return;
   }
-#pragma omp barrier
-  std::uint32_t offset = 0;
-  for (std::size_t k = 0; k <= part; ++k) offset += totals[k];
-  for (std::size_t b = begin; b < end; ++b) start_[b] = offset += start_[b];
+  for (std::uint32_t s = first + 1; s < last; ++s) {
+    const std::uint64_t key = keys_[s];
+    if (keys_[s - 1] <= key) continue;
+    const std::uint32_t index = order_[s];
+    std::uint32_t t = s;
+    for (; t > first && keys_[t - 1] > key; --t) {
+      keys_[t] = keys_[t - 1];
+      order_[t] = order_[t - 1];
+    }
+    keys_[t] = key;
+    order_[t] = index;
+  }
 }
 
-std::pair<std::uint32_t, std::uint32_t> SpatialHash::cell_range(std::uint64_t key) const {
-  auto [first, last] = bucket(key);
-  if (dense_) return {first, last};
-  while (first < last && keys_[first] != key) ++first;
-  std::uint32_t end = first;
-  while (end < last && keys_[end] == key) ++end;
-  return {first, end};
+SpatialHash::Range SpatialHash::row_slots(std::uint64_t from, std::uint64_t to) const {
+  // The bucket's runs are in key order and a row's keys are consecutive numbers: the cells
+  // [from, to] of one row are consecutive runs.
+  const std::uint64_t b = bucket_index(from);
+  const Run* run = runs_.data() + bucket_run_[b];
+  const Run* end = runs_.data() + bucket_run_[b + 1];
+  constexpr std::ptrdiff_t kScanMax = 8;
+  if (end - run > kScanMax) {
+    run = std::lower_bound(run, end, from, [](const Run& r, std::uint64_t k) { return r.key < k; });
+  } else {
+    while (run < end && run->key < from) ++run;
+  }
+  if (run == end || run->key > to) return {0, 0};
+  const std::uint32_t first = run->first;
+  std::uint32_t last = run->last;
+  while (++run < end && run->key <= to) last = run->last;
+  return {first, last};
 }
 
 std::array<std::int64_t, 3> SpatialHash::cell_of(const Vec3& p) const {
-  std::array<std::int64_t, 3> c;
-  for (int k = 0; k < 3; ++k) {
-    const int a = axis_[k];
-    const double t = (p[a] - origin_[a]) * inv_cell_;
-    // Clamp before converting: a point outside the box (or a huge coordinate) must not
-    // overflow the integer.
-    const double clamped = std::clamp(t, 0.0, static_cast<double>(dims_[k] - 1));
-    c[k] = static_cast<std::int64_t>(clamped);
-  }
-  return c;
+  const CellOf c(*this);
+  return {static_cast<std::int64_t>(c(p, 0)), static_cast<std::int64_t>(c(p, 1)),
+          static_cast<std::int64_t>(c(p, 2))};
 }
 
-std::uint64_t SpatialHash::bucket_index(std::uint64_t key) const {
-  if (dense_) {
-    const auto [x, y, z] = unpack(key);
-    return static_cast<std::uint64_t>(x + dims_[0] * (y + dims_[1] * z));
-  }
-  return mix64(key) & mask_;
-}
-
-int SpatialHash::forward_ranges(std::uint64_t key, std::span<Range> out) const {
-  const auto [x, y, z] = unpack(key);
-  int count = 0;
-  auto add = [&](Range r) {
-    out[static_cast<std::size_t>(count)] = r;
-    count += r.first < r.second;
-  };
+int SpatialHash::ForwardWalk::ranges(std::uint64_t key, std::span<Range> out) {
+  const SpatialHash& h = *hash_;
+  const std::uint64_t row = key & ~kAxisMask, x = key & kAxisMask;
   // The cells after (x, y, z): x + 1 in its row, the row y + 1 of its plane, the plane z + 1.
   struct Row {
-    std::int64_t dy, dz, x0;
+    std::int64_t dy, dz;
   };
-  for (const Row row : {Row{0, 0, x + 1}, Row{1, 0, x - 1}, Row{-1, 1, x - 1}, Row{0, 1, x - 1},
-                        Row{1, 1, x - 1}}) {
-    const std::int64_t cy = y + row.dy, cz = z + row.dz;
-    if (cy < 0 || cy >= dims_[1] || cz < 0 || cz >= dims_[2]) continue;
-    const std::int64_t x0 = std::max<std::int64_t>(0, row.x0), x1 = std::min(dims_[0] - 1, x + 1);
-    if (x0 > x1) continue;
-    if (dense_) {
-      const auto b = static_cast<std::size_t>(x0 + dims_[0] * (cy + dims_[1] * cz));
-      add({start_[b], start_[b + static_cast<std::size_t>(x1 - x0) + 1]});
-    } else {
-      for (std::int64_t cx = x0; cx <= x1; ++cx) add(cell_range(pack(cx, cy, cz)));
+  constexpr std::array<Row, kMaxForwardRanges> kRows{
+      {{0, 0}, {1, 0}, {-1, 1}, {0, 1}, {1, 1}}};
+  if (row != row_ || x < x_) {  // a new row (or a step back): start each forward row over
+    const auto [cx, y, z] = unpack(key);
+    for (std::size_t r = 0; r < kRows.size(); ++r) {
+      const std::int64_t cy = y + kRows[r].dy, cz = z + kRows[r].dz;
+      row_key_[r] = ~std::uint64_t{0};
+      at_[r] = end_[r] = nullptr;
+      if (cy < 0 || cy >= h.dims_[1] || cz < 0 || cz >= h.dims_[2]) continue;
+      row_key_[r] = pack(std::int64_t{0}, cy, cz);
+      const std::uint64_t b = h.bucket_index(row_key_[r]);
+      at_[r] = h.runs_.data() + h.bucket_run_[b];
+      end_[r] = h.runs_.data() + h.bucket_run_[b + 1];
     }
+    row_ = row;
+  }
+  x_ = x;
+  const std::uint64_t last_x = static_cast<std::uint64_t>(h.dims_[0] - 1);
+  int count = 0;
+  for (std::size_t r = 0; r < kRows.size(); ++r) {
+    if (row_key_[r] == ~std::uint64_t{0}) continue;
+    const std::uint64_t x0 = r == 0 ? x + 1 : (x > 0 ? x - 1 : 0);
+    const std::uint64_t x1 = std::min(last_x, x + 1);
+    if (x0 > x1) continue;
+    // A bucket's runs are in key order and a row's keys are consecutive numbers: the cells
+    // x0 to x1 of the row are consecutive runs, and the next cell's start no earlier.
+    const std::uint64_t from = row_key_[r] | x0, to = row_key_[r] | x1;
+    const Run*& run = at_[r];
+    const Run* end = end_[r];
+    while (run < end && run->key < from) ++run;
+    if (run == end || run->key > to) continue;
+    Range range{run->first, run->last};
+    for (const Run* next = run + 1; next < end && next->key <= to; ++next) range.second = next->last;
+    out[static_cast<std::size_t>(count++)] = range;
   }
   return count;
 }
@@ -270,9 +314,8 @@ std::pair<std::int64_t, double> SpatialHash::nearest(const Vec3& p, std::span<co
   if (order_.empty()) return {best, best_d2};
   const auto c = cell_of(p);
   auto visit = [&](std::uint64_t key) {
-    const auto [b, e] = bucket(key);
+    const auto [b, e] = row_slots(key, key);
     for (std::uint32_t s = b; s < e; ++s) {
-      if (keys_[s] != key) continue;
       const std::int64_t i = order_[s];
       if (i == skip) continue;
       const double d2 = (points[i] - p).squaredNorm();
@@ -311,9 +354,9 @@ std::vector<std::uint32_t> SpatialHash::k_nearest(const Vec3& p, std::span<const
   k = std::min(k, order_.size());
   const auto c = cell_of(p);
   auto visit = [&](std::uint64_t key) {
-    const auto [b, e] = bucket(key);
+    const auto [b, e] = row_slots(key, key);
     for (std::uint32_t s = b; s < e; ++s)
-      if (keys_[s] == key) found.emplace_back((points[order_[s]] - p).squaredNorm(), order_[s]);
+      found.emplace_back((points[order_[s]] - p).squaredNorm(), order_[s]);
   };
   const std::int64_t max_ring = std::max({dims_[0], dims_[1], dims_[2]});
   for (std::int64_t ring = 0; ring <= max_ring; ++ring) {

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <numeric>
 #include <random>
 #include <vector>
 
@@ -22,21 +23,36 @@ std::vector<Vec3> random_points(std::size_t n, std::uint64_t seed, double size =
   return points;
 }
 
+// n points in two such slabs at opposite corners of the box [-1, 1]³: with small cells, far
+// more rows of cells than points, so the rows are hashed.
+std::vector<Vec3> far_apart_points(std::size_t n, std::uint64_t seed, double size) {
+  std::vector<Vec3> points = random_points(n, seed, size);
+  for (std::size_t i = 0; i < n; ++i) points[i] += Vec3::Constant(i % 2 ? 0.9 : -0.9);
+  return points;
+}
+
 // Every pair closer than a cell edge is listed exactly once when each cell lists its later
 // floaters and its forward ranges, which lie in its own layer or the next.
 void expect_forward_ranges_list_each_pair_once(const std::vector<Vec3>& points, double cell,
-                                               int threads = 1) {
+                                               bool dense, int threads = 1) {
   const Box3 box{Vec3(-1, -1, -1), Vec3(1, 1, 1)};
   SpatialHash hash;
   hash.build(points, box, cell, threads);
+  ASSERT_EQ(hash.dense(), dense);
   const auto order = hash.order();
   std::vector<std::uint32_t> run_of(points.size());
   for (std::uint32_t r = 0; r < hash.runs().size(); ++r)
     for (std::uint32_t s = hash.runs()[r].first; s < hash.runs()[r].last; ++s) run_of[s] = r;
   std::map<std::pair<std::uint32_t, std::uint32_t>, int> listed;  // by input indices, lower first
+  // In slot order, as the pair pass walks a layer's runs (a hashed grid's rows come in no
+  // order: the walk starts over on each).
+  SpatialHash::ForwardWalk walk(hash);
+  using Ranges = std::vector<SpatialHash::Range>;
+  std::vector<Ranges> walked;
   for (const SpatialHash::Run& run : hash.runs()) {
     std::array<SpatialHash::Range, SpatialHash::kMaxForwardRanges> ranges;
-    const int count = hash.forward_ranges(run.key, ranges);
+    const int count = walk.ranges(run.key, ranges);
+    walked.emplace_back(ranges.begin(), ranges.begin() + count);
     for (std::uint32_t s = run.first; s < run.last; ++s) {
       std::vector<std::uint32_t> partners;
       for (std::uint32_t t = s + 1; t < run.last; ++t) partners.push_back(t);
@@ -57,6 +73,17 @@ void expect_forward_ranges_list_each_pair_once(const std::vector<Vec3>& points, 
     }
   }
   for (const auto& [pair, times] : listed) ASSERT_EQ(times, 1) << "a pair listed twice";
+  // Cells in any other order get the same ranges (the walk starts its rows over on a step
+  // back).
+  std::vector<std::uint32_t> shuffled(hash.runs().size());
+  std::iota(shuffled.begin(), shuffled.end(), 0u);
+  std::shuffle(shuffled.begin(), shuffled.end(), std::mt19937(1));
+  SpatialHash::ForwardWalk jumping(hash);
+  for (std::uint32_t r : shuffled) {
+    std::array<SpatialHash::Range, SpatialHash::kMaxForwardRanges> ranges;
+    const int count = jumping.ranges(hash.runs()[r].key, ranges);
+    ASSERT_EQ(Ranges(ranges.begin(), ranges.begin() + count), walked[r]);
+  }
   // The layers list every run once, in increasing layer order, runs in slot order within one.
   std::vector<int> seen(hash.runs().size(), 0);
   for (std::size_t l = 0; l < hash.layers().size(); ++l) {
@@ -87,27 +114,29 @@ void expect_forward_ranges_list_each_pair_once(const std::vector<Vec3>& points, 
 }
 
 TEST(SpatialHash, ForwardRangesListEveryNeighbourPairOnceOnADenseGrid) {
-  expect_forward_ranges_list_each_pair_once(random_points(2000, 4), 0.1);
+  expect_forward_ranges_list_each_pair_once(random_points(2000, 4), 0.1, true);
 }
 
 TEST(SpatialHash, ForwardRangesListEveryNeighbourPairOnceOnAHashedGrid) {
-  expect_forward_ranges_list_each_pair_once(random_points(2000, 5, 0.04), 0.004);
+  expect_forward_ranges_list_each_pair_once(far_apart_points(2000, 5, 0.06), 0.006, false);
 }
 
 TEST(SpatialHash, OrderIsStableAndTheSameOnAnyNumberOfThreads) {
   // Duplicated points share a cell and must keep their input order; from 4,096 points on the
   // sort runs in parallel, in as many parts as there are threads.
-  std::vector<Vec3> points = random_points(6000, 3);
+  std::vector<Vec3> points = far_apart_points(6000, 3, 0.5);
   points.insert(points.end(), points.begin(), points.begin() + 2000);
   const Box3 box{Vec3(-1, -1, -1), Vec3(1, 1, 1)};
   for (double cell : {0.05, 0.002}) {
     SCOPED_TRACE(cell);
+    const bool dense = cell == 0.05;
     SpatialHash one;
     one.build(points, box, cell, 1);
     for (const SpatialHash::Run& run : one.runs())
       for (std::uint32_t s = run.first + 1; s < run.last; ++s)
         ASSERT_LT(one.order()[s - 1], one.order()[s]);
-    if (cell == 0.05) {  // a dense grid: its cells follow each other in key order
+    ASSERT_EQ(one.dense(), dense);
+    if (dense) {  // a dense grid: its cells follow each other in key order
       const auto runs = one.runs();
       for (std::size_t r = 1; r < runs.size(); ++r) ASSERT_LT(runs[r - 1].key, runs[r].key);
     }
@@ -117,7 +146,7 @@ TEST(SpatialHash, OrderIsStableAndTheSameOnAnyNumberOfThreads) {
       many.build(points, box, cell, threads);
       ASSERT_TRUE(std::equal(one.order().begin(), one.order().end(), many.order().begin(),
                              many.order().end()));
-      expect_forward_ranges_list_each_pair_once(points, cell, threads);
+      expect_forward_ranges_list_each_pair_once(points, cell, dense, threads);
     }
   }
 }
