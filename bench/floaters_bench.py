@@ -2,12 +2,11 @@
 """Floaters on the paper's Kummer scene: steps and particle updates per second.
 
 Runs the Google Benchmark program `floaters_bench` (built with the project) on 1 and 2
-threads (OMP_NUM_THREADS, with OMP_WAIT_POLICY=passive): each system is seeded and settled
-once (untimed, with σ̂ calibrated so that about the nominal count settles), then step() is
-timed at about 500, 10,000 and 100,000 floaters, with the paper's heuristics (curvature and
-singularity estimators, cosine weighting, node snapping) and with the original
-Witkin-Heckbert radius rule. A particle update is one floater advanced
-by one step. The 1997 figure beside it: 500 floaters at 5 Hz on a 133 MHz SGI Indy, about
+threads (OMP_NUM_THREADS, OpenMP waiting as the command line sets it): each system is seeded
+and settled once (untimed, with σ̂ calibrated so that about the nominal count settles), then
+step() is timed at about 500, 10,000 and 100,000 floaters, with the paper's heuristics
+(curvature and singularity estimators, cosine weighting, node snapping) and with the original
+Witkin-Heckbert radius rule. A particle update is one floater advanced by one step. The 1997 figure beside it: 500 floaters at 5 Hz on a 133 MHz SGI Indy, about
 2,500 updates per second. Writes section "floaters" of docs/benchmarks.md.
 
 Usage: /usr/bin/python3 bench/floaters_bench.py BUILD_DIR [--repeat N] [--min-time S]
@@ -19,6 +18,8 @@ import pathlib
 import subprocess
 import sys
 import tempfile
+
+from openmp_env import cli_openmp_env, describe
 
 HERE = pathlib.Path(__file__).resolve().parent
 INDY_UPDATES = 2500.0  # 500 floaters at 5 Hz (Rösch, Ruhl & Saupe 1997, §3.4)
@@ -38,9 +39,7 @@ def find_binary(build):
 def run(binary, threads, repeat, min_time):
     """Median step time (ms), floaters and updates/s per (mode, requested size)."""
     with tempfile.NamedTemporaryFile(suffix=".json") as out:
-        # Passive waiting: on a machine shared with other work, OpenMP threads that spin at the
-        # end of each parallel region take the core from the thread still working.
-        env = dict(os.environ, OMP_NUM_THREADS=str(threads), OMP_WAIT_POLICY="passive")
+        env = cli_openmp_env(OMP_NUM_THREADS=str(threads))
         cmd = [str(binary), f"--benchmark_repetitions={repeat}",
                f"--benchmark_min_time={min_time}", "--benchmark_report_aggregates_only=true",
                f"--benchmark_out={out.name}", "--benchmark_out_format=json"]
@@ -78,8 +77,8 @@ def main():
         "",
         f"Command: `/usr/bin/python3 bench/floaters_bench.py BUILD_DIR --repeat {args.repeat}` "
         f"(`floaters_bench`, medians of {args.repeat} runs; load average {load:.1f} when the run "
-        "started, on a machine shared with other work; `OMP_WAIT_POLICY=passive`, without which "
-        "two threads under load are several times slower). Each system is seeded and settled "
+        f"started, on a machine shared with other work; OpenMP waiting as the command line sets "
+        f"it: {describe(cli_openmp_env())}). Each system is seeded and settled "
         "first, with σ̂ calibrated so that about the nominal count settles (the floaters column "
         "gives the count); then only `step()` is timed. An update is one floater advanced by one "
         "step.",

@@ -22,6 +22,8 @@ import time
 
 import numpy as np
 
+from openmp_env import cli_openmp_env, describe
+
 MU = 1.5
 R = 3.0
 HERE = pathlib.Path(__file__).resolve().parent
@@ -125,8 +127,7 @@ def vtk_backend():
 
 def run_zeroset_bench(build, repeat):
     exe = pathlib.Path(build) / "bench" / "mesh_bench"
-    # The passive OpenMP wait policy, as the zeroset command line sets it for itself.
-    env = dict(os.environ, OMP_WAIT_POLICY=os.environ.get("OMP_WAIT_POLICY", "PASSIVE"))
+    env = cli_openmp_env()
     out = subprocess.run([str(exe), "--benchmark_filter=BM_Polygonize", "--benchmark_format=json",
                           f"--benchmark_repetitions={repeat}", "--benchmark_report_aggregates_only=true"],
                          check=True, capture_output=True, text=True, env=env).stdout
@@ -167,8 +168,8 @@ def main():
     lines = ["## Meshing: marching cubes on Kummer mu = 1.5, grid over [-3, 3]^3, clip sphere R = 3", "",
              f"Command: `/usr/bin/python3 bench/mesh_peers.py BUILD_DIR --repeat {args.repeat}` "
              "(medians; zeroset from `mesh_bench`, its sampling and extraction from PolygonizeStats).", "",
-             "Times in milliseconds, 2 threads for zeroset (OpenMP, passive wait policy as its command "
-             f"line uses) and for VTK (its SMP backend: {vtk_backend()}); load average "
+             "Times in milliseconds, 2 threads for zeroset (OpenMP, waiting as its command line sets "
+             f"it: {describe(cli_openmp_env())}) and for VTK (its SMP backend: {vtk_backend()}); load average "
              f"{load:.1f} when the run started. zeroset samples F through the polynomial's restriction to each grid "
              "row (Horner); its extraction includes vertex refinement on F along each edge (Newton inside an Illinois bracket, "
              "12 steps at most); the column without refinement (`--refine-steps 0`) does the same work as VTK (linear "
