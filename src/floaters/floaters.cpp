@@ -80,6 +80,9 @@ constexpr double kMinNominal = 1e-9;
 // Binary exponents of a nonnegative double (with its sign bit 0): the residual histogram's bins.
 constexpr std::size_t kOctaves = 2048;
 std::size_t octave_of(double r) { return std::bit_cast<std::uint64_t>(r) >> 52; }
+// The residual of a floater held on a node, which is left out of the statistics: negative,
+// so in no octave.
+constexpr double kNotListed = -1;
 
 int resolve_threads(int requested) {
 #ifdef _OPENMP
@@ -242,8 +245,9 @@ struct FloaterSystem::Impl {
   std::vector<std::uint32_t> gone;
   std::vector<double> chunk_speed;  // per chunk of kChunk floaters: Σ (|ṗ_i|/σ_i)²
   std::vector<std::size_t> chunk_near;  // and the count near equilibrium
-  // residual_stats(): residuals, and their binary exponents counted per thread
-  // (evaluate_all()), the largest per thread, and the residuals in the median's octave.
+  // residual_stats(): residuals (kNotListed for floaters on nodes), and their binary exponents
+  // counted per thread (evaluate_all()), the largest per thread, and the residuals in the
+  // median's bin.
   std::vector<double> residuals, thread_largest, median_octave;
   std::vector<std::array<std::size_t, kOctaves>> octave_counts;
   // The largest σ_i, and the floaters' bounding box (non-finite coordinates do not count), at
@@ -450,7 +454,10 @@ struct FloaterSystem::Impl {
       auto& counts = octave_counts[t];
       double largest = thread_largest[t];
       for (std::size_t i = b; i < e; ++i) {
-        if (pinned[i]) continue;
+        if (pinned[i]) {
+          residuals[i] = kNotListed;
+          continue;
+        }
         const double r = residual_of(value[i], gnorm[i]);
         residuals[i] = r;
         ++counts[octave_of(r)];
@@ -1176,9 +1183,21 @@ struct FloaterSystem::Impl {
     if (listed == 0) return;
     std::size_t rank = listed / 2, o = 0;
     for (; rank >= counts[o]; ++o) rank -= counts[o];
+    // The median octave counted again by the next kFineBits bits of the residuals, then the
+    // median's fine bin collected and partly sorted (two passes over the residuals take less
+    // time than collecting and sorting the whole octave).
+    constexpr int kFineBits = 10;
+    constexpr int kFineShift = 52 - kFineBits;
+    std::array<std::uint32_t, std::size_t{1} << kFineBits> fine{};
+    const auto bits = [&](std::size_t i) { return std::bit_cast<std::uint64_t>(residuals[i]); };
+    for (std::size_t i = 0; i < size(); ++i)
+      if ((bits(i) >> 52) == o) ++fine[(bits(i) >> kFineShift) & (fine.size() - 1)];
+    std::size_t k = 0;
+    for (; rank >= fine[k]; ++k) rank -= fine[k];
+    const std::uint64_t bin = (std::uint64_t{o} << kFineBits) | k;
     median_octave.clear();
     for (std::size_t i = 0; i < size(); ++i)
-      if (!pinned[i] && octave_of(residuals[i]) == o) median_octave.push_back(residuals[i]);
+      if ((bits(i) >> kFineShift) == bin) median_octave.push_back(residuals[i]);
     const auto mid = median_octave.begin() + static_cast<std::ptrdiff_t>(rank);
     std::nth_element(median_octave.begin(), mid, median_octave.end());
     st.median_residual = *mid;

@@ -272,9 +272,10 @@ int SpatialHash::ForwardWalk::ranges(std::uint64_t key, std::span<Range> out) {
     // A bucket's runs are in key order and a row's keys are consecutive numbers: the cells
     // x0 to x1 of the row are consecutive runs, and the next cell's start no earlier.
     const std::uint64_t from = row_key_[r] | x0, to = row_key_[r] | x1;
-    const Run*& run = at_[r];
+    const Run* run = at_[r];
     const Run* end = end_[r];
     while (run < end && run->key < from) ++run;
+    at_[r] = run;
     if (run == end || run->key > to) continue;
     Range range{run->first, run->last};
     for (const Run* next = run + 1; next < end && next->key <= to; ++next) range.second = next->last;

@@ -166,6 +166,8 @@ Vec3 Clip::project(const Vec3& p) const {
     }
     for (const auto& s : spheres) {
       const Vec3 d = q - s.center;
+      // Well inside (by far more than rounding): no square root needed.
+      if (d.squaredNorm() < s.radius * s.radius * (1 - 1e-12)) continue;
       const double len = d.norm();
       if (len > s.radius) {
         q = s.center + d * (s.radius / len);
