@@ -235,8 +235,8 @@ struct FloaterSystem::Impl {
   std::vector<Vec3> unit;  // ∇F/|∇F|, or 0 where that is undefined
 
   // Per-step scratch.
-  std::vector<double> energy, denergy, graded, fq, new_sigma;
-  std::vector<Vec3> desired, new_pos;
+  std::vector<double> graded, fq, new_sigma;
+  std::vector<Vec3> new_pos;
   std::vector<double> speed_sq;         // (|ṗ_i|/σ_i)²
   std::vector<std::uint8_t> near_flag;  // |ṗ_i| < γσ_i
   // Fates judged in move_one(), carried out in decide_fates().
@@ -798,8 +798,7 @@ struct FloaterSystem::Impl {
   // Then every floater moves (move_one()), in the same parallel region.
   void repulsion_and_move() {
     const std::size_t n = size();
-    for (auto* v : {&energy, &denergy, &graded, &new_sigma, &speed_sq}) v->resize(n);
-    desired.resize(n);
+    for (auto* v : {&graded, &new_sigma, &speed_sq}) v->resize(n);
     new_pos.resize(n);
     fate.resize(n);
     near_flag.resize(n);
@@ -852,13 +851,8 @@ struct FloaterSystem::Impl {
       for (std::int64_t slot = 0; slot < static_cast<std::int64_t>(n); ++slot) {
         const auto s = static_cast<std::size_t>(slot);
         const std::uint32_t i = order[s];
-        const detail::PairSums& sum = sums[s];
-        const double si = packed[s].sigma;
-        energy[i] = sum.e;
-        denergy[i] = sum.de / (si * si * si);
-        desired[i] = Vec3(sum.vx, sum.vy, sum.vz);
-        graded[i] = sum.limit;
-        move_one(i, sum.limit, ev, k);
+        graded[i] = sums[s].limit;
+        move_one(i, sums[s], ev, k);
       }
       // Summed per chunk in index order: the same on any number of threads.
 #pragma omp for schedule(static)
@@ -937,16 +931,17 @@ struct FloaterSystem::Impl {
     });
   }
 
-  // ALGORITHMS A.3–A.6 for floater i once its energy, ∂E_i/∂σ_i, desired velocity and graded
-  // fission radius `local_max` are known: radius adaptation, constrained velocity with the φF
+  // ALGORITHMS A.3–A.6 for floater i once its pair sums are complete (energy, σ_i³ ∂E_i/∂σ_i,
+  // desired velocity and graded fission radius): radius adaptation, constrained velocity with the φF
   // and F_q·q̇ terms, bounded Euler step, clip projection; then its fate (judge()) and its
   // squared speed in radii per time unit and whether it is near equilibrium (for
   // StepStats::rms_speed and near_equilibrium). Reads and writes floater i's entries only.
-  void move_one(std::size_t i, double local_max, Evaluator& ev, const MoveConstants& k) {
+  void move_one(std::size_t i, const detail::PairSums& sum, Evaluator& ev,
+                const MoveConstants& k) {
     const double dt = k.dt, max_scene_step = k.max_scene_step;
     const double s = sigma[i];
-    const double rate =
-        -opt.radius_rate * (energy[i] - k.e_hat) / (denergy[i] + opt.radius_damping);
+    const double denergy = sum.de / (s * s * s);
+    const double rate = -opt.radius_rate * (sum.e - k.e_hat) / (denergy + opt.radius_damping);
     new_sigma[i] = std::clamp(std::clamp(s + dt * rate, 0.5 * s, 2 * s), k.lo, k.hi);
     Vec3 p = pos[i];
     bool outside = false;
@@ -955,7 +950,7 @@ struct FloaterSystem::Impl {
       // tangential part of P and the pull along the unit normal. Where ∇F vanishes (or F is
       // not finite) there is no normal: the floater moves by repulsion alone, and the pull
       // resumes as soon as it leaves the critical point.
-      Vec3 tangential = desired[i];
+      Vec3 tangential(sum.vx, sum.vy, sum.vz);  // the desired velocity
       Vec3 normal_move = Vec3::Zero();
       const Vec3& nrm = unit[i];
       if (nrm.squaredNorm() > 0 && std::isfinite(value[i])) {
@@ -978,19 +973,19 @@ struct FloaterSystem::Impl {
     }
     const double speed = (p - pos[i]).norm() / dt;
     new_pos[i] = p;
-    fate[i] = judge(i, new_sigma[i], local_max, speed, outside);
+    fate[i] = judge(i, sum.e, new_sigma[i], sum.limit, speed, outside);
     if (age[i] < std::numeric_limits<std::uint32_t>::max()) ++age[i];
     const double v = speed / new_sigma[i];
     speed_sq[i] = v * v;
     near_flag[i] = speed < opt.equilibrium_speed * new_sigma[i];
   }
 
-  // What happens to floater i after its move (radius s, fission radius local_max, speed |ṗ|),
-  // ALGORITHMS A.7: a stray is
+  // What happens to floater i after its move (energy e, radius s, fission radius local_max,
+  // speed |ṗ|), ALGORITHMS A.7: a stray is
   // removed; a floater near equilibrium may fission, or else die by the randomised density
   // rule. Whether a fission happens also depends on the population, so decide_fates() settles
   // that, serially. Pure: safe to call in parallel.
-  std::uint8_t judge(std::size_t i, double s, double local_max, double speed,
+  std::uint8_t judge(std::size_t i, double e, double s, double local_max, double speed,
                      bool outside) const {
     const bool near_eq = speed < opt.equilibrium_speed * s;
     const double residual = residual_of(value[i], gnorm[i]);
@@ -1003,7 +998,7 @@ struct FloaterSystem::Impl {
     const double local_nominal = std::min(sigma_hat, local_max);
     std::uint8_t f = 0;
     if (s > local_max ||
-        (energy[i] > opt.fission_energy_factor * desired_energy() && s > local_nominal))
+        (e > opt.fission_energy_factor * desired_energy() && s > local_nominal))
       f |= kFission;
     const double threshold = opt.death_radius_factor * local_nominal;
     if (s < threshold && !pinned[i]) {
