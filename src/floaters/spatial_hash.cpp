@@ -22,8 +22,10 @@ constexpr std::int64_t kParallelMin = 4096;
 std::size_t SpatialHash::lay_grid(const Box3& region, double cell, std::size_t points) {
   Vec3 extent;
   for (int k = 0; k < 3; ++k) {
-    origin_[k] = std::min(region.lo[k], region.hi[k]);
-    extent[k] = std::max(region.hi[k] - region.lo[k], 0.0);
+    // A region that is not finite on an axis gets one cell across it there.
+    const bool finite = std::isfinite(region.lo[k]) && std::isfinite(region.hi[k]);
+    origin_[k] = finite ? std::min(region.lo[k], region.hi[k]) : 0.0;
+    extent[k] = finite ? std::max(region.hi[k] - region.lo[k], 0.0) : 0.0;
   }
   const double max_extent = std::max(extent.maxCoeff(), 1e-300);
   const double min_cell = max_extent / static_cast<double>(std::int64_t{1} << (kBits - 1));
@@ -35,7 +37,7 @@ std::size_t SpatialHash::lay_grid(const Box3& region, double cell, std::size_t p
     across[k] =
         std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(extent[k] * inv_cell_)));
   // The axis with the most cells (z on a tie) is the key's most significant: the one
-  // forward_ranges() works across in layers.
+  // ForwardWalk works across in layers.
   const int major =
       across[2] >= std::max(across[0], across[1]) ? 2 : (across[1] >= across[0] ? 1 : 0);
   axis_ = major == 2   ? std::array{0, 1, 2}

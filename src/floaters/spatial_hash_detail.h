@@ -21,7 +21,8 @@ namespace zeroset::detail {
 class SpatialHash {
  public:
   /// Sorts `points` into cubic cells of edge `cell` laid over `region` (points outside it fall
-  /// into the border cells; an empty or inverted region gets one layer of cells). Cell keys
+  /// into the border cells; an axis on which the region is empty, inverted or not finite gets
+  /// one cell). Cell keys
   /// order the cells along the axis with the most cells last (most significant): the layers
   /// of ForwardWalk::ranges(). The edge is enlarged when an axis would need more than 2^20 cells,
   /// and when it is not a positive finite number. Stable: equal cells keep input order.

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <random>
@@ -148,6 +149,35 @@ TEST(SpatialHash, OrderIsStableAndTheSameOnAnyNumberOfThreads) {
                              many.order().end()));
       expect_forward_ranges_list_each_pair_once(points, cell, dense, threads);
     }
+  }
+}
+
+TEST(SpatialHash, AnyRegionAndAnyCoordinatesGiveEveryPointOneSlot) {
+  // Points off the region, infinite or NaN coordinates, and regions that are inverted, flat
+  // or infinite: every point still gets exactly one slot in one run, and close finite points
+  // are still listed as pairs.
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  std::vector<Vec3> points = random_points(500, 6);
+  points.push_back(Vec3(kInf, 0, 0));
+  points.push_back(Vec3(0, -kInf, 0));
+  points.push_back(Vec3(0, 0, std::numeric_limits<double>::quiet_NaN()));
+  points.push_back(Vec3(1e300, -1e300, 5));
+  const Box3 regions[] = {{Vec3(-1, -1, -1), Vec3(1, 1, 1)},
+                          {Vec3(1, 1, 1), Vec3(-1, -1, -1)},
+                          {Vec3(-1, -1, 0), Vec3(1, 1, 0)},
+                          {Vec3::Constant(-kInf), Vec3::Constant(kInf)},
+                          {Vec3(0.2, 0.2, 0.2), Vec3(0.3, 0.3, 0.3)}};
+  for (const Box3& region : regions) {
+    SCOPED_TRACE(testing::Message() << region.lo.transpose() << " .. " << region.hi.transpose());
+    SpatialHash hash;
+    hash.build(points, region, 0.1);
+    std::vector<int> slots(points.size(), 0);
+    for (const SpatialHash::Run& run : hash.runs())
+      for (std::uint32_t s = run.first; s < run.last; ++s) ++slots[hash.order()[s]];
+    for (int times : slots) ASSERT_EQ(times, 1);
+    const auto [j, d] = hash.nearest(points[0], points, 0);
+    ASSERT_GE(j, 0);
+    for (std::size_t i = 1; i < 500; ++i) ASSERT_LE(d, (points[i] - points[0]).norm());
   }
 }
 
