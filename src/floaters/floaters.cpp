@@ -434,42 +434,42 @@ struct FloaterSystem::Impl {
     thread_sigma.assign(team, 0.0);
     thread_bounds.assign(team, empty_bounds());
     parallel_chunks(n, [&](std::size_t b, std::size_t e, Evaluator& ev) {
+      // Kept in registers over the chunk, stored once: the threads' entries share cache lines.
+      const auto t = static_cast<std::size_t>(thread_index());
+      double largest = thread_largest[t], sigma_bound = thread_sigma[t];
+      Box3 extent = thread_bounds[t];
       std::array<double, kChunk> x, y, z, f, gx, gy, gz;
       const std::size_t m = e - b;
       for (std::size_t k = 0; k < m; ++k) {
-        x[k] = pos[b + k].x();
-        y[k] = pos[b + k].y();
-        z[k] = pos[b + k].z();
+        const Vec3& p = pos[b + k];
+        x[k] = p.x();
+        y[k] = p.y();
+        z[k] = p.z();
+        widen(extent, p);
+        sigma_bound = std::max(sigma_bound, sigma[b + k]);
       }
       ev.values_gradients({x.data(), m}, {y.data(), m}, {z.data(), m}, {f.data(), m},
                           {gx.data(), m}, {gy.data(), m}, {gz.data(), m});
+      auto& counts = octave_counts[t];
       for (std::size_t k = 0; k < m; ++k) {
+        const std::size_t i = b + k;
         const Vec3 g(gx[k], gy[k], gz[k]);
         const double len = g.norm();
-        value[b + k] = f[k];
-        gnorm[b + k] = len;
-        unit[b + k] = (len > 0 && std::isfinite(len)) ? Vec3(g / len) : Vec3(Vec3::Zero());
-      }
-      const auto t = static_cast<std::size_t>(thread_index());
-      auto& counts = octave_counts[t];
-      double largest = thread_largest[t];
-      for (std::size_t i = b; i < e; ++i) {
+        value[i] = f[k];
+        gnorm[i] = len;
+        unit[i] = (len > 0 && std::isfinite(len)) ? Vec3(g / len) : Vec3(Vec3::Zero());
         if (pinned[i]) {
           residuals[i] = kNotListed;
           continue;
         }
-        const double r = residual_of(value[i], gnorm[i]);
+        const double r = residual_of(f[k], len);
         residuals[i] = r;
         ++counts[octave_of(r)];
         largest = std::max(largest, r);
       }
       thread_largest[t] = largest;
-      double sigma_bound = thread_sigma[t];
-      for (std::size_t i = b; i < e; ++i) {
-        sigma_bound = std::max(sigma_bound, sigma[i]);
-        widen(thread_bounds[t], pos[i]);
-      }
       thread_sigma[t] = sigma_bound;
+      thread_bounds[t] = extent;
     });
     // Maxima and minima do not depend on which thread saw which floater.
     largest_sigma = *std::max_element(thread_sigma.begin(), thread_sigma.end());
