@@ -781,21 +781,20 @@ struct FloaterSystem::Impl {
   std::vector<Scratch> scratch;  // one per thread, kept from step to step
   std::vector<detail::PairSums> pair_sums;  // per slot
 
-  // Pair pass (ALGORITHMS A.1–A.3, B): for floater i, E_i = Σ_j E_ij, ∂E_i/∂σ_i and the
-  // desired velocity P_i = Σ_j r_ij (E_ij + (σ_i/σ_j)² E_ji) (or its scaled form). Each pair
-  // is computed once, for both its floaters, by the cell of the one that comes first (in the
-  // cell's own slot order, or by cell order): a cell pairs its floaters with its later
-  // floaters and with the floaters of its 13 forward cells, which lie in its own layer of
-  // cells (SpatialHash::layers) and the next. So layers of one parity can be worked on at once, each by one
-  // thread in slot order, without two threads adding to the same sums: the even layers first,
-  // then the odd ones. Each floater's sums take its pairs in a fixed order (those listed by
-  // even layers, then by odd ones; in each, in listing order): the result does not depend on
-  // the number of threads.
-  // The same pass grades the fission radii: σ_max^i ≤ σ_max^j + g·|r_ij| for every neighbour
-  // j (one relaxation sweep per step). Without it, where μ_i jumps (α_i drops from ~1 to ~0
-  // once a floater's perimeter reaches across a node) the density wanted on either side
-  // differs by more than fission and death tolerate (a factor 1/δ), and they fight forever.
-  // Then every floater moves (move_one()), in the same parallel region.
+  // Pair pass (ALGORITHMS A.1–A.3, B): for floater i, E_i = Σ_j E_ij, ∂E_i/∂σ_i and the desired
+  // velocity P_i = Σ_j r_ij (E_ij + (σ_i/σ_j)² E_ji) (or its scaled form). Each pair is computed
+  // once, for both its floaters, by the cell of the one that comes first (in the cell's own slot
+  // order, or by cell order): a cell pairs its floaters with its later floaters and with the
+  // floaters of its 13 forward cells, which lie in its own layer of cells (SpatialHash::layers) and
+  // the next. So layers of one parity can be worked on at once, each by one thread in slot order,
+  // without two threads adding to the same sums: the even layers first, then the odd ones. Each
+  // floater's sums take its pairs in a fixed order (those listed by even layers, then by odd ones;
+  // in each, in listing order): the result does not depend on the number of threads.
+  // The same pass grades the fission radii: σ_max^i ≤ σ_max^j + g·|r_ij| for every neighbour j (one
+  // relaxation sweep per step). Without it, where μ_i jumps (α_i drops from ~1 to ~0 once a
+  // floater's perimeter reaches across a node) the density wanted on either side differs by more
+  // than fission and death tolerate (a factor 1/δ), and they fight forever. Then every floater
+  // moves (move_one()), in the same parallel region.
   void repulsion_and_move() {
     const std::size_t n = size();
     for (auto* v : {&graded, &new_sigma, &speed_sq}) v->resize(n);
@@ -932,8 +931,8 @@ struct FloaterSystem::Impl {
   }
 
   // ALGORITHMS A.3–A.6 for floater i once its pair sums are complete (energy, σ_i³ ∂E_i/∂σ_i,
-  // desired velocity and graded fission radius): radius adaptation, constrained velocity with the φF
-  // and F_q·q̇ terms, bounded Euler step, clip projection; then its fate (judge()) and its
+  // desired velocity and graded fission radius): radius adaptation, constrained velocity with the
+  // φF and F_q·q̇ terms, bounded Euler step, clip projection; then its fate (judge()) and its
   // squared speed in radii per time unit and whether it is near equilibrium (for
   // StepStats::rms_speed and near_equilibrium). Reads and writes floater i's entries only.
   void move_one(std::size_t i, const detail::PairSums& sum, Evaluator& ev,

@@ -1,9 +1,9 @@
 #pragma once
-// The floaters' neighbour (repulsion) pass, the part worth testing on its own: the terms of a
-// pair of floaters, both ways at once, and their sums over each floater's neighbours, with an
-// exponential written for it, and the single-precision prefilter threshold that never drops a
-// pair within the cutoff. The pair terms are written once, for a lane type that is either a double or four
-// doubles (GCC's vector extension, the AVX2 kernel's registers), with the same operations in
+// The floaters' neighbour (repulsion) pass, the part worth testing on its own: the terms of a pair
+// of floaters, both ways at once, and their sums over each floater's neighbours, with an
+// exponential written for it, and the single-precision prefilter threshold that never drops a pair
+// within the cutoff. The pair terms are written once, for a lane type that is either a double or
+// four doubles (GCC's vector extension, the AVX2 kernel's registers), with the same operations in
 // the same order in both, so both give the same bits. Private to the floaters module.
 #include <array>
 #include <bit>

@@ -215,23 +215,19 @@ void SpatialHash::sort_slots(std::uint32_t first, std::uint32_t last) {
   }
 }
 
-SpatialHash::Range SpatialHash::row_slots(std::uint64_t from, std::uint64_t to) const {
-  // The bucket's runs are in key order and a row's keys are consecutive numbers: the cells
-  // [from, to] of one row are consecutive runs.
-  const std::uint64_t b = bucket_index(from);
+SpatialHash::Range SpatialHash::slots_up_to(const Run* run, const Run* end, std::uint64_t to) {
+  if (run == end || run->key > to) return {0, 0};
+  Range range{run->first, run->last};
+  for (++run; run < end && run->key <= to; ++run) range.second = run->last;
+  return range;
+}
+
+SpatialHash::Range SpatialHash::cell_slots(std::uint64_t key) const {
+  const std::uint64_t b = bucket_index(key);
   const Run* run = runs_.data() + bucket_run_[b];
   const Run* end = runs_.data() + bucket_run_[b + 1];
-  constexpr std::ptrdiff_t kScanMax = 8;
-  if (end - run > kScanMax) {
-    run = std::lower_bound(run, end, from, [](const Run& r, std::uint64_t k) { return r.key < k; });
-  } else {
-    while (run < end && run->key < from) ++run;
-  }
-  if (run == end || run->key > to) return {0, 0};
-  const std::uint32_t first = run->first;
-  std::uint32_t last = run->last;
-  while (++run < end && run->key <= to) last = run->last;
-  return {first, last};
+  run = std::lower_bound(run, end, key, [](const Run& r, std::uint64_t k) { return r.key < k; });
+  return slots_up_to(run, end, key);
 }
 
 std::array<std::int64_t, 3> SpatialHash::cell_of(const Vec3& p) const {
@@ -271,17 +267,14 @@ int SpatialHash::ForwardWalk::ranges(std::uint64_t key, std::span<Range> out) {
     const std::uint64_t x0 = r == 0 ? x + 1 : (x > 0 ? x - 1 : 0);
     const std::uint64_t x1 = std::min(last_x, x + 1);
     if (x0 > x1) continue;
-    // A bucket's runs are in key order and a row's keys are consecutive numbers: the cells
-    // x0 to x1 of the row are consecutive runs, and the next cell's start no earlier.
+    // The cells x0 to x1 of the row (slots_up_to()); the next cell's start no earlier.
     const std::uint64_t from = row_key_[r] | x0, to = row_key_[r] | x1;
     const Run* run = at_[r];
     const Run* end = end_[r];
     while (run < end && run->key < from) ++run;
     at_[r] = run;
-    if (run == end || run->key > to) continue;
-    Range range{run->first, run->last};
-    for (const Run* next = run + 1; next < end && next->key <= to; ++next) range.second = next->last;
-    out[static_cast<std::size_t>(count++)] = range;
+    const Range range = slots_up_to(run, end, to);
+    if (range.first < range.second) out[static_cast<std::size_t>(count++)] = range;
   }
   return count;
 }
@@ -317,7 +310,7 @@ std::pair<std::int64_t, double> SpatialHash::nearest(const Vec3& p, std::span<co
   if (order_.empty()) return {best, best_d2};
   const auto c = cell_of(p);
   auto visit = [&](std::uint64_t key) {
-    const auto [b, e] = row_slots(key, key);
+    const auto [b, e] = cell_slots(key);
     for (std::uint32_t s = b; s < e; ++s) {
       const std::int64_t i = order_[s];
       if (i == skip) continue;
@@ -357,7 +350,7 @@ std::vector<std::uint32_t> SpatialHash::k_nearest(const Vec3& p, std::span<const
   k = std::min(k, order_.size());
   const auto c = cell_of(p);
   auto visit = [&](std::uint64_t key) {
-    const auto [b, e] = row_slots(key, key);
+    const auto [b, e] = cell_slots(key);
     for (std::uint32_t s = b; s < e; ++s)
       found.emplace_back((points[order_[s]] - p).squaredNorm(), order_[s]);
   };

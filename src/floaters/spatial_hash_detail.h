@@ -155,8 +155,12 @@ class SpatialHash {
   }
   // Sorts slots [first, last) by key, stably.
   void sort_slots(std::uint32_t first, std::uint32_t last);
-  // Slots of the points in the cells `from` to `to` of one row (empty when there are none).
-  Range row_slots(std::uint64_t from, std::uint64_t to) const;
+  // The slots of `run` and of the runs after it up to cell `to`, within one bucket's runs
+  // [run, end): a bucket's runs are in key order and a row's keys are consecutive numbers, so
+  // the cells from run's to `to` of one row are consecutive runs (empty when run is past `to`).
+  static Range slots_up_to(const Run* run, const Run* end, std::uint64_t to);
+  // Slots of the points in cell `key` (empty when there are none).
+  Range cell_slots(std::uint64_t key) const;
   // Visits the cells at Chebyshev distance `ring` from `c`; returns false when none exists.
   template <class Visit>
   bool visit_ring(const std::array<std::int64_t, 3>& c, std::int64_t ring, Visit&& visit) const;
