@@ -8,9 +8,9 @@ if(ZEROSET_SANITIZE)
 endif()
 
 # Code generation for the processor that builds (AVX2, FMA, POPCNT where present): the hot
-# loops (grid sampling, bit sets, ray casting, particle forces) vectorise much better. AVX-512
-# stays off: it gains little here and valgrind (callgrind, memcheck) cannot run it. Turn the
-# option off to build binaries for other machines.
+# loops (field evaluation, grid sampling, bit sets, ray casting, particle forces) vectorise much
+# better. AVX-512 stays off: it gains little here and valgrind (callgrind, memcheck) cannot run
+# it. Turn the option off to build binaries for other machines.
 option(ZEROSET_NATIVE "Optimise for this machine's processor (-march=native)" ON)
 add_library(zeroset_native INTERFACE)
 if(ZEROSET_NATIVE)
