@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <numbers>
 
@@ -161,15 +162,69 @@ __attribute__((target("avx2"))) void list_slots_avx2(std::uint32_t* out,
 }
 #endif
 
-// Adds one floater's terms of a pair to its sums.
-void add_terms(PairSums& s, const Terms& t, bool graded) {
-  s.e += t.e;
-  s.de += t.de;
-  s.vx += t.fx;
-  s.vy += t.fy;
-  s.vz += t.fz;
-  if (graded) s.limit = t.lim < s.limit ? t.lim : s.limit;
+// Adds the terms of pairs [0, m) (out, two per pair) to the sums, in the order of
+// PairBatch::accumulate(): a floater's pairs are listed together, so its own terms are summed
+// in registers, then added to its sums once (none of its pairs has it as the other floater).
+template <bool kGraded>
+void sum_terms_scalar(const Terms* out, const std::uint32_t* i, const std::uint32_t* j,
+                      std::size_t m, PairSums* sums) {
+  const auto add = [](PairSums& s, const Terms& t) {
+    s.e += t.e;
+    s.de += t.de;
+    s.vx += t.fx;
+    s.vy += t.fy;
+    s.vz += t.fz;
+    if (kGraded) s.limit = t.lim < s.limit ? t.lim : s.limit;
+  };
+  for (std::size_t q = 0; q < m;) {
+    const std::uint32_t self = i[q];
+    PairSums own{0, 0, 0, 0, 0, std::numeric_limits<double>::infinity()};
+    for (; q < m && i[q] == self; ++q) {
+      add(own, out[2 * q]);
+      add(sums[j[q]], out[2 * q + 1]);
+    }
+    PairSums& total = sums[self];
+    total.e += own.e;
+    total.de += own.de;
+    total.vx += own.vx;
+    total.vy += own.vy;
+    total.vz += own.vz;
+    total.limit = std::min(total.limit, own.limit);
+  }
 }
+
+#ifdef ZS_PAIR_LANES4
+// The same sums, the first four fields of a record (e, de, fx, fy) in one vector: each lane
+// adds exactly as the scalar path, in the same order.
+template <bool kGraded>
+__attribute__((target("avx2"))) void sum_terms_avx2(const Terms* out, const std::uint32_t* i,
+                                                    const std::uint32_t* j, std::size_t m,
+                                                    PairSums* sums) {
+  static_assert(offsetof(PairSums, vz) == 4 * sizeof(double));
+  for (std::size_t q = 0; q < m;) {
+    const std::uint32_t self = i[q];
+    __m256d own = _mm256_setzero_pd();
+    __m128d own_z = _mm_setzero_pd();
+    __m128d own_limit = _mm_set_sd(std::numeric_limits<double>::infinity());
+    for (; q < m && i[q] == self; ++q) {
+      const double* mine = &out[2 * q].e;
+      own = _mm256_add_pd(own, _mm256_load_pd(mine));
+      own_z = _mm_add_sd(own_z, _mm_load_sd(mine + 4));
+      // minsd a, b is a < b ? a : b, as the scalar path's comparison.
+      if (kGraded) own_limit = _mm_min_sd(_mm_load_sd(mine + 5), own_limit);
+      const double* theirs = &out[2 * q + 1].e;
+      double* sum = &sums[j[q]].e;
+      _mm256_storeu_pd(sum, _mm256_add_pd(_mm256_loadu_pd(sum), _mm256_load_pd(theirs)));
+      sum[4] += theirs[4];
+      if (kGraded) sum[5] = theirs[5] < sum[5] ? theirs[5] : sum[5];
+    }
+    double* total = &sums[self].e;
+    _mm256_storeu_pd(total, _mm256_add_pd(_mm256_loadu_pd(total), own));
+    total[4] += _mm_cvtsd_f64(own_z);
+    total[5] = std::min(total[5], _mm_cvtsd_f64(own_limit));
+  }
+}
+#endif
 
 }  // namespace
 
@@ -214,23 +269,16 @@ void PairBatch::accumulate(bool scaled, const PairConstants& k, const double* re
     (scaled ? terms_scalar<true> : terms_scalar<false>)(k, records, ids, m, i_.data(),
                                                          j_.data(), out);
   }
-  // A floater's pairs are listed together: its own terms are summed in registers, then added
-  // to its sums once (none of its pairs has it as the other floater).
   const bool graded = k.grading > 0;
-  for (std::size_t q = 0; q < m;) {
-    const std::uint32_t self = i_[q];
-    PairSums own{0, 0, 0, 0, 0, std::numeric_limits<double>::infinity()};
-    for (; q < m && i_[q] == self; ++q) {
-      add_terms(own, out[2 * q], graded);
-      add_terms(sums[j_[q]], out[2 * q + 1], graded);
-    }
-    PairSums& total = sums[self];
-    total.e += own.e;
-    total.de += own.de;
-    total.vx += own.vx;
-    total.vy += own.vy;
-    total.vz += own.vz;
-    total.limit = std::min(total.limit, own.limit);
+#ifdef ZS_PAIR_LANES4
+  if (path_ == FilterPath::kAvx2) {
+    (graded ? sum_terms_avx2<true> : sum_terms_avx2<false>)(out, i_.data(), j_.data(), m,
+                                                             sums.data());
+  } else
+#endif
+  {
+    (graded ? sum_terms_scalar<true> : sum_terms_scalar<false>)(out, i_.data(), j_.data(), m,
+                                                                 sums.data());
   }
   pairs_ = 0;
 }
