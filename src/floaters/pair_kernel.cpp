@@ -138,26 +138,33 @@ __attribute__((target("avx2,fma"))) void terms_avx2(const PairConstants& k, cons
 }
 #endif
 
-// out[q] = slots[near[q]] for q < kept.
-void list_slots_scalar(std::uint32_t* out, const std::uint32_t* slots, const std::uint32_t* near,
-                       std::size_t kept) {
-  for (std::size_t q = 0; q < kept; ++q) out[q] = slots[near[q]];
+// The pairs (self, slots[near[q]]) for q < kept, written to i[q] and j[q].
+void list_pairs_scalar(std::uint32_t* i, std::uint32_t* j, std::uint32_t self,
+                       const std::uint32_t* slots, const std::uint32_t* near, std::size_t kept) {
+  for (std::size_t q = 0; q < kept; ++q) {
+    i[q] = self;
+    j[q] = slots[near[q]];
+  }
 }
 
 #ifdef ZS_PAIR_LANES4
-// The same, eight at a time (lanes past `kept` neither read nor written).
-__attribute__((target("avx2"))) void list_slots_avx2(std::uint32_t* out,
+// The same, eight at a time: lanes past `kept` neither read, and written with whatever (i and
+// j need room for whole groups of eight).
+__attribute__((target("avx2"))) void list_pairs_avx2(std::uint32_t* i, std::uint32_t* j,
+                                                     std::uint32_t self,
                                                      const std::uint32_t* slots,
                                                      const std::uint32_t* near,
                                                      std::size_t kept) {
   const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256i own = _mm256_set1_epi32(static_cast<int>(self));
   for (std::size_t q = 0; q < kept; q += 8) {
     const __m256i mask = _mm256_cmpgt_epi32(
         _mm256_set1_epi32(static_cast<int>(std::min<std::size_t>(kept - q, 8))), lane);
     const __m256i index = _mm256_maskload_epi32(reinterpret_cast<const int*>(near + q), mask);
     const __m256i slot = _mm256_mask_i32gather_epi32(
         _mm256_setzero_si256(), reinterpret_cast<const int*>(slots), index, mask, 4);
-    _mm256_maskstore_epi32(reinterpret_cast<int*>(out + q), mask, slot);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(j + q), slot);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(i + q), own);
   }
 }
 #endif
@@ -231,19 +238,19 @@ __attribute__((target("avx2"))) void sum_terms_avx2(const Terms* out, const std:
 void PairBatch::add(std::uint32_t self, const std::uint32_t* slots, const std::uint32_t* near,
                     std::size_t kept) {
   const std::size_t first = pairs_;
-  if (j_.size() < first + kept + kLanes) {  // room for the pairs and the padding of accumulate()
-    const std::size_t room = 2 * (first + kept + kLanes);
+  // Room for the pairs, a whole group of eight past them (list_pairs_avx2) and the padding of
+  // accumulate().
+  if (j_.size() < first + kept + 8) {
+    const std::size_t room = 2 * (first + kept + 8);
     i_.resize(room);
     j_.resize(room);
   }
 #ifdef ZS_PAIR_LANES4
   if (path_ == FilterPath::kAvx2)
-    list_slots_avx2(j_.data() + first, slots, near, kept);
+    list_pairs_avx2(i_.data() + first, j_.data() + first, self, slots, near, kept);
   else
 #endif
-    list_slots_scalar(j_.data() + first, slots, near, kept);
-  std::fill(i_.begin() + static_cast<std::ptrdiff_t>(first),
-            i_.begin() + static_cast<std::ptrdiff_t>(first + kept), self);
+    list_pairs_scalar(i_.data() + first, j_.data() + first, self, slots, near, kept);
   pairs_ = first + kept;
 }
 
