@@ -84,6 +84,15 @@ std::size_t octave_of(double r) { return std::bit_cast<std::uint64_t>(r) >> 52; 
 // so in no octave.
 constexpr double kNotListed = -1;
 
+// Resizes v to n, with room for an eighth more when it must grow: the floaters' number changes
+// a little every step, and an array swapped with another from step to step (pos and new_pos,
+// say) would otherwise be reallocated, every element moved, whenever the number grows.
+template <class T>
+void fit(std::vector<T>& v, std::size_t n) {
+  if (v.capacity() < n) v.reserve(n + n / 8);
+  v.resize(n);
+}
+
 int resolve_threads(int requested) {
 #ifdef _OPENMP
   return requested > 0 ? requested : omp_get_max_threads();
@@ -234,6 +243,13 @@ struct FloaterSystem::Impl {
   std::vector<double> gnorm;
   std::vector<Vec3> unit;  // ∇F/|∇F|, or 0 where that is undefined
 
+  // permute_state()'s output, one array per array of state(), kept from call to call.
+  std::tuple<std::vector<Vec3>, std::vector<double>, std::vector<std::uint64_t>,
+             std::vector<double>, std::vector<double>, std::vector<std::uint32_t>,
+             std::vector<std::uint8_t>, std::vector<double>, std::vector<double>,
+             std::vector<Vec3>>
+      permuted;
+
   // Per-step scratch.
   std::vector<double> graded, fq, new_sigma;
   std::vector<Vec3> new_pos;
@@ -359,17 +375,11 @@ struct FloaterSystem::Impl {
     unit[to] = unit[from];
   }
 
+  auto state() { return std::tie(pos, sigma, id, mu, smax, age, pinned, value, gnorm, unit); }
+  static constexpr std::size_t kStateArrays = 10;
+
   void resize_state(std::size_t n) {
-    pos.resize(n);
-    sigma.resize(n);
-    id.resize(n);
-    mu.resize(n);
-    smax.resize(n);
-    age.resize(n);
-    pinned.resize(n);
-    value.resize(n);
-    gnorm.resize(n);
-    unit.resize(n);
+    std::apply([n](auto&... v) { (fit(v, n), ...); }, state());
   }
 
   // out[s] = v[order[s]]: a worksharing loop inside the caller's parallel region (nowait: each
@@ -383,19 +393,19 @@ struct FloaterSystem::Impl {
   }
 
   // Reorders every floater's state by `order` (new index → old index), in one parallel region.
+  // The reordered arrays are then the state's, and the state's old arrays are kept for the next
+  // time.
   void permute_state(std::span<const std::uint32_t> order) {
-    auto state = std::tie(pos, sigma, id, mu, smax, age, pinned, value, gnorm, unit);
-    auto out = std::apply(
-        [](const auto&... v) { return std::make_tuple(std::decay_t<decltype(v)>(v.size())...); },
-        state);
-    constexpr std::size_t kArrays = std::tuple_size_v<decltype(state)>;
+    auto now = state();
+    static_assert(std::tuple_size_v<decltype(now)> == kStateArrays);
+    std::apply([&](auto&... v) { (fit(v, order.size()), ...); }, permuted);
 #pragma omp parallel num_threads(threads) if (order.size() >= kParallelMin)
     [&]<std::size_t... k>(std::index_sequence<k...>) {
-      (permute_into(std::get<k>(state), std::get<k>(out), order), ...);
-    }(std::make_index_sequence<kArrays>{});
+      (permute_into(std::get<k>(now), std::get<k>(permuted), order), ...);
+    }(std::make_index_sequence<kStateArrays>{});
     [&]<std::size_t... k>(std::index_sequence<k...>) {
-      (std::get<k>(state).swap(std::get<k>(out)), ...);
-    }(std::make_index_sequence<kArrays>{});
+      (std::get<k>(now).swap(std::get<k>(permuted)), ...);
+    }(std::make_index_sequence<kStateArrays>{});
   }
 
   // ---- seeding ------------------------------------------------------------------------------
@@ -427,7 +437,7 @@ struct FloaterSystem::Impl {
   void evaluate_all() {
     const std::size_t n = size();
     const auto team = static_cast<std::size_t>(threads);
-    residuals.resize(n);
+    fit(residuals, n);
     octave_counts.resize(team);
     for (auto& counts : octave_counts) counts.fill(0);
     thread_largest.assign(team, 0.0);
@@ -714,11 +724,11 @@ struct FloaterSystem::Impl {
       permute_state(hash.order());
       hash.build(pos, region, 3 * largest, threads);
     }
-    packed.resize(n);
-    pid.resize(n);
+    fit(packed, n);
+    fit(pid, n);
     // The filter reads whole groups of slots past a range's end: padding keeps that in bounds.
     for (auto* v : {&fx, &fy, &fz, &fcut}) {
-      v->resize(n + detail::kFilterPad);
+      fit(*v, n + detail::kFilterPad);
       std::fill(v->begin() + static_cast<std::ptrdiff_t>(n), v->end(), 0.0f);
     }
     // Single-precision coordinates for the prefilter: relative to the box centre, scaled into
@@ -797,11 +807,11 @@ struct FloaterSystem::Impl {
   // moves (move_one()), in the same parallel region.
   void repulsion_and_move() {
     const std::size_t n = size();
-    for (auto* v : {&graded, &new_sigma, &speed_sq}) v->resize(n);
-    new_pos.resize(n);
-    fate.resize(n);
-    near_flag.resize(n);
-    pair_sums.resize(n);
+    for (auto* v : {&graded, &new_sigma, &speed_sq}) fit(*v, n);
+    fit(new_pos, n);
+    fit(fate, n);
+    fit(near_flag, n);
+    fit(pair_sums, n);
     const std::size_t chunks = (n + kChunk - 1) / kChunk;
     chunk_speed.resize(chunks);
     chunk_near.resize(chunks);
@@ -918,7 +928,8 @@ struct FloaterSystem::Impl {
   // F_q·q̇ at every floater (exact parameter derivatives).
   void parameter_terms(std::span<const double> qdot) {
     const std::size_t n = size();
-    fq.assign(n, 0);
+    fit(fq, n);
+    std::fill(fq.begin(), fq.end(), 0.0);
     if (std::all_of(qdot.begin(), qdot.end(), [](double v) { return v == 0; })) return;
     parallel_chunks(n, [&](std::size_t b, std::size_t e, Evaluator& ev) {
       for (std::size_t i = b; i < e; ++i) {
