@@ -36,6 +36,18 @@ def find_binary(build):
     sys.exit(f"floaters_bench not found in {build} (build the target floaters_bench)")
 
 
+def processor():
+    """The processor's model name: the absolute figures below depend on it (the build targets
+    the processor it runs on)."""
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return "unknown processor"
+
+
 def run(binary, threads, repeat, min_time):
     """Median step time (ms), floaters and updates/s per (mode, requested size)."""
     with tempfile.NamedTemporaryFile(suffix=".json") as out:
@@ -76,8 +88,9 @@ def main():
         "## Floaters: Kummer mu = 1.5, clip sphere R = 3",
         "",
         f"Command: `/usr/bin/python3 bench/floaters_bench.py BUILD_DIR --repeat {args.repeat}` "
-        f"(`floaters_bench`, medians of {args.repeat} runs; load average {load:.1f} when the run "
-        f"started, on a machine shared with other work; OpenMP waiting as the command line sets "
+        f"(`floaters_bench`, medians of {args.repeat} runs on {processor()}, 2 cores; load "
+        f"average {load:.1f} when the run started, on a machine shared with other work; the "
+        f"absolute figures depend on the processor; OpenMP waiting as the command line sets "
         f"it: {describe(cli_openmp_env())}). Each system is seeded and settled "
         "first, with σ̂ calibrated so that about the nominal count settles (the floaters column "
         "gives the count); then only `step()` is timed. An update is one floater advanced by one "
