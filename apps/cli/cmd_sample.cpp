@@ -221,6 +221,11 @@ void run_sample(const SampleArgs& a) {
   const FloaterOptions options = options_from(a, scene);
   const Camera camera = camera_from(surface, a.camera);
   FloaterSystem sys(surface, options);
+  if (options.radius > 0 && sys.nominal_radius() != options.radius)
+    fmt::print(stderr,
+               "zeroset: warning: radius {:g} is outside [1e-9, 1] times the scene radius "
+               "({:g}); using {:.4g}\n",
+               options.radius, surface.scene_radius(), sys.nominal_radius());
 
   Progress progress("sampling", global_flags().quiet);
   nlohmann::json stats;
@@ -339,7 +344,8 @@ void register_sample_command(CLI::App& app) {
   a->radius_opt = cmd->add_option("--radius", a->radius,
                                   "Nominal floater radius sigma^ (the density knob; spacing is "
                                   "about 1.5 sigma^). Default: from the surface's area so that "
-                                  "about max-count/3 floaters would cover it uniformly")
+                                  "about max-count/3 floaters would cover it uniformly. Kept within [1e-9, 1] "
+                                  "times the scene radius")
                       ->type_name("LENGTH");
   a->max_count_opt = cmd->add_option("--max-count", a->max_count, "Population cap (default 2000)")
                          ->check(CLI::Range(std::size_t{1}, std::size_t{100'000'000}));

@@ -128,5 +128,16 @@ TEST_F(SampleCommand, BadInputExitsWithTwoAndWritesNothing) {
   }
 }
 
+TEST_F(SampleCommand, RadiusOutsideItsRangeIsKeptInsideAndSaidSo) {
+  const auto tiny = run("sample kummer --radius 1e-300 --steps 2 -o " + path("t.ply"));
+  EXPECT_EQ(tiny.exit_code, 0) << tiny.output;
+  EXPECT_NE(tiny.output.find("warning: radius 1e-300 is outside"), std::string::npos)
+      << tiny.output;
+  EXPECT_NE(tiny.output.find("using 3e-09"), std::string::npos) << tiny.output;
+  const auto fine = run("sample kummer --radius 0.1 --steps 2 -o " + path("f.ply"));
+  EXPECT_EQ(fine.exit_code, 0) << fine.output;
+  EXPECT_EQ(fine.output.find("warning"), std::string::npos) << fine.output;
+}
+
 }  // namespace
 }  // namespace zeroset
