@@ -76,7 +76,7 @@ void check_memory(const Surface& surface, PolygonizeOptions po) {
   const double have = physical_memory_bytes();
   if (have <= 0) return;
   const double limit = 0.75 * have;
-  auto need = [&](int cells) {
+  auto need = [&surface, po](int cells) mutable {
     po.cells = cells;
     return plan_grid(surface, po).estimated_bytes;
   };

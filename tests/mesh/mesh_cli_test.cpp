@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <regex>
 
 #include <nlohmann/json.hpp>
 
@@ -78,6 +79,14 @@ TEST_F(MeshCli, AbsurdResolutionIsRefusedWithTheMemoryItNeeds) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.output.find("GB"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(path("k.obj")));
+  // The message names the resolution asked for and a smaller one that fits.
+  EXPECT_NE(r.output.find("--resolution = 30000:"), std::string::npos) << r.output;
+  std::smatch fit;
+  ASSERT_TRUE(std::regex_search(r.output, fit, std::regex("use --resolution (\\d+) or less")))
+      << r.output;
+  const int fits = std::stoi(fit[1]);
+  EXPECT_GT(fits, 0);
+  EXPECT_LT(fits, 30000);
 }
 
 }  // namespace
