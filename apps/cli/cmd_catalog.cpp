@@ -60,9 +60,13 @@ void run_info(const SurfaceArgs& args, bool as_json) {
   }
   if (!s.title.empty()) fmt::print("{} ({})\n", s.title, s.name);
   fmt::print("equation:   {}\n", s.field.expression_string());
-  if (s.field.is_polynomial())
+  if (s.field.is_expandable())
     fmt::print("degree:     {} (polynomial, {} terms expanded)\n", s.field.degree(),
                s.field.polynomial().terms().size());
+  else if (s.field.is_polynomial())
+    fmt::print("degree:     {} (polynomial, not expanded above degree {}: ray tracing uses "
+               "interval arithmetic, no POV-Ray export)\n",
+               s.field.degree(), Field::kMaxExpansionDegree);
   else
     fmt::print("degree:     not a polynomial (ray tracing uses interval arithmetic)\n");
   if (s.ranges.empty()) fmt::print("parameters: none\n");

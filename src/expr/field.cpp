@@ -18,10 +18,6 @@
 namespace zeroset {
 namespace {
 
-/// The highest degree Field::polynomial() expands: a dense degree-24 polynomial has 2925
-/// terms, and one product of two of them already takes a few milliseconds.
-constexpr int kMaxExpansionDegree = 24;
-
 const Field& zero_field() {
   static const Field zero = compile_field("0");
   return zero;
@@ -249,6 +245,10 @@ void Field::require_parameters() const {
 bool Field::is_polynomial() const { return tape_->degree >= 0; }
 
 int Field::degree() const { return tape_->degree; }
+
+bool Field::is_expandable() const {
+  return is_polynomial() && tape_->degree <= kMaxExpansionDegree;
+}
 
 Polynomial Field::polynomial() const {
   if (!is_polynomial())

@@ -1443,7 +1443,7 @@ Mesh polygonize(const Surface& surface, const PolygonizeOptions& options, Polygo
   const int workers = detail::worker_count(options.threads);
 
   std::optional<Polynomial> poly;
-  if (options.polynomial_rows && surface.field.is_polynomial()) poly = surface.field.polynomial();
+  if (options.polynomial_rows && surface.field.is_expandable()) poly = surface.field.polynomial();
 
   DenseResult r = st.sparse ? extract_sparse(surface, g, options, poly ? &*poly : nullptr, workers, st, stop)
                             : extract_dense(surface, g, options, poly ? &*poly : nullptr, workers, st, stop);

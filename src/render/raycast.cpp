@@ -420,7 +420,7 @@ struct SurfaceRayCaster::Impl {
       : surface(s), eye(e), options(o), evaluator(s.field), finder(o.roots) {
     (void)surface.bounds();  // throws BadInput naming the surface when the clip is unbounded
     const Field& field = surface.field;
-    exact = !o.force_interval && field.is_polynomial() &&
+    exact = !o.force_interval && field.is_expandable() &&
             field.degree() <= RootFinder::kMaxDegree;
     if (exact) {
       const Polynomial poly = field.polynomial();

@@ -83,7 +83,7 @@ std::string suggestion(const std::string& name) {
 // sum of the absolute coefficients of degree k). m is estimated on 4,000 directions and the
 // axes and halved for safety; forms that come near zero anywhere are treated as indefinite. Returns an empty clip when no bound is found (an unbounded surface).
 Clip default_clip(const Field& field) {
-  if (!field.is_polynomial() || !field.missing_parameters().empty()) return {};
+  if (!field.is_expandable() || !field.missing_parameters().empty()) return {};
   const Polynomial poly = field.polynomial();
   const int d = poly.degree();
   if (d < 2 || d % 2) return {};

@@ -13,6 +13,7 @@
 #include "surfaces.h"
 #include "zeroset/error.h"
 #include "zeroset/expr/parse.h"
+#include "zeroset/expr/polynomial.h"
 
 namespace zeroset {
 namespace {
@@ -370,7 +371,19 @@ TEST(Field, DegreeIsDecidedSymbolically) {
     const Field f = compile_field(c.source);
     EXPECT_EQ(f.degree(), c.degree);
     EXPECT_EQ(f.is_polynomial(), c.degree >= 0);
+    EXPECT_EQ(f.is_expandable(), c.degree >= 0);
   }
+}
+
+TEST(Field, PolynomialsAboveTheExpansionLimitAreNotExpanded) {
+  const Field f24 = compile_field("(x^2 + y^2 + z^2)^12 - 1");
+  EXPECT_TRUE(f24.is_expandable());
+  EXPECT_EQ(f24.polynomial().degree(), 24);
+  const Field f26 = compile_field("(x^2 + y^2 + z^2)^13 - 1");
+  EXPECT_TRUE(f26.is_polynomial());
+  EXPECT_FALSE(f26.is_expandable());
+  EXPECT_THROW((void)f26.polynomial(), BadInput);
+  EXPECT_NEAR(value_at(f26, {1, 0, 0}), 0.0, 1e-15);  // still evaluated
 }
 
 TEST(Field, DefaultFieldIsZeroWithoutParameters) {

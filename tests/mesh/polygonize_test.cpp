@@ -194,6 +194,17 @@ TEST(Polygonize, ExpressionAndPolynomialSamplingAgree) {
   EXPECT_EQ(a.triangle_count(), b.triangle_count());
 }
 
+TEST(Polygonize, PolynomialTooHighToExpandIsSampledThroughTheExpression) {
+  // Degree 26, just above the expansion limit: the unit sphere, watertight, vertices on it.
+  const Surface s = test::equation("(x^2 + y^2 + z^2)^13 - 1", Clip::sphere(2));
+  ASSERT_FALSE(s.field.is_expandable());
+  const Mesh m = polygonize(s, {.cells = 24, .polynomial_rows = true});
+  const MeshTopology t = mesh_topology(m);
+  EXPECT_TRUE(t.is_watertight());
+  EXPECT_EQ(t.euler_characteristic, 2);
+  for (const Vec3& p : m.positions) EXPECT_NEAR(p.norm(), 1.0, 1e-6);
+}
+
 TEST(Polygonize, ResultDoesNotDependOnThreadCount) {
   const Surface s = test::catalog_surface("torus");
   const Mesh a = polygonize(s, {.cells = 30, .threads = 1});

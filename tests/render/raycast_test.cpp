@@ -607,5 +607,19 @@ TEST(Raycast, CastsNonPolynomialSurfaceWithIntervals) {
   EXPECT_GT(hits, 50);
 }
 
+TEST(Raycast, PolynomialsTooHighToExpandAreCastWithIntervals) {
+  // Degree 26 (below the root finder's limit, above the expansion limit) and degree 600: the
+  // unit sphere either way.
+  for (const char* equation : {"(x^2 + y^2 + z^2)^13 - 1", "(x^2 + y^2 + z^2)^300 - 1"}) {
+    const Surface s = equation_surface(equation, 2);
+    ASSERT_FALSE(s.field.is_expandable()) << equation;
+    SurfaceRayCaster caster(s, Vec3(0.3, 0.2, 5));
+    EXPECT_FALSE(caster.is_exact()) << equation;
+    SurfaceHit hit;
+    ASSERT_TRUE(caster.intersect(Vec3(0, 0, -1), hit)) << equation;
+    EXPECT_NEAR(hit.t, 5 - std::sqrt(1 - 0.13), 1e-9) << equation;
+  }
+}
+
 }  // namespace
 }  // namespace zeroset

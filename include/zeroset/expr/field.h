@@ -44,9 +44,16 @@ class Field {
   bool is_polynomial() const;
   /// Total degree in x, y, z; -1 when not a polynomial.
   int degree() const;
+  /// The highest degree polynomial() expands: a dense degree-24 polynomial has 2925 terms, and
+  /// one product of two of them already takes a few milliseconds.
+  static constexpr int kMaxExpansionDegree = 24;
+  /// True when polynomial() can expand F: a polynomial of degree ≤ kMaxExpansionDegree. Higher
+  /// degrees are still evaluated, differentiated, sampled, meshed and ray traced (by interval
+  /// arithmetic) from the compiled expression.
+  bool is_expandable() const;
   /// The expanded polynomial for the current parameter values. Throws BadInput when F is not
-  /// a polynomial, when its degree exceeds 24 (the expansion limit), or when a parameter has
-  /// no value (InvalidArgument). Cost: milliseconds for degree ≤ 12.
+  /// expandable (not a polynomial, or of degree above kMaxExpansionDegree), or when a
+  /// parameter has no value (InvalidArgument). Cost: milliseconds for degree ≤ 12.
   Polynomial polynomial() const;
 
   /// The source text it was compiled from.

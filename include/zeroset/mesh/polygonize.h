@@ -71,7 +71,8 @@ struct PolygonizeOptions {
   /// Refinement steps at most per edge vertex, one evaluation of F each (0: linear
   /// interpolation only).
   int refine_steps = 12;
-  /// Sample polynomial fields row by row through their univariate restriction.
+  /// Sample expandable polynomial fields (Field::is_expandable()) row by row through their
+  /// univariate restriction; other fields through the compiled expression.
   bool polynomial_rows = true;
   /// Cut triangles at the clip surface and flag the vertices there.
   bool clip = true;

@@ -8,7 +8,8 @@
 /// to restrict (Horner in s) whatever the number of terms. The ray is clipped to the clip
 /// volume and the first root in that interval is isolated by `RootFinder`, even roots
 /// included; a neighbouring ray's hit may guide the search (`RootGuess`), never change it.
-/// Other expressions (and polynomials above RootFinder::kMaxDegree): interval arithmetic
+/// Other expressions (and polynomials above degree Field::kMaxExpansionDegree, 24, which are
+/// not expanded): interval arithmetic
 /// over the field's tape along the ray, subdivided where the enclosure of F
 /// contains 0 and F is not provably monotone (enclosure of ∇F·d), then sign-change
 /// refinement.
