@@ -232,7 +232,9 @@ void run_sample(const SampleArgs& a) {
   double seconds = 0;
   std::size_t updates = 0;
   std::optional<std::size_t> converged_at;
+  StepStats last;
   auto run = [&](const StepStats& st) {
+    last = st;
     seconds += st.seconds;
     updates += st.count;
     if (st.converged && !converged_at) converged_at = st.step;
@@ -314,6 +316,18 @@ void run_sample(const SampleArgs& a) {
     stats["metrics"] = metrics_json(m, band);
     write_json(stats, a.stats);
   }
+  // Floaters that find no surface are reseeded, wander, and are removed as strays.
+  if (sys.size() == 0)
+    fmt::print(stderr,
+               "zeroset: warning: {}: no floater stayed on the surface; F = 0 may have no "
+               "point inside the clip, or F may be undefined there (try zeroset eval)\n",
+               final_surface.label());
+  else if (!(last.median_residual <= sys.nominal_radius()))
+    fmt::print(stderr,
+               "zeroset: warning: {}: the floaters are not on F = 0 (median |F|/|grad F| "
+               "{:.3g}, sigma^ {:.3g}); the run may be too short (--steps), or F = 0 may have "
+               "no point inside the clip\n",
+               final_surface.label(), last.median_residual, sys.nominal_radius());
   say(fmt::format("{} floaters after {} steps ({}), sigma^ = {:.4g}, {:.0f} steps/s", sys.size(),
                   sys.steps_taken(),
                   converged_at ? fmt::format("settled at step {}", *converged_at) : "not settled",

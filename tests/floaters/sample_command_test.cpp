@@ -136,7 +136,24 @@ TEST_F(SampleCommand, RadiusOutsideItsRangeIsKeptInsideAndSaidSo) {
   EXPECT_NE(tiny.output.find("using 3e-09"), std::string::npos) << tiny.output;
   const auto fine = run("sample kummer --radius 0.1 --steps 2 -o " + path("f.ply"));
   EXPECT_EQ(fine.exit_code, 0) << fine.output;
-  EXPECT_EQ(fine.output.find("warning"), std::string::npos) << fine.output;
+  EXPECT_EQ(fine.output.find("is outside"), std::string::npos) << fine.output;
+}
+
+TEST_F(SampleCommand, FloatersThatFindNoSurfaceAreReported) {
+  // F ≥ 1 everywhere: floaters gather at the minimum of F, off any surface.
+  const auto none = run("sample \"x^2 + y^2 + z^2 + 1\" --clip sphere:1 --max-count 100 "
+                        "--steps 300 -o " + path("n.ply"));
+  EXPECT_EQ(none.exit_code, 0) << none.output;
+  EXPECT_NE(none.output.find("warning"), std::string::npos) << none.output;
+  EXPECT_NE(none.output.find("not on F = 0"), std::string::npos) << none.output;
+  // F undefined everywhere: every floater is removed.
+  const auto nan = run("sample \"sqrt(-1) + x\" --clip sphere:1 --steps 20 -o " + path("u.ply"));
+  EXPECT_EQ(nan.exit_code, 0) << nan.output;
+  EXPECT_NE(nan.output.find("no floater stayed"), std::string::npos) << nan.output;
+  // A settled sampling of a real surface says nothing of the kind.
+  const auto kummer = run("sample kummer --max-count 400 -o " + path("k.ply"));
+  EXPECT_EQ(kummer.exit_code, 0) << kummer.output;
+  EXPECT_EQ(kummer.output.find("warning"), std::string::npos) << kummer.output;
 }
 
 }  // namespace
