@@ -358,8 +358,8 @@ void register_sample_command(CLI::App& app) {
   a->radius_opt = cmd->add_option("--radius", a->radius,
                                   "Nominal floater radius sigma^ (the density knob; spacing is "
                                   "about 1.5 sigma^). Default: from the surface's area so that "
-                                  "about max-count/3 floaters would cover it uniformly. Kept within [1e-9, 1] "
-                                  "times the scene radius")
+                                  "about max-count/3 floaters would cover it uniformly. "
+                                  "Kept within [1e-9, 1] times the scene radius")
                       ->type_name("LENGTH");
   a->max_count_opt = cmd->add_option("--max-count", a->max_count, "Population cap (default 2000)")
                          ->check(CLI::Range(std::size_t{1}, std::size_t{100'000'000}));

@@ -139,6 +139,11 @@ void floaters_settings(ViewerState& state) {
   ImGui::Text("residual |F|/|grad F|: median %.1e, max %.1e", st.median_residual,
               st.max_residual);
   ImGui::Text("sigma-hat %.4g   %s", st.nominal_radius, st.converged ? "at rest" : "moving");
+  const bool off_surface = st.floater_count == 0 || !(st.median_residual <= st.nominal_radius);
+  if (st.floater_steps > 0 && off_surface)
+    ImGui::TextColored(kDimColor,
+                       "off F = 0: still finding the surface, or it has no point\n"
+                       "inside the clip (or F is undefined there)");
 
   FloaterOptions o = state.floater_options();
   bool changed = false;

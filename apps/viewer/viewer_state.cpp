@@ -148,7 +148,8 @@ class RateMeter {
       count_ = 0;
       start_ = now;
     }
-    return rate_;
+    // Until the first half second has passed, the rate so far.
+    return rate_ > 0 || elapsed <= 0 ? rate_ : count_ / elapsed;
   }
 
  private:
