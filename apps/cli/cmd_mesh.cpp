@@ -162,20 +162,40 @@ void run_mesh(const MeshArgs& a) {
   Scene scene = a.surface.resolve();
   const Surface& surface = scene.surface;
 
-  // Settings from a scene file's "mesh" object; flags given explicitly win.
+  // Settings from a scene file's "mesh" object, as the viewer saves them (cells, improve as
+  // true or false) or with improve as --improve takes it; flags given explicitly win.
   int resolution = a.resolution;
   std::string improve_text = a.improve, boundary_text = a.boundary;
+  std::string improve_where = "--improve", boundary_where = "--boundary";
   if (scene.settings.contains("mesh")) {
     const auto& j = scene.settings["mesh"];
-    try {
-      if (j.contains("resolution") && !a.resolution_opt->count()) resolution = j.at("resolution").get<int>();
-      if (j.contains("improve") && !a.improve_opt->count())
-        improve_text = j.at("improve").is_string() ? j.at("improve").get<std::string>()
-                                                   : std::to_string(j.at("improve").get<int>());
-      if (j.contains("boundary") && !a.boundary_opt->count()) boundary_text = j.at("boundary").get<std::string>();
-    } catch (const nlohmann::json::exception&) {
-      throw BadInput("scene: an entry of \"mesh\" has the wrong type (resolution: number, "
-                     "improve: \"auto\", \"off\" or a number, boundary: \"fix\" or \"constrain\")");
+    const std::string origin = "'" + a.surface.spec + "': /mesh";
+    if (!j.is_object()) throw BadInput(origin + ": expected an object");
+    if (j.contains("cells") && !a.resolution_opt->count()) {
+      const auto& c = j.at("cells");
+      if (!c.is_number_integer() || c.get<long long>() < 1 || c.get<long long>() > 32768)
+        throw BadInput(origin + "/cells: expected a whole number from 1 to 32768 (cells along "
+                                "the longest side of the clip box)");
+      resolution = c.get<int>();
+    }
+    if (j.contains("improve") && !a.improve_opt->count()) {
+      const auto& v = j.at("improve");
+      if (v.is_boolean())
+        improve_text = v.get<bool>() ? "auto" : "off";
+      else if (v.is_string())
+        improve_text = v.get<std::string>();
+      else if (v.is_number_integer())
+        improve_text = std::to_string(v.get<long long>());
+      else
+        throw BadInput(origin + "/improve: expected true, false, \"auto\", \"off\" or a number "
+                                "of steps");
+      improve_where = origin + "/improve";
+    }
+    if (j.contains("boundary") && !a.boundary_opt->count()) {
+      if (!j.at("boundary").is_string())
+        throw BadInput(origin + "/boundary: expected \"fix\" or \"constrain\"");
+      boundary_text = j.at("boundary").get<std::string>();
+      boundary_where = origin + "/boundary";
     }
   }
   if (resolution < 1)
@@ -183,7 +203,7 @@ void run_mesh(const MeshArgs& a) {
                           "must be at least 1 (cells along the longest side of the clip box)");
   if (resolution > 32768)
     throw InvalidArgument("--resolution", std::to_string(resolution), "must be at most 32768");
-  const std::optional<int> improve_steps = parse_improve(improve_text, "--improve");
+  const std::optional<int> improve_steps = parse_improve(improve_text, improve_where);
 
   PolygonizeOptions po;
   po.cells = resolution;
@@ -193,7 +213,7 @@ void run_mesh(const MeshArgs& a) {
   else if (a.grid == "sparse") po.mode = GridMode::kSparse;
   else if (a.grid != "auto") throw InvalidArgument("--grid", a.grid, "use auto, dense or sparse");
   ImproveOptions io;
-  io.boundary = parse_boundary(boundary_text, "--boundary");
+  io.boundary = parse_boundary(boundary_text, boundary_where);
   io.use_curvature = !a.no_curvature;
   io.use_singularity = !a.no_singularity;
   io.flip_edges = !a.no_flips;

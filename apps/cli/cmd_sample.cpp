@@ -11,6 +11,7 @@
 #include "zeroset/floaters/floaters.h"
 #include "zeroset/floaters/metrics.h"
 #include "zeroset/floaters/ply.h"
+#include "zeroset/floaters/settings.h"
 #include "zeroset/io/atomic_file.h"
 #include "zeroset/io/image.h"
 #include "zeroset/render/render.h"
@@ -56,29 +57,8 @@ struct SampleArgs {
 // command-line flags given explicitly win.
 FloaterOptions options_from(const SampleArgs& a, const Scene& scene) {
   FloaterOptions o;
-  if (scene.settings.contains("floaters")) {
-    const auto& j = scene.settings["floaters"];
-    auto get = [&](const char* key, auto& field) {
-      if (!j.contains(key)) return;
-      try {
-        j.at(key).get_to(field);
-      } catch (const nlohmann::json::exception&) {
-        throw BadInput(fmt::format("'{}': /floaters/{} has the wrong type", a.surface.spec, key));
-      }
-    };
-    get("radius", o.radius);
-    get("max_count", o.max_count);
-    get("seed_count", o.seed_count);
-    get("seed", o.seed);
-    get("cos_weight", o.cos_weight);
-    get("clip_projection", o.clip_projection);
-    get("snap_to_nodes", o.snap_to_nodes);
-    get("scaled_repulsion", o.scaled_repulsion);
-    get("radius_grading", o.radius_grading);
-    std::string adapt(to_string(o.radius_adapt));
-    get("radius_adapt", adapt);
-    o.radius_adapt = parse_radius_adapt(adapt, "'" + a.surface.spec + "': /floaters/radius_adapt");
-  }
+  if (scene.settings.contains("floaters"))
+    apply_floater_settings(scene.settings["floaters"], o, "'" + a.surface.spec + "'");
   if (a.radius_opt->count()) o.radius = a.radius;
   if (a.max_count_opt->count()) o.max_count = a.max_count;
   if (a.seed_count_opt->count()) o.seed_count = a.seed_count;

@@ -14,6 +14,7 @@
 #include "zeroset/error.h"
 #include "zeroset/expr/parse.h"
 #include "zeroset/floaters/ply.h"
+#include "zeroset/floaters/settings.h"
 #include "zeroset/io/atomic_file.h"
 #include "zeroset/mesh/improve.h"
 #include "zeroset/mesh/mesh_io.h"
@@ -605,47 +606,8 @@ View ViewerState::view() const {
 
 void ViewerState::apply_settings(const json& settings, const std::string& origin) {
   if (!settings.is_object()) return;
-  if (settings.contains("floaters")) {
-    const json& f = settings["floaters"];
-    if (!f.is_object()) bad_setting(origin, "/floaters", "expected an object");
-    FloaterOptions o = floater_options_;
-    if (f.contains("max_count")) {
-      const double n = setting_number(f["max_count"], origin, "/floaters/max_count");
-      if (n < 1 || n > 2e6 || n != std::floor(n))
-        bad_setting(origin, "/floaters/max_count", "expected a whole number in [1, 2000000]");
-      o.max_count = static_cast<std::size_t>(n);
-    }
-    if (f.contains("radius")) {
-      o.radius = setting_number(f["radius"], origin, "/floaters/radius");
-      if (o.radius < 0) bad_setting(origin, "/floaters/radius", "must be ≥ 0");
-    }
-    if (f.contains("seed")) {
-      const double s = setting_number(f["seed"], origin, "/floaters/seed");
-      if (s < 0 || s != std::floor(s) || s > 9.007e15)
-        bad_setting(origin, "/floaters/seed", "expected a whole number ≥ 0");
-      o.seed = static_cast<std::uint64_t>(s);
-    }
-    auto flag = [&](const char* key, bool& field) {
-      if (f.contains(key)) field = setting_bool(f[key], origin, std::string("/floaters/") + key);
-    };
-    flag("cos_weight", o.cos_weight);
-    flag("clip_projection", o.clip_projection);
-    flag("snap_to_nodes", o.snap_to_nodes);
-    flag("scaled_repulsion", o.scaled_repulsion);
-    if (f.contains("radius_grading")) {
-      o.radius_grading = setting_number(f["radius_grading"], origin, "/floaters/radius_grading");
-      if (o.radius_grading < 0) bad_setting(origin, "/floaters/radius_grading", "must be ≥ 0");
-    }
-    if (f.contains("radius_adapt")) {
-      try {
-        o.radius_adapt = parse_radius_adapt(
-            setting_string(f["radius_adapt"], origin, "/floaters/radius_adapt"));
-      } catch (const InvalidArgument& e) {
-        bad_setting(origin, "/floaters/radius_adapt", e.what());
-      }
-    }
-    floater_options_ = o;
-  }
+  if (settings.contains("floaters"))
+    apply_floater_settings(settings["floaters"], floater_options_, origin);
   if (settings.contains("mesh")) {
     const json& m = settings["mesh"];
     if (!m.is_object()) bad_setting(origin, "/mesh", "expected an object");
@@ -714,17 +676,7 @@ int ViewerState::floater_threads() const {
 
 json ViewerState::settings() const {
   json s = extra_settings_;
-  json& f = s["floaters"];
-  if (!f.is_object()) f = json::object();
-  f["max_count"] = floater_options_.max_count;
-  f["radius"] = floater_options_.radius;
-  f["seed"] = floater_options_.seed;
-  f["cos_weight"] = floater_options_.cos_weight;
-  f["clip_projection"] = floater_options_.clip_projection;
-  f["snap_to_nodes"] = floater_options_.snap_to_nodes;
-  f["scaled_repulsion"] = floater_options_.scaled_repulsion;
-  f["radius_grading"] = floater_options_.radius_grading;
-  f["radius_adapt"] = std::string(zeroset::to_string(floater_options_.radius_adapt));
+  s["floaters"] = floater_settings_to_json(floater_options_);
   json& m = s["mesh"];
   if (!m.is_object()) m = json::object();
   m["cells"] = mesh_settings_.cells;

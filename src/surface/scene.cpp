@@ -6,6 +6,7 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <initializer_list>
 #include <limits>
 
 #include "zeroset/error.h"
@@ -21,6 +22,19 @@ using json = nlohmann::json;
 
 [[noreturn]] void bad(const std::string& origin, const std::string& where, const std::string& what) {
   throw BadInput(fmt::format("{}: {}: {}", origin, where, what));
+}
+
+// An object's keys must be among `known`: a misspelt key would otherwise be ignored.
+void known_keys(const json& object, std::initializer_list<const char*> known,
+                const std::string& origin, const std::string& where) {
+  for (const auto& [key, value] : object.items()) {
+    if (std::find_if(known.begin(), known.end(), [&](const char* k) { return key == k; }) !=
+        known.end())
+      continue;
+    std::string list;
+    for (const char* k : known) list += (list.empty() ? "" : ", ") + std::string(k);
+    bad(origin, where + "/" + key, "unknown key; expected one of " + list);
+  }
 }
 
 double number_at(const json& j, const std::string& origin, const std::string& where) {
@@ -270,6 +284,7 @@ Scene scene_from_json(const json& j, const std::string& origin) {
         spec.value = number_at(p, origin, where);
         spec = default_range(name, spec.value);
       } else if (p.is_object()) {
+        known_keys(p, {"value", "min", "max"}, origin, where);
         if (p.contains("value")) spec.value = number_at(p["value"], origin, where + "/value");
         if (p.contains("min")) spec.min = number_at(p["min"], origin, where + "/min");
         if (p.contains("max")) spec.max = number_at(p["max"], origin, where + "/max");
@@ -299,6 +314,8 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   if (j.contains("camera")) {
     const json& c = j["camera"];
     if (!c.is_object()) bad(origin, "/camera", "expected an object");
+    known_keys(c, {"azimuth_deg", "elevation_deg", "distance", "fov_deg", "target"}, origin,
+               "/camera");
     auto num = [&](const char* key, double& out) {
       if (c.contains(key)) out = number_at(c[key], origin, std::string("/camera/") + key);
     };
@@ -323,7 +340,7 @@ Scene read_scene(const std::string& path) {
   json j;
   try {
     j = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // a syntax error, or a number beyond double's range
     throw BadInput(fmt::format("{}: not valid JSON: {}", path, e.what()));
   }
   return scene_from_json(j, path);

@@ -97,6 +97,10 @@ TEST(Scene, BadFilesSayWhatAndWhere) {
   expect_error(R"({"equation": "x - a", "parameters": {"b": 1}})", "/parameters/b");
   expect_error(R"({"equation": "x", "clip": ["sphere:-2"]})", "/clip/0");
   expect_error(R"({"equation": "x", "camera": {"fov_deg": 400}})", "/camera/fov_deg");
+  expect_error(R"({"equation": "x", "camera": {"azimuth": 30}})", "/camera/azimuth: unknown key");
+  expect_error(R"({"equation": "x - a", "parameters": {"a": {"val": 1}}})",
+               "/parameters/a/val: unknown key");
+  expect_error(R"({"equation": "x - a", "parameters": {"a": 1e999}})", "not valid JSON");
   expect_error(R"([1, 2])", "JSON object");
   std::filesystem::remove(path);
   try {

@@ -1,0 +1,102 @@
+#include "zeroset/floaters/settings.h"
+
+#include <fmt/core.h>
+
+#include <cmath>
+#include <cstdint>
+
+#include "zeroset/error.h"
+
+namespace zeroset {
+namespace {
+
+using nlohmann::json;
+
+[[noreturn]] void fail(const std::string& origin, const std::string& path, const std::string& why) {
+  throw BadInput(origin + ": " + path + ": " + why);
+}
+
+double number(const json& j, const std::string& origin, const std::string& path) {
+  if (!j.is_number()) fail(origin, path, "expected a number");
+  const double v = j.get<double>();
+  if (!std::isfinite(v)) fail(origin, path, "expected a finite number");
+  return v;
+}
+
+double non_negative(const json& j, const std::string& origin, const std::string& path) {
+  const double v = number(j, origin, path);
+  if (v < 0) fail(origin, path, "must not be negative");
+  return v;
+}
+
+// A whole number in [lo, hi] (hi ≤ 2^53, so every such double is exact).
+std::uint64_t whole(const json& j, const std::string& origin, const std::string& path,
+                    double lo, double hi) {
+  const double v = j.is_number() ? j.get<double>() : std::nan("");
+  if (!(v >= lo && v <= hi && v == std::floor(v)))
+    fail(origin, path, fmt::format("expected a whole number from {:.0f} to {:.0f}", lo, hi));
+  return static_cast<std::uint64_t>(v);
+}
+
+bool boolean(const json& j, const std::string& origin, const std::string& path) {
+  if (!j.is_boolean()) fail(origin, path, "expected true or false");
+  return j.get<bool>();
+}
+
+}  // namespace
+
+void apply_floater_settings(const json& floaters, FloaterOptions& options,
+                            const std::string& origin) {
+  const std::string base = "/floaters";
+  if (!floaters.is_object()) fail(origin, base, "expected an object");
+  FloaterOptions o = options;
+  for (const auto& [key, value] : floaters.items()) {
+    const std::string p = base + "/" + key;
+    if (key == "max_count")
+      o.max_count = whole(value, origin, p, 1, 1e8);
+    else if (key == "seed_count")
+      o.seed_count = whole(value, origin, p, 0, 1e8);
+    else if (key == "seed")
+      o.seed = whole(value, origin, p, 0, 9007199254740992.0);
+    else if (key == "radius")
+      o.radius = non_negative(value, origin, p);
+    else if (key == "radius_grading")
+      o.radius_grading = non_negative(value, origin, p);
+    else if (key == "cos_weight")
+      o.cos_weight = boolean(value, origin, p);
+    else if (key == "clip_projection")
+      o.clip_projection = boolean(value, origin, p);
+    else if (key == "snap_to_nodes")
+      o.snap_to_nodes = boolean(value, origin, p);
+    else if (key == "scaled_repulsion")
+      o.scaled_repulsion = boolean(value, origin, p);
+    else if (key == "radius_adapt") {
+      if (!value.is_string()) fail(origin, p, "expected wh, curvature, singular or mixed");
+      try {
+        o.radius_adapt = parse_radius_adapt(value.get<std::string>(), p);
+      } catch (const InvalidArgument&) {
+        fail(origin, p, "expected wh, curvature, singular or mixed");
+      }
+    } else {
+      fail(origin, p,
+           "unknown key (known: max_count, seed_count, seed, radius, radius_grading, "
+           "cos_weight, clip_projection, snap_to_nodes, scaled_repulsion, radius_adapt)");
+    }
+  }
+  options = o;
+}
+
+json floater_settings_to_json(const FloaterOptions& o) {
+  return {{"max_count", o.max_count},
+          {"seed_count", o.seed_count},
+          {"seed", o.seed},
+          {"radius", o.radius},
+          {"radius_grading", o.radius_grading},
+          {"cos_weight", o.cos_weight},
+          {"clip_projection", o.clip_projection},
+          {"snap_to_nodes", o.snap_to_nodes},
+          {"scaled_repulsion", o.scaled_repulsion},
+          {"radius_adapt", std::string(to_string(o.radius_adapt))}};
+}
+
+}  // namespace zeroset
