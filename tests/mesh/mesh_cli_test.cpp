@@ -41,6 +41,26 @@ TEST_F(MeshCli, WritesMeshAndStats) {
   EXPECT_TRUE(j["topology_after"]["watertight"].get<bool>());
 }
 
+TEST_F(MeshCli, ReadsTheMeshSettingsTheViewerSaves) {
+  // The viewer writes {"cells": N, "improve": true|false}; flags given explicitly win.
+  std::ofstream(path("scene.json"))
+      << R"({"name": "sphere", "mesh": {"cells": 12, "improve": true}})";
+  auto stats = [&](const std::string& flags) {
+    const auto r = run(path("scene.json") + " " + flags + " -o " + path("s.ply") + " --stats " +
+                       path("s.json"));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    std::ifstream in(path("s.json"));
+    return nlohmann::json::parse(in);
+  };
+  const nlohmann::json improved = stats("");
+  EXPECT_EQ(improved["polygonize"]["resolution"].get<int>(), 12);
+  ASSERT_TRUE(improved.contains("improve")) << improved.dump();
+  EXPECT_GT(improved["improve"]["steps"].get<int>(), 1);  // true: until converged, not 1 step
+  const nlohmann::json flagged = stats("--resolution 10 --improve off");
+  EXPECT_EQ(flagged["polygonize"]["resolution"].get<int>(), 10);
+  EXPECT_FALSE(flagged.contains("improve"));
+}
+
 TEST_F(MeshCli, RefineStepsZeroIsLinearInterpolationOffTheSurface) {
   // Linear interpolation leaves the vertices of a sphere inside it, off F = 0 by about h²;
   // the default refinement puts them on it to rounding.
