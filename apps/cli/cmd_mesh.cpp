@@ -18,6 +18,7 @@
 #include "zeroset/mesh/polygonize.h"
 #include "zeroset/mesh/quality.h"
 #include "zeroset/render/render.h"
+#include "zeroset/surface/json_read.h"
 
 namespace zeroset::cli {
 namespace {
@@ -169,15 +170,12 @@ void run_mesh(const MeshArgs& a) {
   std::string improve_where = "--improve", boundary_where = "--boundary";
   if (scene.settings.contains("mesh")) {
     const auto& j = scene.settings["mesh"];
-    const std::string origin = "'" + a.surface.spec + "': /mesh";
-    if (!j.is_object()) throw BadInput(origin + ": expected an object");
-    if (j.contains("cells") && !a.resolution_opt->count()) {
-      const auto& c = j.at("cells");
-      if (!c.is_number_integer() || c.get<long long>() < 1 || c.get<long long>() > 32768)
-        throw BadInput(origin + "/cells: expected a whole number from 1 to 32768 (cells along "
-                                "the longest side of the clip box)");
-      resolution = c.get<int>();
-    }
+    const std::string origin = "'" + a.surface.spec + "'";
+    if (!j.is_object()) json_read::fail(origin, "/mesh", "expected an object");
+    json_read::known_keys(j, {"cells", "improve", "boundary"}, origin, "/mesh");
+    if (j.contains("cells") && !a.resolution_opt->count())
+      resolution =
+          static_cast<int>(json_read::whole(j.at("cells"), origin, "/mesh/cells", 1, 32768));
     if (j.contains("improve") && !a.improve_opt->count()) {
       const auto& v = j.at("improve");
       if (v.is_boolean())
@@ -187,15 +185,13 @@ void run_mesh(const MeshArgs& a) {
       else if (v.is_number_integer())
         improve_text = std::to_string(v.get<long long>());
       else
-        throw BadInput(origin + "/improve: expected true, false, \"auto\", \"off\" or a number "
-                                "of steps");
-      improve_where = origin + "/improve";
+        json_read::fail(origin, "/mesh/improve",
+                        "expected true, false, \"auto\", \"off\" or a number of steps");
+      improve_where = origin + ": /mesh/improve";
     }
     if (j.contains("boundary") && !a.boundary_opt->count()) {
-      if (!j.at("boundary").is_string())
-        throw BadInput(origin + "/boundary: expected \"fix\" or \"constrain\"");
-      boundary_text = j.at("boundary").get<std::string>();
-      boundary_where = origin + "/boundary";
+      boundary_text = json_read::string(j.at("boundary"), origin, "/mesh/boundary");
+      boundary_where = origin + ": /mesh/boundary";
     }
   }
   if (resolution < 1)

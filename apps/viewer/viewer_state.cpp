@@ -20,6 +20,7 @@
 #include "zeroset/mesh/mesh_io.h"
 #include "zeroset/mesh/mesh_ops.h"
 #include "zeroset/render/pov_export.h"
+#include "zeroset/surface/json_read.h"
 #include "zeroset/surface/catalog.h"
 
 namespace zeroset::viewer {
@@ -87,31 +88,14 @@ constexpr double kFpsSmoothing = 0.1;
 
 using json = nlohmann::json;
 
-[[noreturn]] void bad_setting(const std::string& origin, const std::string& where,
-                              const std::string& what) {
-  throw BadInput(fmt::format("{}: {}: {}", origin, where, what));
-}
-
-double setting_number(const json& j, const std::string& origin, const std::string& where) {
-  if (!j.is_number() || !std::isfinite(j.get<double>()))
-    bad_setting(origin, where, "expected a finite number");
-  return j.get<double>();
-}
-
-bool setting_bool(const json& j, const std::string& origin, const std::string& where) {
-  if (!j.is_boolean()) bad_setting(origin, where, "expected true or false");
-  return j.get<bool>();
-}
-
-std::string setting_string(const json& j, const std::string& origin, const std::string& where) {
-  if (!j.is_string()) bad_setting(origin, where, "expected a string");
-  return j.get<std::string>();
-}
+using json_read::boolean;
+using json_read::fail;
+using json_read::number;
 
 Color setting_color(const json& j, const std::string& origin, const std::string& where) {
-  if (!j.is_array() || j.size() != 3) bad_setting(origin, where, "expected [r, g, b]");
+  if (!j.is_array() || j.size() != 3) fail(origin, where, "expected [r, g, b]");
   Color c;
-  for (int k = 0; k < 3; ++k) c[k] = setting_number(j[k], origin, fmt::format("{}/{}", where, k));
+  for (int k = 0; k < 3; ++k) c[k] = number(j[k], origin, fmt::format("{}/{}", where, k));
   return c;
 }
 
@@ -610,50 +594,50 @@ void ViewerState::apply_settings(const json& settings, const std::string& origin
     apply_floater_settings(settings["floaters"], floater_options_, origin);
   if (settings.contains("mesh")) {
     const json& m = settings["mesh"];
-    if (!m.is_object()) bad_setting(origin, "/mesh", "expected an object");
-    if (m.contains("cells")) {
-      const double c = setting_number(m["cells"], origin, "/mesh/cells");
-      if (c < 4 || c > 512 || c != std::floor(c))
-        bad_setting(origin, "/mesh/cells", "expected a whole number in [4, 512]");
-      mesh_settings_.cells = static_cast<int>(c);
-    }
-    if (m.contains("improve")) mesh_settings_.improve = setting_bool(m["improve"], origin, "/mesh/improve");
+    if (!m.is_object()) fail(origin, "/mesh", "expected an object");
+    if (m.contains("cells"))
+      mesh_settings_.cells =
+          static_cast<int>(json_read::whole(m["cells"], origin, "/mesh/cells", 4, 512));
+    if (m.contains("improve"))
+      mesh_settings_.improve = boolean(m["improve"], origin, "/mesh/improve");
   }
   if (settings.contains("animation")) {
     const json& a = settings["animation"];
-    if (!a.is_object()) bad_setting(origin, "/animation", "expected an object");
+    if (!a.is_object()) fail(origin, "/animation", "expected an object");
     if (a.contains("parameter"))
-      animation_.parameter = setting_string(a["parameter"], origin, "/animation/parameter");
+      animation_.parameter = json_read::string(a["parameter"], origin, "/animation/parameter");
     if (a.contains("speed")) {
-      const double s = setting_number(a["speed"], origin, "/animation/speed");
-      if (!(s > 0 && s <= 100)) bad_setting(origin, "/animation/speed", "must lie in (0, 100]");
+      const double s = number(a["speed"], origin, "/animation/speed");
+      if (!(s > 0 && s <= 100)) fail(origin, "/animation/speed", "must lie in (0, 100]");
       animation_.speed = s;
     }
-    if (a.contains("loop")) animation_.loop = setting_bool(a["loop"], origin, "/animation/loop");
+    if (a.contains("loop")) animation_.loop = boolean(a["loop"], origin, "/animation/loop");
   }
   if (settings.contains("viewer")) {
     const json& v = settings["viewer"];
-    if (!v.is_object()) bad_setting(origin, "/viewer", "expected an object");
+    if (!v.is_object()) fail(origin, "/viewer", "expected an object");
     if (v.contains("mode")) {
       try {
-        mode_ = parse_mode(setting_string(v["mode"], origin, "/viewer/mode"));
+        mode_ = parse_mode(json_read::string(v["mode"], origin, "/viewer/mode"));
       } catch (const InvalidArgument& e) {
-        bad_setting(origin, "/viewer/mode", e.what());
+        fail(origin, "/viewer/mode", e.what());
       }
     }
     if (v.contains("draw")) {
-      const std::string d = setting_string(v["draw"], origin, "/viewer/draw");
-      if (d != "disks" && d != "points") bad_setting(origin, "/viewer/draw", "expected disks or points");
+      const std::string d = json_read::string(v["draw"], origin, "/viewer/draw");
+      if (d != "disks" && d != "points") fail(origin, "/viewer/draw", "expected disks or points");
       display_.draw_points = d == "points";
     }
     if (v.contains("disk_scale")) {
-      const double s = setting_number(v["disk_scale"], origin, "/viewer/disk_scale");
-      if (!(s > 0 && s <= 10)) bad_setting(origin, "/viewer/disk_scale", "must lie in (0, 10]");
+      const double s = number(v["disk_scale"], origin, "/viewer/disk_scale");
+      if (!(s > 0 && s <= 10)) fail(origin, "/viewer/disk_scale", "must lie in (0, 10]");
       display_.disk_scale = s;
     }
-    if (v.contains("wireframe")) display_.wireframe = setting_bool(v["wireframe"], origin, "/viewer/wireframe");
+    if (v.contains("wireframe"))
+      display_.wireframe = boolean(v["wireframe"], origin, "/viewer/wireframe");
     if (v.contains("lights_follow_camera"))
-      set_lights_follow_camera(setting_bool(v["lights_follow_camera"], origin, "/viewer/lights_follow_camera"));
+      set_lights_follow_camera(
+          boolean(v["lights_follow_camera"], origin, "/viewer/lights_follow_camera"));
     if (v.contains("front")) look_.front.diffuse = setting_color(v["front"], origin, "/viewer/front");
     if (v.contains("back")) look_.back.diffuse = setting_color(v["back"], origin, "/viewer/back");
     if (v.contains("background"))

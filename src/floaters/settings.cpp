@@ -1,46 +1,24 @@
 #include "zeroset/floaters/settings.h"
 
-#include <fmt/core.h>
-
 #include <cmath>
 #include <cstdint>
 
 #include "zeroset/error.h"
+#include "zeroset/surface/json_read.h"
 
 namespace zeroset {
 namespace {
 
 using nlohmann::json;
 
-[[noreturn]] void fail(const std::string& origin, const std::string& path, const std::string& why) {
-  throw BadInput(origin + ": " + path + ": " + why);
-}
-
-double number(const json& j, const std::string& origin, const std::string& path) {
-  if (!j.is_number()) fail(origin, path, "expected a number");
-  const double v = j.get<double>();
-  if (!std::isfinite(v)) fail(origin, path, "expected a finite number");
-  return v;
-}
+using json_read::boolean;
+using json_read::fail;
+using json_read::whole;
 
 double non_negative(const json& j, const std::string& origin, const std::string& path) {
-  const double v = number(j, origin, path);
+  const double v = json_read::number(j, origin, path);
   if (v < 0) fail(origin, path, "must not be negative");
   return v;
-}
-
-// A whole number in [lo, hi] (hi ≤ 2^53, so every such double is exact).
-std::uint64_t whole(const json& j, const std::string& origin, const std::string& path,
-                    double lo, double hi) {
-  const double v = j.is_number() ? j.get<double>() : std::nan("");
-  if (!(v >= lo && v <= hi && v == std::floor(v)))
-    fail(origin, path, fmt::format("expected a whole number from {:.0f} to {:.0f}", lo, hi));
-  return static_cast<std::uint64_t>(v);
-}
-
-bool boolean(const json& j, const std::string& origin, const std::string& path) {
-  if (!j.is_boolean()) fail(origin, path, "expected true or false");
-  return j.get<bool>();
 }
 
 }  // namespace

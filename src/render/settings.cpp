@@ -7,35 +7,16 @@
 #include <vector>
 
 #include "zeroset/error.h"
+#include "zeroset/surface/json_read.h"
 
 namespace zeroset {
 namespace {
 
 using nlohmann::json;
 
-[[noreturn]] void fail(const std::string& origin, const std::string& path, const std::string& why) {
-  throw BadInput(origin + ": " + path + ": " + why);
-}
-
-double number(const json& j, const std::string& origin, const std::string& path, double lo,
-              double hi) {
-  if (!j.is_number()) fail(origin, path, "expected a number");
-  const double v = j.get<double>();
-  if (!std::isfinite(v) || v < lo || v > hi)
-    fail(origin, path, "must lie in [" + json(lo).dump() + ", " + json(hi).dump() + "]");
-  return v;
-}
-
-Vec3 vector3(const json& j, const std::string& origin, const std::string& path) {
-  if (!j.is_array() || j.size() != 3) fail(origin, path, "expected [x, y, z]");
-  Vec3 v;
-  for (int k = 0; k < 3; ++k) {
-    if (!j[static_cast<size_t>(k)].is_number()) fail(origin, path, "expected [x, y, z]");
-    v[k] = j[static_cast<size_t>(k)].get<double>();
-  }
-  if (!v.allFinite()) fail(origin, path, "components must be finite");
-  return v;
-}
+using json_read::fail;
+using json_read::number_in;
+using json_read::vec3;
 
 Color color(const json& j, const std::string& origin, const std::string& path) {
   if (j.is_string()) {
@@ -46,7 +27,7 @@ Color color(const json& j, const std::string& origin, const std::string& path) {
     }
   }
   if (!j.is_array()) fail(origin, path, "expected '#rrggbb' or [r, g, b]");
-  const Vec3 c = vector3(j, origin, path);
+  const Vec3 c = vec3(j, origin, path);
   if ((c.array() < 0).any() || (c.array() > 1).any())
     fail(origin, path, "linear colour components must lie in [0, 1]");
   return c;
@@ -59,11 +40,11 @@ void material(const json& j, Material& m, const std::string& origin, const std::
     if (key == "diffuse")
       m.diffuse = color(value, origin, p);
     else if (key == "ambient")
-      m.ambient = number(value, origin, p, 0, 1);
+      m.ambient = number_in(value, origin, p, 0, 1);
     else if (key == "specular")
-      m.specular = number(value, origin, p, 0, 10);
+      m.specular = number_in(value, origin, p, 0, 10);
     else if (key == "shininess")
-      m.shininess = number(value, origin, p, 0, 10000);
+      m.shininess = number_in(value, origin, p, 0, 10000);
     else
       fail(origin, p, "unknown key (known: diffuse, ambient, specular, shininess)");
   }
@@ -122,8 +103,7 @@ void apply_render_settings(const json& render, RenderOptions& o, const std::stri
       o.width = static_cast<int>(w);
       o.height = static_cast<int>(h);
     } else if (key == "samples") {
-      o.samples = static_cast<int>(number(value, origin, p, 1, 16));
-      if (value.get<double>() != o.samples) fail(origin, p, "expected a whole number");
+      o.samples = static_cast<int>(json_read::whole(value, origin, p, 1, 16));
     } else if (key == "background") {
       o.background = color(value, origin, p);
     } else if (key == "front") {
@@ -140,13 +120,12 @@ void apply_render_settings(const json& render, RenderOptions& o, const std::stri
         Light light;
         for (const auto& [lk, lv] : l.items()) {
           if (lk == "direction") {
-            light.direction = vector3(lv, origin, lp + "/direction");
+            light.direction = vec3(lv, origin, lp + "/direction");
             if (!(light.direction.norm() > 0)) fail(origin, lp + "/direction", "must not be zero");
           } else if (lk == "color") {
             light.color = color(lv, origin, lp + "/color");
           } else if (lk == "follows_camera") {
-            if (!lv.is_boolean()) fail(origin, lp + "/follows_camera", "expected true or false");
-            light.follows_camera = lv.get<bool>();
+            light.follows_camera = json_read::boolean(lv, origin, lp + "/follows_camera");
           } else {
             fail(origin, lp + "/" + lk, "unknown key (known: direction, color, follows_camera)");
           }

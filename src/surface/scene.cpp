@@ -6,7 +6,6 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
-#include <initializer_list>
 #include <limits>
 
 #include "zeroset/error.h"
@@ -14,41 +13,17 @@
 #include "zeroset/expr/polynomial.h"
 #include "zeroset/io/atomic_file.h"
 #include "zeroset/surface/catalog.h"
+#include "zeroset/surface/json_read.h"
 
 namespace zeroset {
 namespace {
 
 using json = nlohmann::json;
 
-[[noreturn]] void bad(const std::string& origin, const std::string& where, const std::string& what) {
-  throw BadInput(fmt::format("{}: {}: {}", origin, where, what));
-}
-
-// An object's keys must be among `known`: a misspelt key would otherwise be ignored.
-void known_keys(const json& object, std::initializer_list<const char*> known,
-                const std::string& origin, const std::string& where) {
-  for (const auto& [key, value] : object.items()) {
-    if (std::find_if(known.begin(), known.end(), [&](const char* k) { return key == k; }) !=
-        known.end())
-      continue;
-    std::string list;
-    for (const char* k : known) list += (list.empty() ? "" : ", ") + std::string(k);
-    bad(origin, where + "/" + key, "unknown key; expected one of " + list);
-  }
-}
-
-double number_at(const json& j, const std::string& origin, const std::string& where) {
-  if (!j.is_number()) bad(origin, where, "expected a number");
-  const double v = j.get<double>();
-  if (!std::isfinite(v)) bad(origin, where, "expected a finite number");
-  return v;
-}
-
-Vec3 vec3_at(const json& j, const std::string& origin, const std::string& where) {
-  if (!j.is_array() || j.size() != 3) bad(origin, where, "expected [x, y, z]");
-  return {number_at(j[0], origin, where + "/0"), number_at(j[1], origin, where + "/1"),
-          number_at(j[2], origin, where + "/2")};
-}
+using json_read::fail;
+using json_read::known_keys;
+using json_read::number;
+using json_read::vec3;
 
 // Default slider range for a parameter the user introduced: around its value.
 ParamSpec default_range(const std::string& name, double value) {
@@ -248,49 +223,49 @@ json scene_to_json(const Scene& scene) {
 }
 
 Scene scene_from_json(const json& j, const std::string& origin) {
-  if (!j.is_object()) bad(origin, "/", "a scene file is a JSON object");
+  if (!j.is_object()) fail(origin, "/", "a scene file is a JSON object");
   Scene scene;
   Surface& s = scene.surface;
   const CatalogEntry* entry = nullptr;
   if (j.contains("name")) {
-    if (!j["name"].is_string()) bad(origin, "/name", "expected a string");
+    if (!j["name"].is_string()) fail(origin, "/name", "expected a string");
     entry = find_catalog_entry(j["name"].get<std::string>());
   }
   if (j.contains("equation")) {
-    if (!j["equation"].is_string()) bad(origin, "/equation", "expected a string");
+    if (!j["equation"].is_string()) fail(origin, "/equation", "expected a string");
     const std::string eq = j["equation"].get<std::string>();
     if (entry && eq == entry->equation) {
       s = make_surface(*entry);
     } else {
       ParseResult r = parse_field(eq);
-      if (!r.ok()) bad(origin, "/equation", "cannot read the equation:\n" + r.format());
+      if (!r.ok()) fail(origin, "/equation", "cannot read the equation:\n" + r.format());
       s.field = *r.field;
       if (j.contains("name") && j["name"].is_string()) s.name = j["name"].get<std::string>();
     }
   } else if (entry) {
     s = make_surface(*entry);
   } else {
-    bad(origin, "/", "needs \"equation\" (or the \"name\" of a catalog surface)");
+    fail(origin, "/", "needs \"equation\" (or the \"name\" of a catalog surface)");
   }
   if (j.contains("parameters")) {
     const json& ps = j["parameters"];
-    if (!ps.is_object()) bad(origin, "/parameters", "expected an object");
+    if (!ps.is_object()) fail(origin, "/parameters", "expected an object");
     for (const auto& [name, p] : ps.items()) {
       const std::string where = "/parameters/" + name;
       if (s.field.parameter_index(name) < 0)
-        bad(origin, where, "the equation has no parameter '" + name + "'");
+        fail(origin, where, "the equation has no parameter '" + name + "'");
       ParamSpec spec{name, std::nan(""), 0, 1};
       if (p.is_number()) {
-        spec.value = number_at(p, origin, where);
+        spec.value = number(p, origin, where);
         spec = default_range(name, spec.value);
       } else if (p.is_object()) {
         known_keys(p, {"value", "min", "max"}, origin, where);
-        if (p.contains("value")) spec.value = number_at(p["value"], origin, where + "/value");
-        if (p.contains("min")) spec.min = number_at(p["min"], origin, where + "/min");
-        if (p.contains("max")) spec.max = number_at(p["max"], origin, where + "/max");
-        if (!(spec.min < spec.max)) bad(origin, where, "needs min < max");
+        if (p.contains("value")) spec.value = number(p["value"], origin, where + "/value");
+        if (p.contains("min")) spec.min = number(p["min"], origin, where + "/min");
+        if (p.contains("max")) spec.max = number(p["max"], origin, where + "/max");
+        if (!(spec.min < spec.max)) fail(origin, where, "needs min < max");
       } else {
-        bad(origin, where, "expected a number or {\"value\", \"min\", \"max\"}");
+        fail(origin, where, "expected a number or {\"value\", \"min\", \"max\"}");
       }
       if (std::isfinite(spec.value)) s.field.set_parameter(name, spec.value);
       std::erase_if(s.ranges, [&](const ParamSpec& r) { return r.name == name; });
@@ -299,33 +274,33 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   }
   if (j.contains("clip")) {
     const json& cj = j["clip"];
-    if (!cj.is_array()) bad(origin, "/clip", "expected a list of clip specs like \"sphere:3\"");
+    if (!cj.is_array()) fail(origin, "/clip", "expected a list of clip specs like \"sphere:3\"");
     Clip c;
     for (size_t i = 0; i < cj.size(); ++i) {
-      if (!cj[i].is_string()) bad(origin, fmt::format("/clip/{}", i), "expected a string");
+      if (!cj[i].is_string()) fail(origin, fmt::format("/clip/{}", i), "expected a string");
       try {
         c.add(cj[i].get<std::string>());
       } catch (const BadInput& e) {
-        bad(origin, fmt::format("/clip/{}", i), e.what());
+        fail(origin, fmt::format("/clip/{}", i), e.what());
       }
     }
     s.clip = c;
   }
   if (j.contains("camera")) {
     const json& c = j["camera"];
-    if (!c.is_object()) bad(origin, "/camera", "expected an object");
+    if (!c.is_object()) fail(origin, "/camera", "expected an object");
     known_keys(c, {"azimuth_deg", "elevation_deg", "distance", "fov_deg", "target"}, origin,
                "/camera");
     auto num = [&](const char* key, double& out) {
-      if (c.contains(key)) out = number_at(c[key], origin, std::string("/camera/") + key);
+      if (c.contains(key)) out = number(c[key], origin, std::string("/camera/") + key);
     };
     num("azimuth_deg", s.camera.azimuth_deg);
     num("elevation_deg", s.camera.elevation_deg);
     num("distance", s.camera.distance);
     num("fov_deg", s.camera.fov_deg);
     if (!(s.camera.fov_deg > 0 && s.camera.fov_deg < 180))
-      bad(origin, "/camera/fov_deg", "must lie between 0 and 180 degrees");
-    if (c.contains("target")) s.camera.target = vec3_at(c["target"], origin, "/camera/target");
+      fail(origin, "/camera/fov_deg", "must lie between 0 and 180 degrees");
+    if (c.contains("target")) s.camera.target = vec3(c["target"], origin, "/camera/target");
   }
   sync_ranges(s);
   for (const auto& [key, value] : j.items())
