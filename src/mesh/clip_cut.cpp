@@ -15,6 +15,9 @@ namespace {
 
 enum Side : std::uint8_t { kIn = 0, kOn = 1, kOut = 2 };
 
+// |cos| of the angle between ∇F and ∇G above which F = 0 counts as running along the clip.
+constexpr double kSheetCosine = 0.9;
+
 // The point where G = 0 on the segment from `in` (G < 0) to `out` (G > 0), by bisection
 // with a secant guess (G is 1-Lipschitz and piecewise smooth for spheres and planes).
 Vec3 clip_crossing(const Clip& clip, const Vec3& in, const Vec3& out) {
@@ -119,11 +122,31 @@ ClipCutStats cut_at_clip(Mesh& mesh, const Surface& surface, double snap_distanc
   for (const auto& tri : mesh.triangles)
     if (side[tri[0]] != kIn || side[tri[1]] != kIn || side[tri[2]] != kIn) band.push_back(tri);
   const MeshAdjacency adj = build_adjacency(mesh.positions.size(), band);
+  // A triangle with every vertex on the clip lies in the clip surface. It belongs to the mesh
+  // only where F = 0 runs along the clip there (∇F parallel to ∇G at its centre); where the
+  // surface crosses the clip, it is a sliver between boundary vertices (a grid face on a box
+  // clip's plane, a vertex snapped next to its neighbours), often turned against ∇F.
+  EvaluatorPool pool(surface.field, workers);
+  auto in_clip_sheet = [&](const std::array<std::uint32_t, 3>& tri) {
+    const Vec3 c =
+        (mesh.positions[tri[0]] + mesh.positions[tri[1]] + mesh.positions[tri[2]]) / 3.0;
+    Vec3 gf, gg;
+    pool.local().value_gradient(c, gf);
+    clip.value_gradient(c, gg);
+    const double norms = gf.norm() * gg.norm();
+    return !(norms > 0) || std::abs(gf.dot(gg)) >= kSheetCosine * norms;
+  };
+  std::vector<std::uint8_t> all_on_kept(band.size(), 0);
+  for (size_t t = 0; t < band.size(); ++t) {
+    const auto& tri = band[t];
+    if (side[tri[0]] == kOn && side[tri[1]] == kOn && side[tri[2]] == kOn)
+      all_on_kept[t] = in_clip_sheet(tri);
+  }
   auto kept = [&](std::uint32_t t) {
     const auto& tri = band[t];
     bool any_in = false, all_on = true;
     for (std::uint32_t v : tri) any_in |= side[v] == kIn, all_on &= side[v] == kOn;
-    return any_in || all_on;
+    return any_in || (all_on && all_on_kept[t]);
   };
   // A vertex moved onto the clip must keep a single fan of triangles: where the clip curve
   // passes it so that kept and dropped triangles alternate, it is cut normally instead.
@@ -162,7 +185,6 @@ ClipCutStats cut_at_clip(Mesh& mesh, const Surface& surface, double snap_distanc
   mesh.positions.resize(mesh.positions.size() + cut_edges.size());
   mesh.is_boundary.resize(mesh.positions.size(), 0);
 
-  EvaluatorPool pool(surface.field, workers);
   const long long ncut = static_cast<long long>(cut_edges.size());
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 64)
   for (long long c = 0; c < ncut; ++c) {
@@ -196,11 +218,15 @@ ClipCutStats cut_at_clip(Mesh& mesh, const Surface& surface, double snap_distanc
     bool any_in = false, any_out = false, all_on = true;
     for (std::uint32_t v : tri)
       any_in |= side[v] == kIn, any_out |= side[v] == kOut, all_on &= side[v] == kOn;
+    if (all_on) {
+      if (in_clip_sheet(tri)) out.push_back(tri);
+      continue;
+    }
     if (!any_out) {
       out.push_back(tri);
       continue;
     }
-    if (!any_in || all_on) continue;
+    if (!any_in) continue;
     std::uint32_t poly[4];
     int n = 0;
     for (int k = 0; k < 3; ++k) {

@@ -10,6 +10,7 @@
 #include "zeroset/error.h"
 #include "zeroset/mesh/adjacency.h"
 #include "zeroset/mesh/polygonize.h"
+#include "zeroset/mesh/quality.h"
 
 namespace zeroset {
 namespace {
@@ -134,6 +135,24 @@ TEST(Polygonize, BoxClipCutsAlongItsPlanes) {
     }
   }
   EXPECT_EQ(mesh_topology(m).non_manifold_edges, 0u);
+}
+
+TEST(Polygonize, BoxClipLeavesNoSliversInItsPlanes) {
+  // Grid faces lie in a box clip's planes: triangles there whose three vertices are all on the
+  // clip are slivers between boundary vertices, often facing against ∇F, and are dropped.
+  for (double half : {2.5, 3.0}) {
+    Surface k = test::kummer(1.5);
+    k.clip = Clip::box(Box3::cube(half));
+    const Mesh m = polygonize(k, {.cells = 64});
+    const MeshQuality q = measure_quality(m, k);
+    EXPECT_EQ(q.flipped_triangles, 0u) << half;
+    EXPECT_GT(q.smallest_angle_deg, 0.0) << half;
+    EXPECT_EQ(mesh_topology(m).non_manifold_edges, 0u) << half;
+  }
+  // Where the surface lies in the clip's plane, its triangles stay: z = 1 on the box's top.
+  const Surface top = test::equation("z - 1", Clip::box(Box3::cube(1)));
+  const Mesh m = polygonize(top, {.cells = 20});
+  EXPECT_EQ(m.triangle_count(), 800u);
 }
 
 TEST(Polygonize, AmbiguousFacesGiveAConsistentManifold) {

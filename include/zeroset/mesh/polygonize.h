@@ -34,6 +34,9 @@
 ///    `clip_snap_fraction` cells of the clip surface is moved onto that curve instead of
 ///    cutting next to it. Those vertices are flagged `is_boundary`; they satisfy |G| ≤ 1e-12
 ///    (G is exactly zero up to rounding after the final projection onto the clip part).
+///    A triangle with all three vertices on the clip is kept only where F = 0 runs along the
+///    clip there (∇F and ∇G within 26° of parallel); elsewhere it is a sliver in the clip
+///    surface (a grid face in a box clip's plane), often facing against ∇F, and is dropped.
 ///  - The sparse path samples the grid in bricks of `brick_cells`³ cells and only where the
 ///    surface may be. A brick is kept when the signs of F at its 8 corners and its centre
 ///    differ, or when min |F| over those 9 points ≤ `sparse_margin` · |∇F(centre)| · (brick
