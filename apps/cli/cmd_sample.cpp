@@ -202,10 +202,9 @@ void run_sample(const SampleArgs& a) {
   const Camera camera = camera_from(surface, a.camera);
   FloaterSystem sys(surface, options);
   if (options.radius > 0 && sys.nominal_radius() != options.radius)
-    fmt::print(stderr,
-               "zeroset: warning: radius {:g} is outside [1e-9, 1] times the scene radius "
-               "({:g}); using {:.4g}\n",
-               options.radius, surface.scene_radius(), sys.nominal_radius());
+    warn(fmt::format("radius {:g} is outside [1e-9, 1] times the scene radius ({:g}); using "
+                     "{:.4g}",
+                     options.radius, surface.scene_radius(), sys.nominal_radius()));
 
   Progress progress("sampling", global_flags().quiet);
   nlohmann::json stats;
@@ -298,16 +297,14 @@ void run_sample(const SampleArgs& a) {
   }
   // Floaters that find no surface are reseeded, wander, and are removed as strays.
   if (sys.size() == 0)
-    fmt::print(stderr,
-               "zeroset: warning: {}: no floater stayed on the surface; F = 0 may have no "
-               "point inside the clip, or F may be undefined there (try zeroset eval)\n",
-               final_surface.label());
+    warn(fmt::format("{}: no floater stayed on the surface; F = 0 may have no point inside the "
+                     "clip, or F may be undefined there (try zeroset eval)",
+                     final_surface.label()));
   else if (!(last.median_residual <= sys.nominal_radius()))
-    fmt::print(stderr,
-               "zeroset: warning: {}: the floaters are not on F = 0 (median |F|/|grad F| "
-               "{:.3g}, sigma^ {:.3g}); the run may be too short (--steps), or F = 0 may have "
-               "no point inside the clip\n",
-               final_surface.label(), last.median_residual, sys.nominal_radius());
+    warn(fmt::format("{}: the floaters are not on F = 0 (median |F|/|grad F| {:.3g}, sigma^ "
+                     "{:.3g}); the run may be too short (--steps), or F = 0 may have no point "
+                     "inside the clip",
+                     final_surface.label(), last.median_residual, sys.nominal_radius()));
   say(fmt::format("{} floaters after {} steps ({}), sigma^ = {:.4g}, {:.0f} steps/s", sys.size(),
                   sys.steps_taken(),
                   converged_at ? fmt::format("settled at step {}", *converged_at) : "not settled",

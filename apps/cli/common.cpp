@@ -21,6 +21,10 @@ void say(const std::string& line) {
   if (!global_flags().quiet) fmt::print("{}\n", line);
 }
 
+void warn(const std::string& line) {
+  if (!global_flags().quiet) fmt::print(stderr, "zeroset: warning: {}\n", line);
+}
+
 void SurfaceArgs::add_to(CLI::App* cmd, bool optional) {
   auto* opt = cmd->add_option("SURFACE", spec,
                               "Catalog name (zeroset list), equation in quotes, or scene file "

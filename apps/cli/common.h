@@ -61,6 +61,8 @@ GlobalFlags& global_flags();
 
 /// Prints a line to stdout unless --quiet.
 void say(const std::string& line);
+/// Prints "zeroset: warning: LINE" to stderr unless --quiet.
+void warn(const std::string& line);
 
 void register_catalog_commands(CLI::App& app);  // list, info, eval
 void register_render_commands(CLI::App& app);   // render, animate, export
