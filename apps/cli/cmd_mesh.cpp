@@ -309,7 +309,10 @@ void run_mesh(const MeshArgs& a) {
   std::string line = fmt::format("{}: {} vertices, {} triangles ({} grid, {} cells, {:.2f} s)",
                                  surface.label(), mesh.vertex_count(), mesh.triangle_count(),
                                  ps.sparse ? "sparse" : "dense", resolution, ps.seconds_total);
-  if (max_steps > 0) line += fmt::format("; improved in {} steps ({:.2f} s)", is.steps, is.seconds);
+  if (max_steps > 0)
+    line += fmt::format("; improved in {} steps ({:.2f} s{})", is.steps, is.seconds,
+                        is.converged || mesh.empty() ? ""
+                                                     : ", stopped at the step limit, not at rest");
   say(line);
   if (before && after)
     say(fmt::format("  min angle < 30°: {:.1f}% -> {:.1f}%, mean min angle {:.1f}° -> {:.1f}°, "
