@@ -20,8 +20,8 @@
 #include "zeroset/mesh/mesh_io.h"
 #include "zeroset/mesh/mesh_ops.h"
 #include "zeroset/render/pov_export.h"
-#include "zeroset/surface/json_read.h"
 #include "zeroset/surface/catalog.h"
+#include "zeroset/surface/json_read.h"
 
 namespace zeroset::viewer {
 

@@ -1,8 +1,5 @@
 #include "zeroset/floaters/settings.h"
 
-#include <cmath>
-#include <cstdint>
-
 #include "zeroset/error.h"
 #include "zeroset/surface/json_read.h"
 
@@ -49,9 +46,8 @@ void apply_floater_settings(const json& floaters, FloaterOptions& options,
     else if (key == "scaled_repulsion")
       o.scaled_repulsion = boolean(value, origin, p);
     else if (key == "radius_adapt") {
-      if (!value.is_string()) fail(origin, p, "expected wh, curvature, singular or mixed");
       try {
-        o.radius_adapt = parse_radius_adapt(value.get<std::string>(), p);
+        o.radius_adapt = parse_radius_adapt(json_read::string(value, origin, p), p);
       } catch (const InvalidArgument&) {
         fail(origin, p, "expected wh, curvature, singular or mixed");
       }

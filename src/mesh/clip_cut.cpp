@@ -118,35 +118,35 @@ ClipCutStats cut_at_clip(Mesh& mesh, const Surface& surface, double snap_distanc
   // Only triangles with a vertex on or outside the clip can change, and every edge that
   // matters below (one with a vertex on the clip, or one that crosses it) has all its
   // triangles among them: connectivity over that band is enough.
-  std::vector<std::array<std::uint32_t, 3>> band;
-  for (const auto& tri : mesh.triangles)
-    if (side[tri[0]] != kIn || side[tri[1]] != kIn || side[tri[2]] != kIn) band.push_back(tri);
-  const MeshAdjacency adj = build_adjacency(mesh.positions.size(), band);
   // A triangle with every vertex on the clip lies in the clip surface. It belongs to the mesh
   // only where F = 0 runs along the clip there (∇F parallel to ∇G at its centre); where the
   // surface crosses the clip, it is a sliver between boundary vertices (a grid face on a box
   // clip's plane, a vertex snapped next to its neighbours), often turned against ∇F.
   EvaluatorPool pool(surface.field, workers);
-  auto in_clip_sheet = [&](const std::array<std::uint32_t, 3>& tri) {
-    const Vec3 c =
-        (mesh.positions[tri[0]] + mesh.positions[tri[1]] + mesh.positions[tri[2]]) / 3.0;
-    Vec3 gf, gg;
-    pool.local().value_gradient(c, gf);
-    clip.value_gradient(c, gg);
-    const double norms = gf.norm() * gg.norm();
-    return !(norms > 0) || std::abs(gf.dot(gg)) >= kSheetCosine * norms;
-  };
-  std::vector<std::uint8_t> all_on_kept(band.size(), 0);
-  for (size_t t = 0; t < band.size(); ++t) {
-    const auto& tri = band[t];
-    if (side[tri[0]] == kOn && side[tri[1]] == kOn && side[tri[2]] == kOn)
-      all_on_kept[t] = in_clip_sheet(tri);
+  std::vector<std::array<std::uint32_t, 3>> band;
+  // Per triangle (and per band triangle): one with every vertex on the clip that stays.
+  std::vector<std::uint8_t> all_on_kept(mesh.triangles.size(), 0), band_all_on_kept;
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const auto& tri = mesh.triangles[t];
+    if (side[tri[0]] == kIn && side[tri[1]] == kIn && side[tri[2]] == kIn) continue;
+    if (side[tri[0]] == kOn && side[tri[1]] == kOn && side[tri[2]] == kOn) {
+      const Vec3 c =
+          (mesh.positions[tri[0]] + mesh.positions[tri[1]] + mesh.positions[tri[2]]) / 3.0;
+      Vec3 gf, gg;
+      pool.local().value_gradient(c, gf);
+      clip.value_gradient(c, gg);
+      const double norms = gf.norm() * gg.norm();
+      all_on_kept[t] = !(norms > 0) || std::abs(gf.dot(gg)) >= kSheetCosine * norms;
+    }
+    band.push_back(tri);
+    band_all_on_kept.push_back(all_on_kept[t]);
   }
+  const MeshAdjacency adj = build_adjacency(mesh.positions.size(), band);
   auto kept = [&](std::uint32_t t) {
     const auto& tri = band[t];
     bool any_in = false, all_on = true;
     for (std::uint32_t v : tri) any_in |= side[v] == kIn, all_on &= side[v] == kOn;
-    return any_in || (all_on && all_on_kept[t]);
+    return any_in || (all_on && band_all_on_kept[t]);
   };
   // A vertex moved onto the clip must keep a single fan of triangles: where the clip curve
   // passes it so that kept and dropped triangles alternate, it is cut normally instead.
@@ -214,12 +214,13 @@ ClipCutStats cut_at_clip(Mesh& mesh, const Surface& surface, double snap_distanc
   };
   std::vector<std::array<std::uint32_t, 3>> out;
   out.reserve(mesh.triangles.size());
-  for (const auto& tri : mesh.triangles) {
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const auto& tri = mesh.triangles[t];
     bool any_in = false, any_out = false, all_on = true;
     for (std::uint32_t v : tri)
       any_in |= side[v] == kIn, any_out |= side[v] == kOut, all_on &= side[v] == kOn;
     if (all_on) {
-      if (in_clip_sheet(tri)) out.push_back(tri);
+      if (all_on_kept[t]) out.push_back(tri);
       continue;
     }
     if (!any_out) {

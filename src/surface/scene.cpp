@@ -228,12 +228,10 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   Surface& s = scene.surface;
   const CatalogEntry* entry = nullptr;
   if (j.contains("name")) {
-    if (!j["name"].is_string()) fail(origin, "/name", "expected a string");
-    entry = find_catalog_entry(j["name"].get<std::string>());
+    entry = find_catalog_entry(json_read::string(j["name"], origin, "/name"));
   }
   if (j.contains("equation")) {
-    if (!j["equation"].is_string()) fail(origin, "/equation", "expected a string");
-    const std::string eq = j["equation"].get<std::string>();
+    const std::string eq = json_read::string(j["equation"], origin, "/equation");
     if (entry && eq == entry->equation) {
       s = make_surface(*entry);
     } else {
