@@ -23,11 +23,8 @@
 #include "rng_detail.h"
 #include "spatial_hash_detail.h"
 #include "zeroset/error.h"
+#include "zeroset/detail/parallel.h"
 #include "zeroset/floaters/metrics.h"
-
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 namespace zeroset {
 namespace {
@@ -91,23 +88,6 @@ template <class T>
 void fit(std::vector<T>& v, std::size_t n) {
   if (v.capacity() < n) v.reserve(n + n / 8);
   v.resize(n);
-}
-
-int resolve_threads(int requested) {
-#ifdef _OPENMP
-  return requested > 0 ? requested : omp_get_max_threads();
-#else
-  (void)requested;
-  return 1;
-#endif
-}
-
-int thread_index() {
-#ifdef _OPENMP
-  return omp_get_thread_num();
-#else
-  return 0;
-#endif
 }
 
 // |F|/|∇F| without infinities: 0 on the surface, the largest double where ∇F = 0 and F ≠ 0.
@@ -326,7 +306,7 @@ struct FloaterSystem::Impl {
   }
 
   void ensure_evaluators() {
-    threads = resolve_threads(opt.threads);
+    threads = detail::worker_count(opt.threads);
     while (static_cast<int>(evaluators.size()) < threads) evaluators.emplace_back(surface.field);
     perimeter.resize(evaluators.size());
     hessian_batch.resize(evaluators.size());
@@ -341,7 +321,7 @@ struct FloaterSystem::Impl {
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (n >= kParallelMin)
     for (std::int64_t c = 0; c < chunks; ++c) {
       const std::size_t b = static_cast<std::size_t>(c) * kChunk;
-      body(b, std::min(n, b + kChunk), evaluators[thread_index()]);
+      body(b, std::min(n, b + kChunk), evaluators[detail::worker_index()]);
     }
   }
 
@@ -445,7 +425,7 @@ struct FloaterSystem::Impl {
     thread_bounds.assign(team, empty_bounds());
     parallel_chunks(n, [&](std::size_t b, std::size_t e, Evaluator& ev) {
       // Kept in registers over the chunk, stored once: the threads' entries share cache lines.
-      const auto t = static_cast<std::size_t>(thread_index());
+      const auto t = static_cast<std::size_t>(detail::worker_index());
       double largest = thread_largest[t], sigma_bound = thread_sigma[t];
       Box3 extent = thread_bounds[t];
       std::array<double, kChunk> x, y, z, f, gx, gy, gz;
@@ -528,7 +508,7 @@ struct FloaterSystem::Impl {
       std::vector<double> alpha(m, 1.0), beta(m, 1.0);
       if (need_hessian) {
         // F, ∇F and the Hessian at the chunk's floaters, in one batched evaluation.
-        auto& v = hessian_batch[static_cast<std::size_t>(thread_index())];
+        auto& v = hessian_batch[static_cast<std::size_t>(detail::worker_index())];
         for (auto& a : v) a.resize(m);
         for (std::size_t k = 0; k < m; ++k) {
           v[0][k] = pos[b + k].x();
@@ -644,7 +624,7 @@ struct FloaterSystem::Impl {
                            std::vector<double>& alpha) {
     const std::size_t m = (e - b) * static_cast<std::size_t>(samples);
     // Kept per thread from call to call: every entry used is written first.
-    auto& [x, y, z, f, gx, gy, gz] = perimeter[static_cast<std::size_t>(thread_index())];
+    auto& [x, y, z, f, gx, gy, gz] = perimeter[static_cast<std::size_t>(detail::worker_index())];
     for (auto* v : {&x, &y, &z, &f, &gx, &gy, &gz}) v->resize(m);
     // Stratified angles θ_j = 2π(j + phase)/samples: every direction around the floater gets
     // looked at. Each is the previous one turned by 2π/samples (one sine and cosine per
@@ -824,8 +804,8 @@ struct FloaterSystem::Impl {
     const std::span<detail::PairSums> sums(pair_sums);
 #pragma omp parallel num_threads(threads) if (n >= kParallelMin)
     {
-      Scratch& c = scratch[static_cast<std::size_t>(thread_index())];
-      Evaluator& ev = evaluators[static_cast<std::size_t>(thread_index())];
+      Scratch& c = scratch[static_cast<std::size_t>(detail::worker_index())];
+      Evaluator& ev = evaluators[static_cast<std::size_t>(detail::worker_index())];
 #pragma omp for schedule(static)
       for (std::int64_t slot = 0; slot < static_cast<std::int64_t>(n); ++slot) {
         const auto s = static_cast<std::size_t>(slot);

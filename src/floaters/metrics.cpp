@@ -8,10 +8,7 @@
 #include "critical_detail.h"
 #include "rng_detail.h"
 #include "spatial_hash_detail.h"
-
-#ifdef _OPENMP
-#include <omp.h>
-#endif
+#include "zeroset/detail/parallel.h"
 
 namespace zeroset {
 namespace {
@@ -19,22 +16,6 @@ namespace {
 constexpr std::size_t kBlock = 16384;  // candidates per parallel round
 constexpr std::size_t kChunk = 256;    // candidates per batched evaluation
 constexpr int kNewtonIterations = 40;
-
-int max_threads() {
-#ifdef _OPENMP
-  return omp_get_max_threads();
-#else
-  return 1;
-#endif
-}
-
-int thread_index() {
-#ifdef _OPENMP
-  return omp_get_thread_num();
-#else
-  return 0;
-#endif
-}
 
 // Newton's method onto F = 0 from p; false when it does not converge to `tolerance` (in
 // |F|/|∇F|) or strays more than `max_move` from where it started.
@@ -54,7 +35,7 @@ bool project_onto_surface(Evaluator& ev, Vec3& p, double tolerance, double max_m
 
 std::vector<Evaluator> make_evaluators(const Surface& surface) {
   std::vector<Evaluator> evs;
-  for (int t = 0; t < max_threads(); ++t) evs.emplace_back(surface.field);
+  for (int t = 0; t < detail::worker_count(0); ++t) evs.emplace_back(surface.field);
   return evs;
 }
 
@@ -86,7 +67,7 @@ ReferenceSampling reference_sampling(const Surface& surface, const ReferenceOpti
     std::vector<std::size_t> shell_hits(static_cast<std::size_t>(chunks), 0);
 #pragma omp parallel for schedule(dynamic, 1) num_threads(static_cast <int>(evs.size()))
     for (std::int64_t c = 0; c < chunks; ++c) {
-      Evaluator& ev = evs[thread_index()];
+      Evaluator& ev = evs[detail::worker_index()];
       const std::size_t b = static_cast<std::size_t>(c) * kChunk;
       const std::size_t e = std::min(m, b + kChunk);
       std::array<double, kChunk> x, y, z, f, gx, gy, gz;

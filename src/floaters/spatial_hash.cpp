@@ -3,12 +3,9 @@
 #include <cmath>
 #include <limits>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
 #include "rng_detail.h"
 #include "spatial_hash_detail.h"
+#include "zeroset/detail/parallel.h"
 
 namespace zeroset::detail {
 namespace {
@@ -57,23 +54,6 @@ std::size_t SpatialHash::lay_grid(const Box3& region, double cell, std::size_t p
   return buckets;
 }
 
-namespace {
-int thread_number() {
-#ifdef _OPENMP
-  return omp_get_thread_num();
-#else
-  return 0;
-#endif
-}
-int thread_count() {
-#ifdef _OPENMP
-  return omp_get_num_threads();
-#else
-  return 1;
-#endif
-}
-}  // namespace
-
 void SpatialHash::build(std::span<const Vec3> points, const Box3& region, double cell,
                         int threads) {
   const std::size_t n = points.size();
@@ -92,8 +72,8 @@ void SpatialHash::build(std::span<const Vec3> points, const Box3& region, double
   // sorted. All in one parallel region (its threads wake once).
 #pragma omp parallel num_threads(team)
   {
-    const auto part = static_cast<std::size_t>(thread_number());
-    const auto parts = static_cast<std::size_t>(thread_count());
+    const auto part = static_cast<std::size_t>(detail::worker_index());
+    const auto parts = static_cast<std::size_t>(detail::team_size());
 #pragma omp single
     {
       cursor_.assign(parts * buckets, 0);

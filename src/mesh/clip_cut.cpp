@@ -7,7 +7,7 @@
 #include <Eigen/Dense>
 
 #include "mesh_detail.h"
-#include "parallel_detail.h"
+#include "zeroset/detail/parallel.h"
 #include "zeroset/mesh/adjacency.h"
 
 namespace zeroset::detail {

@@ -12,7 +12,7 @@
 #include <fmt/core.h>
 
 #include "mesh_detail.h"
-#include "parallel_detail.h"
+#include "zeroset/detail/parallel.h"
 #include "zeroset/error.h"
 #include "zeroset/mesh/adjacency.h"
 #include "zeroset/mesh/mesh_ops.h"

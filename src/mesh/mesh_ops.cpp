@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "mesh_detail.h"
-#include "parallel_detail.h"
+#include "zeroset/detail/parallel.h"
 
 namespace zeroset {
 

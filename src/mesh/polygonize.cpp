@@ -25,7 +25,8 @@
 
 #include "cell_triangulation_detail.h"
 #include "mc_table_detail.h"
-#include "parallel_detail.h"
+#include "zeroset/detail/bracket.h"
+#include "zeroset/detail/parallel.h"
 #include "mesh_detail.h"
 #include "zeroset/error.h"
 #include "zeroset/expr/polynomial.h"
@@ -36,6 +37,8 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 using detail::CellPolygons;
+using detail::IllinoisBracket;
+using detail::is_positive;
 using detail::kEdgeAxis;
 using detail::kEdgeCorners;
 using detail::kFaceCanonical;
@@ -213,8 +216,6 @@ class LineRestriction {
   bool have_v_ = false;
 };
 
-bool is_positive(double v) { return !(v < 0); }  // NaN counts as positive
-
 // Bit i of bits[i / 64] set where values[i] counts as positive (is_positive); returns how many
 // values are NaN. Four (AVX) or two (SSE2) values per compare where available.
 long long sign_bits(const double* values, long long n, std::uint64_t* bits) {
@@ -359,46 +360,6 @@ double linear_fraction(double fa, double fb) {
   const double s = fa / (fa - fb);
   return std::isfinite(s) ? std::clamp(s, 0.0, 1.0) : 0.5;
 }
-
-// The Illinois variant of regula falsi on one edge, in the edge's fraction s ∈ [0, 1]: the
-// bracket [lo, hi] keeps opposite signs, and the end value kept twice in a row is halved so
-// the bracket shrinks from both sides. Robust where the surface touches the edge (a double
-// root), where Newton's method would crawl.
-struct IllinoisBracket {
-  double lo = 0, hi = 1, f_lo = 0, f_hi = 0;
-  int last_side = 0;
-
-  IllinoisBracket(double fa, double fb) : f_lo(fa), f_hi(fb) {}
-
-  /// Takes F at s (not 0): s replaces the end whose value has f's sign.
-  void update(double s, double f) {
-    if (is_positive(f) == is_positive(f_hi)) {
-      hi = s, f_hi = f;
-      if (last_side == 1) f_lo *= 0.5;
-      last_side = 1;
-    } else {
-      lo = s, f_lo = f;
-      if (last_side == -1) f_hi *= 0.5;
-      last_side = -1;
-    }
-  }
-
-  /// Where the line through the ends' values crosses zero. Converged, the estimate may round
-  /// onto an end: that is fine, so only an estimate outside the closed bracket falls back to
-  /// bisection.
-  double estimate() const {
-    const double n = hi - f_hi * (hi - lo) / (f_hi - f_lo);
-    return std::isfinite(n) && n >= std::min(lo, hi) && n <= std::max(lo, hi) ? n : 0.5 * (lo + hi);
-  }
-
-  /// Takes F at s (not 0) and returns the next s; sets `done` once s no longer moves.
-  double next(double s, double f, bool& done) {
-    update(s, f);
-    const double n = estimate();
-    done = std::abs(n - s) <= 1e-13 || std::abs(hi - lo) <= 1e-15;
-    return n;
-  }
-};
 
 // Places one vertex on each crossing edge: linear interpolation, then refinement on F
 // restricted to the edge. Polynomials: F along the edge is a univariate polynomial (its grid

@@ -1,5 +1,6 @@
 #pragma once
-// OpenMP helpers with a serial fallback, and one field evaluator per worker thread.
+// OpenMP helpers with a serial fallback, and one field evaluator per worker thread: the one
+// place where the modules ask OpenMP how many workers there are and which one is running.
 #include <algorithm>
 #include <span>
 #include <vector>
@@ -27,6 +28,15 @@ inline int worker_index() {
   return omp_get_thread_num();
 #else
   return 0;
+#endif
+}
+
+// The number of workers in the enclosing parallel region (1 outside one).
+inline int team_size() {
+#ifdef _OPENMP
+  return omp_get_num_threads();
+#else
+  return 1;
 #endif
 }
 
