@@ -72,35 +72,9 @@ Vec3 project_onto_clip_curve(Evaluator& ev, const Clip& clip, const Vec3& p, dou
 }
 
 void flag_open_boundary(Mesh& mesh) {
-  // Only how many triangles share each edge matters here, so the edges are bucketed by
-  // their smaller vertex with just the other one (a lighter cousin of build_adjacency).
-  const size_t nv = mesh.positions.size();
-  mesh.is_boundary.resize(nv, 0);
-  std::vector<std::uint32_t> start(nv + 1, 0);
-  for (const auto& tri : mesh.triangles)
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t a = tri[static_cast<size_t>(k)], b = tri[static_cast<size_t>((k + 1) % 3)];
-      if (a != b) ++start[std::min(a, b) + 1];
-    }
-  for (size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
-  std::vector<std::uint32_t> other(start[nv]);
-  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-  for (const auto& tri : mesh.triangles)
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t a = tri[static_cast<size_t>(k)], b = tri[static_cast<size_t>((k + 1) % 3)];
-      if (a != b) other[fill[std::min(a, b)]++] = std::max(a, b);
-    }
-  for (size_t v = 0; v < nv; ++v) {
-    std::uint32_t* b = other.data() + start[v];
-    std::uint32_t* e = other.data() + start[v + 1];
-    std::sort(b, e);
-    for (std::uint32_t* h = b; h != e;) {
-      std::uint32_t* g = h;
-      while (g != e && *g == *h) ++g;
-      if (g - h == 1) mesh.is_boundary[v] = mesh.is_boundary[*h] = 1;
-      h = g;
-    }
-  }
+  mesh.is_boundary.resize(mesh.positions.size(), 0);
+  for (const auto& [a, b] : boundary_edges(mesh.positions.size(), mesh.triangles))
+    mesh.is_boundary[a] = mesh.is_boundary[b] = 1;
 }
 
 ClipCutStats cut_at_clip(Mesh& mesh, const Surface& surface, double snap_distance, int workers) {

@@ -116,12 +116,11 @@ struct MeshImprover::State {
 
   void build_connectivity() {
     const MeshAdjacency adj = build_adjacency(mesh);
-    std::vector<std::uint32_t> tcount(nv(), 0);
-    for (const auto& t : mesh.triangles)
-      for (std::uint32_t v : t) ++tcount[v];
+    const VertexTriangles vtris = build_vertex_triangles(nv(), mesh.triangles);
     size_t maxdeg = 0;
     for (size_t v = 0; v < nv(); ++v)
-      maxdeg = std::max({maxdeg, adj.valence(static_cast<std::uint32_t>(v)), static_cast<size_t>(tcount[v])});
+      maxdeg = std::max({maxdeg, adj.valence(static_cast<std::uint32_t>(v)),
+                         vtris.count(static_cast<std::uint32_t>(v))});
     cap = static_cast<int>(std::max<size_t>(16, maxdeg + 4));
     nbr.assign(nv() * static_cast<size_t>(cap), kNone);
     vtri.assign(nbr.size(), kNone);
@@ -130,8 +129,9 @@ struct MeshImprover::State {
     for (size_t v = 0; v < nv(); ++v)
       for (std::uint32_t q = adj.neighbor_offsets[v]; q < adj.neighbor_offsets[v + 1]; ++q)
         nb(static_cast<std::uint32_t>(v))[nbr_count[v]++] = adj.neighbors[q];
-    for (size_t t = 0; t < mesh.triangles.size(); ++t)
-      for (std::uint32_t v : mesh.triangles[t]) vt(v)[vtri_count[v]++] = static_cast<std::uint32_t>(t);
+    for (size_t v = 0; v < nv(); ++v)
+      for (std::uint32_t t : vtris.of(static_cast<std::uint32_t>(v)))
+        vt(static_cast<std::uint32_t>(v))[vtri_count[v]++] = t;
     // Vertices on the mesh border that are not on the clip would be pulled inwards: hold them.
     for (size_t e = 0; e < adj.edges.size(); ++e)
       if (adj.edge_triangle_count[e] != 2)

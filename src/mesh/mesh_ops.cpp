@@ -7,6 +7,7 @@
 
 #include "mesh_detail.h"
 #include "zeroset/detail/parallel.h"
+#include "zeroset/mesh/adjacency.h"
 
 namespace zeroset {
 
@@ -50,17 +51,9 @@ size_t collapse_short_edges(Mesh& mesh, double min_length) {
   std::sort(short_edges.begin(), short_edges.end());
   short_edges.erase(std::unique(short_edges.begin(), short_edges.end()), short_edges.end());
 
-  // Vertex → triangles (CSR of the original mesh); a collapsed vertex's list is reached
-  // through the member chain of the vertex it was merged into.
-  std::vector<std::uint32_t> start(nv + 1, 0), vt(3 * nt);
-  for (const auto& t : tris)
-    for (std::uint32_t v : t) ++start[v + 1];
-  for (size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
-  {
-    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-    for (size_t t = 0; t < nt; ++t)
-      for (std::uint32_t v : tris[t]) vt[fill[v]++] = static_cast<std::uint32_t>(t);
-  }
+  // Vertex → triangles of the original mesh; a collapsed vertex's list is reached through the
+  // member chain of the vertex it was merged into.
+  const VertexTriangles vt = build_vertex_triangles(nv, tris);
   std::vector<std::uint32_t> parent(nv), member_next(nv, kNone), member_tail(nv);
   for (size_t v = 0; v < nv; ++v) parent[v] = member_tail[v] = static_cast<std::uint32_t>(v);
   std::vector<std::uint8_t> alive(nt, 1);
@@ -73,8 +66,8 @@ size_t collapse_short_edges(Mesh& mesh, double min_length) {
   auto ring = [&](std::uint32_t u, std::vector<std::uint32_t>& out) {
     out.clear();
     for (std::uint32_t m = u; m != kNone; m = member_next[m])
-      for (std::uint32_t q = start[m]; q < start[m + 1]; ++q)
-        if (alive[vt[q]]) out.push_back(vt[q]);
+      for (std::uint32_t t : vt.of(m))
+        if (alive[t]) out.push_back(t);
     std::sort(out.begin(), out.end());
     out.erase(std::unique(out.begin(), out.end()), out.end());
   };

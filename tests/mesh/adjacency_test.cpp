@@ -1,3 +1,7 @@
+#include <array>
+#include <cstdint>
+#include <vector>
+
 #include <gtest/gtest.h>
 
 #include "zeroset/error.h"
@@ -46,10 +50,34 @@ TEST(Adjacency, DetectsMisorientedAndNonManifoldEdges) {
   EXPECT_EQ(mesh_topology(fin).non_manifold_edges, 1u);
 }
 
+TEST(Adjacency, BoundaryEdgesAreTheEdgesInOneTriangle) {
+  EXPECT_TRUE(boundary_edges(4, tetrahedron().triangles).empty());
+  Mesh m = tetrahedron();
+  m.triangles.pop_back();  // open the face (0, 3, 2)
+  const auto open = boundary_edges(m.positions.size(), m.triangles);
+  const std::vector<std::array<std::uint32_t, 2>> expected = {{0, 2}, {0, 3}, {2, 3}};
+  EXPECT_EQ(open, expected);
+  const MeshAdjacency adj = build_adjacency(m);
+  size_t in_one = 0;
+  for (std::uint32_t c : adj.edge_triangle_count) in_one += c == 1;
+  EXPECT_EQ(in_one, open.size());
+}
+
+TEST(Adjacency, VertexTrianglesInIncreasingOrderOncePerCorner) {
+  const VertexTriangles vt = build_vertex_triangles(4, tetrahedron().triangles);
+  const std::vector<std::uint32_t> at0 = {0, 1, 3};
+  EXPECT_EQ(std::vector<std::uint32_t>(vt.of(0).begin(), vt.of(0).end()), at0);
+  for (std::uint32_t v = 0; v < 4; ++v) EXPECT_EQ(vt.count(v), 3u);
+  const std::vector<std::array<std::uint32_t, 3>> degenerate = {{0, 1, 1}};
+  EXPECT_EQ(build_vertex_triangles(2, degenerate).count(1), 2u);
+}
+
 TEST(Adjacency, RejectsTrianglesWithMissingVertices) {
   Mesh m = tetrahedron();
   m.triangles.push_back({0, 1, 9});
   EXPECT_THROW(build_adjacency(m), InvalidArgument);
+  EXPECT_THROW(boundary_edges(m.positions.size(), m.triangles), InvalidArgument);
+  EXPECT_THROW(build_vertex_triangles(m.positions.size(), m.triangles), InvalidArgument);
 }
 
 }  // namespace

@@ -37,6 +37,31 @@ MeshAdjacency build_adjacency(const Mesh& mesh);
 MeshAdjacency build_adjacency(size_t vertex_count,
                               std::span<const std::array<std::uint32_t, 3>> triangles);
 
+/// The edges that lie in exactly one triangle (the mesh's open border), sorted by (a, b), a < b.
+/// The same edges as those of `build_adjacency` with one triangle, found without storing the
+/// triangles or the rings. Throws InvalidArgument like `build_adjacency`.
+std::vector<std::array<std::uint32_t, 2>> boundary_edges(
+    size_t vertex_count, std::span<const std::array<std::uint32_t, 3>> triangles);
+
+/// The triangles around each vertex in CSR form: those of v are
+/// triangles[offsets[v] .. offsets[v + 1]), in increasing order, a triangle once per corner it
+/// has at v (so twice at the repeated vertex of a degenerate triangle). A plain value like
+/// MeshAdjacency.
+struct VertexTriangles {
+  std::vector<std::uint32_t> offsets;
+  std::vector<std::uint32_t> triangles;
+
+  size_t count(std::uint32_t v) const { return offsets[v + 1] - offsets[v]; }
+  std::span<const std::uint32_t> of(std::uint32_t v) const {
+    return {triangles.data() + offsets[v], count(v)};
+  }
+};
+
+/// Builds the vertex → triangle lists in O(V + T). Throws InvalidArgument like
+/// `build_adjacency`.
+VertexTriangles build_vertex_triangles(size_t vertex_count,
+                                       std::span<const std::array<std::uint32_t, 3>> triangles);
+
 /// Counts that decide whether a mesh is a closed, consistently oriented 2-manifold.
 struct MeshTopology {
   size_t vertices = 0;            ///< vertices used by at least one triangle
