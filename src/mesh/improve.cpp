@@ -446,10 +446,6 @@ struct MeshImprover::State {
     const double min_area2 = opt.min_area_fraction * std::sqrt(3.0) / 2 * mean_edge * mean_edge;
     auto& T = mesh.triangles;
     const auto& P = mesh.positions;
-    auto angle_at = [&](std::uint32_t at, std::uint32_t a, std::uint32_t b) {
-      const Vec3 u = P[a] - P[at], w = P[b] - P[at];
-      return std::atan2(u.cross(w).norm(), u.dot(w));
-    };
     auto remove_from = [&](std::uint32_t* list, std::uint32_t& count, std::uint32_t x) {
       for (std::uint32_t k = 0; k < count; ++k)
         if (list[k] == x) {
@@ -490,7 +486,9 @@ struct MeshImprover::State {
             const double sb = b1.cross(b2).norm(), cb = b1.dot(b2);
             if (sa * cb + ca * sb >= 0) continue;
           }
-          if (angle_at(a, u, v) + angle_at(b, v, u) <= std::numbers::pi + kFlipMargin) continue;
+          if (detail::corner_angle(P[a], P[u], P[v]) + detail::corner_angle(P[b], P[v], P[u]) <=
+              std::numbers::pi + kFlipMargin)
+            continue;
           const Vec3 n1 = detail::area_normal(P[u], P[v], P[a]), n2 = detail::area_normal(P[v], P[u], P[b]);
           const Vec3 m1 = detail::area_normal(P[u], P[b], P[a]), m2 = detail::area_normal(P[b], P[v], P[a]);
           if (m1.norm() < min_area2 || m2.norm() < min_area2) continue;

@@ -1,5 +1,7 @@
 #pragma once
 // Pieces shared by the polygonizer and the improver.
+#include <cmath>
+
 #include <Eigen/Geometry>
 
 #include "zeroset/expr/field.h"
@@ -31,6 +33,13 @@ Vec3 project_onto_clip_curve(Evaluator& ev, const Clip& clip, const Vec3& p, dou
 // Unit normal of triangle (a, b, c) times twice its area.
 inline Vec3 area_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
   return (b - a).cross(c - a);
+}
+
+// The angle (radians) at corner `at` of the triangle (at, p, q); atan2 of |u × w| and u · w
+// stays accurate near 0 and π, where acos of the cosine does not.
+inline double corner_angle(const Vec3& at, const Vec3& p, const Vec3& q) {
+  const Vec3 u = p - at, w = q - at;
+  return std::atan2(u.cross(w).norm(), u.dot(w));
 }
 
 // Mean ratio 4√3·area / Σ edge², 1 for an equilateral triangle, 0 for a degenerate one.

@@ -23,12 +23,9 @@ void evaluate(const Surface& surface, const std::vector<Vec3>& pts, int workers,
 }  // namespace
 
 double triangle_min_angle_deg(const Vec3& a, const Vec3& b, const Vec3& c) {
-  auto angle = [](const Vec3& at, const Vec3& p, const Vec3& q) {
-    const Vec3 u = p - at, w = q - at;
-    return std::atan2(u.cross(w).norm(), u.dot(w));
-  };
   if ((b - a).cross(c - a).squaredNorm() == 0) return 0;
-  return kDeg * std::min({angle(a, b, c), angle(b, c, a), angle(c, a, b)});
+  return kDeg * std::min({detail::corner_angle(a, b, c), detail::corner_angle(b, c, a),
+                          detail::corner_angle(c, a, b)});
 }
 
 double triangle_radius_ratio(const Vec3& a, const Vec3& b, const Vec3& c) {
