@@ -12,8 +12,8 @@
 #include <span>
 #include <vector>
 
-#include "interval_detail.h"
 #include "raycast_monomials_detail.h"
+#include "zeroset/expr/interval.h"
 #include "zeroset/render/raycast.h"
 
 namespace zeroset::detail {
