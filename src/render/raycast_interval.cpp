@@ -5,40 +5,9 @@
 #include <optional>
 
 #include "raycast_detail.h"
+#include "zeroset/detail/bracket.h"
 
 namespace zeroset::detail {
-namespace {
-
-/// Bracketed refinement of a sign change of a scalar function of t (Illinois method).
-template <class F>
-double refine_sign_change(F&& f, double a, double b, double fa, double fb, double tol) {
-  int retained = 0;
-  for (int iter = 0; iter < 100 && b - a > tol; ++iter) {
-    double m = (a * fb - b * fa) / (fb - fa);
-    if (!(m > a && m < b)) m = 0.5 * (a + b);
-    const double fm = f(m);
-    if (fm == 0) return m;
-    if (!std::isfinite(fm)) {
-      // Undefined inside the bracket: bisect on the side that keeps a defined end.
-      b = m;
-      continue;
-    }
-    if ((fm > 0) == (fa > 0)) {
-      a = m;
-      fa = fm;
-      if (retained == 1) fb *= 0.5;
-      retained = 1;
-    } else {
-      b = m;
-      fb = fm;
-      if (retained == -1) fa *= 0.5;
-      retained = -1;
-    }
-  }
-  return 0.5 * (a + b);
-}
-
-}  // namespace
 
 std::optional<double> interval_hit(RayCaster& rc, const Vec3& dir, double t0, double t1) {
   const double leaf = std::max(rc.options.interval_tolerance, 1e-15) * (t1 - t0);
