@@ -10,6 +10,7 @@
 
 #include "camera_control.h"
 #include "zeroset/error.h"
+#include "zeroset/render/lights.h"
 
 namespace zeroset::viewer {
 namespace {
@@ -402,16 +403,13 @@ void GlView::set_shading(const Program& p, const ViewerState& state, const Eigen
   glUniformMatrix4fv(p.proj, 1, GL_FALSE, proj.data());
   glUniform4f(p.flat_color, 0, 0, 0, 0);
   const RenderOptions& look = state.look();
-  // Lights in eye space: camera-following lights are given in camera coordinates already,
-  // world lights are turned by the view's rotation.
+  // Lights in eye space, turned by the view matrix's rotation.
   std::vector<float> dirs, colors;
   const Eigen::Matrix3d rotation = view.block<3, 3>(0, 0).cast<double>();
-  for (const Light& l : look.lights) {
+  for (const PlacedLight& l : camera_lights(look.lights, rotation)) {
     if (static_cast<int>(dirs.size()) / 3 == kMaxLights) break;
-    if (!(l.direction.norm() > 0) || !l.direction.allFinite()) continue;
-    const Vec3 d = (l.follows_camera ? l.direction : Vec3(rotation * l.direction)).normalized();
     for (int k = 0; k < 3; ++k) {
-      dirs.push_back(static_cast<float>(d[k]));
+      dirs.push_back(static_cast<float>(l.direction[k]));
       colors.push_back(static_cast<float>(l.color[k]));
     }
   }

@@ -61,17 +61,6 @@ struct ViewerState::FloaterControl {
 
 namespace {
 
-// The renderer's default three-light rig (warm key from the upper left, cool fill from the
-// right, rim from behind), given explicitly so the GL modes and the ray caster light the
-// surface the same way.
-std::vector<Light> default_rig() {
-  return {
-      {.direction = Vec3(-0.45, 0.55, 1.0), .color = Color(0.78, 0.76, 0.72)},
-      {.direction = Vec3(0.9, -0.15, 0.5), .color = Color(0.22, 0.24, 0.3)},
-      {.direction = Vec3(0.1, 0.9, -0.7), .color = Color(0.25, 0.25, 0.25)},
-  };
-}
-
 // A light grey-blue background: both the orange front and the blue back stand out on it.
 const Color kBackground(0.74, 0.76, 0.80);
 
@@ -178,7 +167,7 @@ json ViewerStats::to_json() const {
 ViewerState::ViewerState(Scene scene, std::optional<Mode> mode, int threads,
                          const std::string& origin)
     : threads_(threads), floater_control_(std::make_shared<FloaterControl>()) {
-  look_.lights = default_rig();
+  look_.lights = default_lights();  // explicit: the GL modes read look_.lights
   look_.background = kBackground;
   floater_options_.threads = floater_threads();
   open_scene(std::move(scene), origin);

@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 
 #include "mesh_detail.h"
+#include "zeroset/detail/bracket.h"
 #include "zeroset/detail/parallel.h"
 #include "zeroset/mesh/adjacency.h"
 
@@ -21,18 +22,9 @@ constexpr double kSheetCosine = 0.9;
 // The point where G = 0 on the segment from `in` (G < 0) to `out` (G > 0), by bisection
 // with a secant guess (G is 1-Lipschitz and piecewise smooth for spheres and planes).
 Vec3 clip_crossing(const Clip& clip, const Vec3& in, const Vec3& out) {
-  double lo = 0, hi = 1, g_lo = clip.value(in), g_hi = clip.value(out);
-  for (int it = 0; it < 80 && hi - lo > 1e-15; ++it) {
-    double t = lo + (hi - lo) * g_lo / (g_lo - g_hi);
-    if (!(t > lo && t < hi)) t = 0.5 * (lo + hi);
-    // Alternate with bisection so a one-sided secant cannot stall.
-    if (it % 2) t = 0.5 * (lo + hi);
-    const double g = clip.value(in + t * (out - in));
-    if (g == 0) return in + t * (out - in);
-    if (g < 0) lo = t, g_lo = g;
-    else hi = t, g_hi = g;
-  }
-  return in + 0.5 * (lo + hi) * (out - in);
+  const double t = secant_bisection([&](double s) { return clip.value(in + s * (out - in)); },
+                                    clip.value(in), clip.value(out));
+  return in + t * (out - in);
 }
 
 }  // namespace

@@ -14,17 +14,9 @@
 
 namespace zeroset::detail {
 
-/// The three-light rig used when RenderOptions::lights is empty: a warm key light from the
-/// upper left, a cool fill from the right and a rim light from behind, all following the camera.
-std::vector<Light> default_lights();
-
 /// Phong shading with world-space lights and front/back materials.
 struct Shader {
-  struct WorldLight {
-    Vec3 direction;  // unit, towards the light
-    Color color;
-  };
-  std::vector<WorldLight> lights;
+  std::vector<PlacedLight> lights;  // in world coordinates
   Material front;
   Material back;
 

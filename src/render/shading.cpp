@@ -18,22 +18,10 @@
 
 namespace zeroset::detail {
 
-std::vector<Light> default_lights() {
-  return {
-      {.direction = Vec3(-0.45, 0.55, 1.0), .color = Color(0.78, 0.76, 0.72)},
-      {.direction = Vec3(0.9, -0.15, 0.5), .color = Color(0.22, 0.24, 0.3)},
-      {.direction = Vec3(0.1, 0.9, -0.7), .color = Color(0.25, 0.25, 0.25)},
-  };
-}
-
 Shader::Shader(const RenderOptions& options, const View& view)
-    : front(options.front), back(options.back) {
-  const std::vector<Light> rig = options.lights.empty() ? default_lights() : options.lights;
-  for (const Light& l : rig) {
-    if (!(l.direction.norm() > 0) || !l.direction.allFinite()) continue;
-    const Vec3 d = l.follows_camera ? view.camera_to_world(l.direction) : l.direction;
-    lights.push_back({d.normalized(), l.color});
-  }
+    : lights(world_lights(options.lights.empty() ? default_lights() : options.lights, view)),
+      front(options.front),
+      back(options.back) {
   lit_front_ = light_up(front);
   lit_back_ = light_up(back);
 }
@@ -41,7 +29,7 @@ Shader::Shader(const RenderOptions& options, const View& view)
 Shader::Lit Shader::light_up(const Material& m) const {
   Lit lit;
   lit.ambient = m.ambient * m.diffuse;
-  for (const WorldLight& l : lights) {
+  for (const PlacedLight& l : lights) {
     const Color diffuse = l.color.cwiseProduct(m.diffuse);
     const Color specular = m.specular > 0 ? Color(m.specular * l.color) : Color::Zero();
     lit.terms.push_back({{l.direction.x(), l.direction.y(), l.direction.z()},

@@ -9,18 +9,10 @@
 
 #include "zeroset/io/image.h"
 #include "zeroset/mesh/mesh.h"
+#include "zeroset/render/lights.h"
 #include "zeroset/surface/surface.h"
 
 namespace zeroset {
-
-/// A directional light; `direction` points from the surface towards the light. With
-/// `follows_camera` the direction is given in camera coordinates (x right, y up, z towards
-/// the viewer), otherwise in world coordinates.
-struct Light {
-  Vec3 direction = Vec3(0.3, 0.5, 1.0);
-  Color color = Color(1, 1, 1);
-  bool follows_camera = true;
-};
 
 /// Phong material.
 struct Material {
@@ -35,7 +27,7 @@ struct RenderOptions {
   int height = 800;
   int samples = 1;                ///< anti-aliasing: samples×samples rays per pixel
   std::optional<Camera> camera;   ///< default: the surface's camera
-  std::vector<Light> lights;      ///< empty: a three-light rig that follows the camera
+  std::vector<Light> lights;      ///< empty: default_lights(), a rig that follows the camera
   Material front;                 ///< the side ∇F points to
   Material back{.diffuse = Color(0.06, 0.12, 0.35)};  ///< the other side, darker (paper's figures)
   Color background = Color(1, 1, 1);  ///< linear RGB (pictures are gamma encoded, 2.2)

@@ -1,10 +1,11 @@
+#include "zeroset/expr/interval.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
 
-#include "expr/tape_detail.h"
-#include "interval_detail.h"
+#include "tape_detail.h"
 
 namespace zeroset::detail {
 namespace {
@@ -141,10 +142,18 @@ Interval apply_interval(Code code, Interval a, Interval b) {
 }
 
 }  // namespace
+}  // namespace zeroset::detail
+
+namespace zeroset {
+
+using detail::apply_interval;
+using detail::Code;
+using detail::Instr;
+using detail::Program;
 
 IntervalEvaluator::IntervalEvaluator(const Field& field) : field_(field), tape_(&field_.tape()) {
   field_.require_parameters();
-  eval_uniforms(*tape_, field_.parameter_values(), uniforms_);
+  detail::eval_uniforms(*tape_, field_.parameter_values(), uniforms_);
   slots_.resize(static_cast<size_t>(
       std::max(tape_->value.slot_count, tape_->gradient.slot_count)));
 }
@@ -225,4 +234,4 @@ void IntervalEvaluator::run(const Program& p, const Interval& x, const Interval&
   }
 }
 
-}  // namespace zeroset::detail
+}  // namespace zeroset

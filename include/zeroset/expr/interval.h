@@ -1,15 +1,16 @@
 #pragma once
-// Interval arithmetic over a field's tape: an enclosure of F over an axis-aligned box, used to
-// ray cast expressions that are not polynomials. Private to the render module.
-#include <span>
+/// Interval arithmetic over a field's tape: an enclosure of F (and of ∇F) over an axis-aligned
+/// box. The ray caster uses it for expressions that are not polynomials.
+#include <cstddef>
 #include <vector>
 
 #include "zeroset/expr/field.h"
 
-namespace zeroset::detail {
+namespace zeroset {
 
-struct Tape;
+namespace detail {
 struct Program;
+}  // namespace detail
 
 /// A closed interval [lo, hi]; empty when lo > hi (where F is undefined, e.g. sqrt of a
 /// negative range). Infinite ends are allowed.
@@ -33,13 +34,13 @@ class IntervalEvaluator {
   void eval_gradient(const Interval& x, const Interval& y, const Interval& z, Interval out[4]);
 
  private:
-  void run(const Program& p, const Interval& x, const Interval& y, const Interval& z);
-  Interval output(const Program& p, size_t i) const;
+  void run(const detail::Program& p, const Interval& x, const Interval& y, const Interval& z);
+  Interval output(const detail::Program& p, size_t i) const;
 
   Field field_;  // keeps the tape alive
-  const Tape* tape_;
+  const detail::Tape* tape_;
   std::vector<double> uniforms_;
   std::vector<Interval> slots_;
 };
 
-}  // namespace zeroset::detail
+}  // namespace zeroset
