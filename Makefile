@@ -1,13 +1,14 @@
 # zeroset: the two commands of the README, and a few helpers.
 #   make demo   install what is missing, build, run the main job (pictures and a mesh in out/)
 #   make test   install what is missing, build, run the whole test suite with ctest
+#   make format format the C++ sources with clang-format (.clang-format)
 JOBS ?= $(shell nproc)
 BUILD ?= build
 ASAN_BUILD ?= build-asan
 FUZZ_BUILD ?= build-fuzz
 CMAKE_FLAGS ?=
 
-.PHONY: deps build demo test test-asan fuzz bench clean
+.PHONY: deps build demo test test-asan fuzz bench format clean
 
 deps:
 	scripts/install-deps.sh
@@ -44,6 +45,11 @@ fuzz: deps
 bench: build
 	scripts/install-deps.sh --peers
 	scripts/bench.sh $(BUILD)
+
+# Formats the C++ sources in place with clang-format and the repository's .clang-format.
+FORMAT_DIRS ?= src include apps tests bench examples
+format:
+	find $(FORMAT_DIRS) \( -name '*.cpp' -o -name '*.h' \) -print0 | xargs -0 clang-format -i
 
 clean:
 	rm -rf $(BUILD) $(ASAN_BUILD) $(FUZZ_BUILD)

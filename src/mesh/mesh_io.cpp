@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <cstring>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -15,6 +14,7 @@
 
 #include "zeroset/error.h"
 #include "zeroset/io/atomic_file.h"
+#include "zeroset/io/ply.h"
 
 namespace zeroset {
 namespace {
@@ -65,29 +65,19 @@ std::string obj_bytes(const Mesh& m) {
   return fmt::to_string(out);
 }
 
-std::string ply_bytes(const Mesh& m) {
-  const bool normals = has_normals(m);
+// The boundary flags go to the PLY file as a "boundary" uchar property.
+void write_ply_mesh(const Mesh& m, const std::string& path) {
   const bool flags = m.is_boundary.size() == m.positions.size();
-  Bytes b;
-  b.reserve(64 + m.positions.size() * 28 + m.triangles.size() * 13);
-  b.text("ply\nformat binary_little_endian 1.0\ncomment zeroset mesh\n");
-  b.text(fmt::format("element vertex {}\n", m.positions.size()));
-  b.text("property float x\nproperty float y\nproperty float z\n");
-  if (normals) b.text("property float nx\nproperty float ny\nproperty float nz\n");
-  if (flags) b.text("property uchar boundary\n");
-  b.text(fmt::format("element face {}\n", m.triangles.size()));
-  b.text("property list uchar uint vertex_indices\nend_header\n");
-  for (size_t v = 0; v < m.positions.size(); ++v) {
-    for (int k = 0; k < 3; ++k) b.f32(m.positions[v][k]);
-    if (normals)
-      for (int k = 0; k < 3; ++k) b.f32(m.normals[v][k]);
-    if (flags) b.u8(m.is_boundary[v] ? 1 : 0);
-  }
-  for (const auto& t : m.triangles) {
-    b.u8(3);
-    for (std::uint32_t v : t) b.u32(v);
-  }
-  return b.str();
+  const std::vector<double> boundary(m.is_boundary.begin(),
+                                     flags ? m.is_boundary.end() : m.is_boundary.begin());
+  PlyContent c;
+  c.comment = "zeroset mesh";
+  c.positions = m.positions;
+  if (has_normals(m)) c.normals = m.normals;
+  if (flags) c.properties.push_back({"boundary", PlyScalar::kUChar, boundary});
+  c.has_faces = true;
+  c.triangles = m.triangles;
+  write_ply(path, c);
 }
 
 std::string stl_bytes(const Mesh& m) {
@@ -215,12 +205,6 @@ class Reader {
     return static_cast<std::uint8_t>(data_[at]);
   }
   float f32(size_t at) const { return std::bit_cast<float>(u32(at)); }
-  double f64(size_t at) const {
-    need(at, 8);
-    std::uint64_t v = 0;
-    for (int k = 0; k < 8; ++k) v |= static_cast<std::uint64_t>(static_cast<unsigned char>(data_[at + static_cast<size_t>(k)])) << (8 * k);
-    return std::bit_cast<double>(v);
-  }
 
  private:
   std::string path_;
@@ -271,89 +255,14 @@ Mesh read_obj(const Reader& r) {
   return m;
 }
 
-Mesh read_ply(const Reader& r) {
-  const std::string& d = r.data();
-  const size_t end = d.find("end_header\n");
-  if (d.rfind("ply\n", 0) != 0 || end == std::string::npos) r.fail("not a PLY file");
-  std::istringstream header(d.substr(0, end));
-  std::string line;
-  struct Prop {
-    std::string name, type;
-  };
-  std::vector<Prop> vprops;
-  size_t nv = 0, nf = 0;
-  std::string element, count_type, index_type;
-  bool binary_le = false;
-  while (std::getline(header, line)) {
-    std::istringstream ls(line);
-    std::string w;
-    ls >> w;
-    if (w == "format") {
-      std::string f;
-      ls >> f;
-      binary_le = f == "binary_little_endian";
-    } else if (w == "element") {
-      size_t n = 0;
-      ls >> element >> n;
-      (element == "vertex" ? nv : nf) = element == "vertex" || element == "face" ? n : 0;
-      if (element != "vertex" && element != "face" && n > 0) r.fail("unsupported element '" + element + "'");
-    } else if (w == "property") {
-      std::string type;
-      ls >> type;
-      if (element == "vertex") {
-        Prop p;
-        p.type = type;
-        ls >> p.name;
-        vprops.push_back(p);
-      } else if (type == "list") {
-        ls >> count_type >> index_type;
-      }
-    }
-  }
-  if (!binary_le) r.fail("only binary little-endian PLY is read");
-  auto type_size = [&](const std::string& t) -> size_t {
-    if (t == "float" || t == "float32" || t == "int" || t == "uint" || t == "int32" || t == "uint32") return 4;
-    if (t == "double" || t == "float64") return 8;
-    if (t == "uchar" || t == "char" || t == "uint8" || t == "int8") return 1;
-    if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
-    r.fail("unsupported property type '" + t + "'");
-  };
-  size_t stride = 0;
-  std::map<std::string, std::pair<size_t, std::string>> at;
-  for (const Prop& p : vprops) {
-    at[p.name] = {stride, p.type};
-    stride += type_size(p.type);
-  }
-  for (const char* c : {"x", "y", "z"})
-    if (!at.count(c)) r.fail(std::string("the vertices have no '") + c + "'");
-  auto read_real = [&](size_t pos, const std::string& type) -> double {
-    if (type == "double" || type == "float64") return r.f64(pos);
-    if (type == "float" || type == "float32") return r.f32(pos);
-    r.fail("coordinates must be float or double");
-  };
+Mesh read_ply_mesh(const std::string& path) {
+  PlyData ply = read_ply(path);
   Mesh m;
-  size_t pos = end + std::strlen("end_header\n");
-  r.need(pos, nv * stride);
-  const bool normals = at.count("nx") && at.count("ny") && at.count("nz");
-  const bool flags = at.count("boundary") > 0;
-  for (size_t v = 0; v < nv; ++v, pos += stride) {
-    m.positions.emplace_back(read_real(pos + at["x"].first, at["x"].second), read_real(pos + at["y"].first, at["y"].second),
-                             read_real(pos + at["z"].first, at["z"].second));
-    if (normals)
-      m.normals.emplace_back(read_real(pos + at["nx"].first, at["nx"].second), read_real(pos + at["ny"].first, at["ny"].second),
-                             read_real(pos + at["nz"].first, at["nz"].second));
-    if (flags) m.is_boundary.push_back(r.u8(pos + at["boundary"].first));
-  }
-  const size_t cs = nf ? type_size(count_type) : 1, is = nf ? type_size(index_type) : 4;
-  for (size_t f = 0; f < nf; ++f) {
-    const size_t n = cs == 1 ? r.u8(pos) : cs == 2 ? r.u16(pos) : r.u32(pos);
-    pos += cs;
-    std::vector<std::uint32_t> idx(n);
-    for (size_t k = 0; k < n; ++k, pos += is) idx[k] = is == 4 ? r.u32(pos) : is == 2 ? r.u16(pos) : r.u8(pos);
-    if (n < 3) r.fail("a face has fewer than three vertices");
-    for (size_t k = 1; k + 1 < n; ++k) m.triangles.push_back({idx[0], idx[k], idx[k + 1]});
-  }
-  check_indices(r, m);
+  m.positions = std::move(ply.positions);
+  m.normals = std::move(ply.normals);
+  m.triangles = std::move(ply.triangles);
+  if (const auto it = ply.properties.find("boundary"); it != ply.properties.end())
+    for (double flag : it->second) m.is_boundary.push_back(flag != 0 ? 1 : 0);
   return m;
 }
 
@@ -444,8 +353,11 @@ void write_mesh(const Mesh& mesh, const std::string& path) {
     for (std::uint32_t v : t)
       if (v >= mesh.positions.size())
         throw InvalidArgument("mesh", path, fmt::format("a triangle refers to vertex {} of {}", v, mesh.positions.size()));
+  if (ext == "ply") {
+    write_ply_mesh(mesh, path);
+    return;
+  }
   const std::string bytes = ext == "obj"   ? obj_bytes(mesh)
-                            : ext == "ply" ? ply_bytes(mesh)
                             : ext == "stl" ? stl_bytes(mesh)
                                            : glb_bytes(mesh);
   write_file_atomically(path, [&](std::ostream& os) {
@@ -458,12 +370,12 @@ Mesh read_mesh(const std::string& path) {
   const auto& known = mesh_file_extensions();
   if (std::find(known.begin(), known.end(), ext) == known.end())
     throw IoError(path, "unknown mesh format; known formats: " + known_list());
+  if (ext == "ply") return read_ply_mesh(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path, "cannot be opened");
   std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const Reader r(path, std::move(data));
   if (ext == "obj") return read_obj(r);
-  if (ext == "ply") return read_ply(r);
   if (ext == "stl") return read_stl(r);
   return read_glb(r);
 }

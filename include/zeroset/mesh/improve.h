@@ -1,51 +1,18 @@
 #pragma once
-/// The mesh improver (Rösch, Ruhl & Saupe 1997, §4.1–4.3; ALGORITHMS §C): the mesh is a
-/// spring–mass system whose massless vertices are held on F = 0 by the floaters' constrained
-/// velocity.
+/// The mesh improver (Rösch, Ruhl & Saupe 1997, §4): the mesh is a spring–mass system whose
+/// massless vertices are held on F = 0 by the floaters' constrained velocity. Springs are
+/// stiffer where the normals turn and near singular points, so vertices gather at creases and
+/// nodes while the triangles relax towards regular ones. The formulas and constants are in
+/// docs/algorithms.md (section C); docs/meshing.md shows what it does to a mesh.
 ///
-/// The spring model. The paper's springs have rest length zero and constants
-/// κ_ij = κ_d (1 − cos(n_i, n_j)) (eq. 6). Taken literally, springs on flat parts have κ = 0,
-/// so flat parts never move and their triangles stay as the polygonizer made them. Here
-///     κ_ij = κ_0 + κ_d (1 − cos(n_i, n_j)) + κ_s (1 − min(β_i, β_j)),
-/// a base constant κ_0 (the paper's "default value"), the paper's curvature estimator, and the
-/// singularity estimator β of the floaters (ALGORITHMS §B: β = min(‖r‖/γ_s, 1) with
-/// F_xx r = F_x, the length of a Newton step towards ∇F = 0). Zero-rest-length springs make
-/// each vertex's equilibrium the κ-weighted mean of its neighbours, so
-///     P_i = λ (Σ_j κ_ij p_j / Σ_j κ_ij − p_i)
-/// is the paper's desired velocity P_i = −2 Σ_j κ_ij r_ij with a per-vertex time step
-/// dt_i = λ / (2 Σ_j κ_ij): a tangential Laplacian smoothing step that relaxes to regular
-/// triangles, while stiffer springs where normals turn (creases, the cone of a node) or
-/// near singular points pull vertices there, which irons out the notches marching cubes
-/// leaves at nodes (paper figures 8, 9).
-///
-/// One step:
-///  1. F and ∇F at every vertex (batched); every `singularity_interval` steps also the
-///     Hessian for β.
-///  2. P_i from the springs; the constrained velocity (paper eq. 1–2, as for floaters)
-///     ṗ_i = P_i − [(F_x·P_i + φF)/(F_x·F_x + ε²)] F_x, with ε = 1e-3 × the median |∇F| so
-///     that nothing divides by zero at singular points (the pull towards F = 0 weakens there
-///     but never points the wrong way). φ = `feedback` per step (1: a full Newton step).
-///  3. Boundary vertices are either fixed, or constrained to the clip curve F = 0 ∩ G = 0
-///     by the second constraint G_x·ṗ + φG = 0 of §4.2: the velocity is projected onto the
-///     curve's tangent (both constraints solved together, regularised where ∇F ∥ ∇G), and the
-///     vertex is put back exactly on G = 0 after the move.
-///  4. No step may turn a triangle over: moves are bounded by `max_move_fraction` of the
-///     vertex's shortest edge, then every triangle that would turn over relative to ∇F (its
-///     normal against the sum of its vertices' unit gradients, where it agreed before), fold
-///     by more than 90° against its old normal, or lose nearly all of its area has the moves
-///     of its vertices halved, up to 6 times, then cancelled.
-///  5. Optional complements: Delaunay edge flips between nearly coplanar triangles during the
-///     first `flip_steps` steps (the paper moves vertices only; flips fix the vertex valences
-///     marching cubes leaves, which vertex motion alone cannot, and never bend the surface by
-///     more than `flip_max_dihedral_deg`; a flip must beat the Delaunay test by 0.05 rad so
-///     that edges do not flip back and forth while vertices move),
-///     and singular points found from the field alone: from vertices whose Newton step to
-///     ∇F = 0 is shorter than an edge, Newton's method on ∇F = 0 finds points with F ≈ 0 and
-///     ∇F ≈ 0 (no list of known singular points is used); the nearest vertex is moved there
-///     (with the flip guard) and then held.
-/// The improver stops when every vertex moves less than `speed_threshold` mean edge lengths
-/// in a step. Then `finish()` projects every free vertex onto F = 0 by guarded Newton steps
-/// (boundary vertices onto the clip curve).
+/// One step: F and ∇F at every vertex; the spring forces, made tangent to F = 0 (and to the
+/// clip surface for boundary vertices, BoundaryMode::kConstrained); moves bounded by the
+/// vertex's shortest edge and shortened or cancelled wherever a triangle would turn over,
+/// fold or collapse; during the first `flip_steps` steps Delaunay edge flips between nearly
+/// coplanar triangles; and singular points found from the field alone (Newton's method on
+/// ∇F = 0), each then held by its nearest vertex. The improver stops when every vertex moves
+/// less than `speed_threshold` mean edge lengths in a step; finish() then projects every free
+/// vertex onto F = 0.
 #include <cstdint>
 #include <memory>
 #include <stop_token>

@@ -2,7 +2,8 @@
 /// Mesh files: Wavefront OBJ, binary PLY, binary STL and glTF 2.0 binary (.glb).
 ///
 /// Positions and normals are written as 32-bit floats in PLY, STL and glb (their usual form)
-/// and with 9 significant digits in OBJ. PLY also carries the per-vertex `boundary` flag.
+/// and with 9 significant digits in OBJ. PLY (through zeroset/io/ply.h) also carries the
+/// per-vertex `boundary` flag.
 /// STL has no shared vertices; reading one merges bitwise equal corners.
 #include <string>
 #include <vector>
@@ -24,7 +25,7 @@ void write_mesh(const Mesh& mesh, const std::string& path);
 void check_mesh_path(const std::string& path);
 
 /// Reads a mesh written by `write_mesh` (OBJ with triangles or polygons, which are fanned;
-/// binary little-endian PLY with float or double coordinates; binary STL; glb with one
+/// PLY, ASCII or binary little-endian, with any scalar property types; binary STL; glb with one
 /// triangle primitive). Throws IoError naming the path and what is wrong.
 Mesh read_mesh(const std::string& path);
 

@@ -1,51 +1,20 @@
 #pragma once
-/// The polygonizer (DESIGN §4, ALGORITHMS §D): marching cubes with a topologically consistent
-/// triangulation, vertices on F = 0, triangles cut at the clip surface.
+/// The polygonizer: marching cubes with a topologically consistent triangulation, vertices
+/// refined onto F = 0 along their grid edges, triangles cut at the clip surface. How it works,
+/// with every constant, is in docs/algorithms.md (section D) and docs/meshing.md.
 ///
-/// How it works:
-///  - The grid has cubic cells; `cells` of them span the longest side of the box. F is sampled
-///    at every node, a row at a time: for polynomials the row's restriction to a line is a
-///    univariate polynomial evaluated by Horner's rule, otherwise the field is evaluated over
-///    structure-of-arrays rows (Evaluator::values). F ≥ 0 (and NaN) counts as positive. The
-///    dense path works through slabs of 16 cell layers, one per worker at a time from sampling
-///    to triangles a node layer at a time, so a worker holds F on three node layers and the
-///    bit sets of one slab rather than the whole grid (the two node layers above a slab are
-///    sampled again by the next one).
-///  - Every sign-changing grid edge gets exactly one vertex, numbered by the edge (a per-row
-///    prefix count over bit sets, as in Flying Edges, Schroeder et al. 2015), so neighbouring
-///    cells share it without welding by coordinates. The vertex starts at the linear
-///    interpolation and is refined on the edge, in batches over all edges: for polynomials by
-///    Newton's method on the edge's univariate restriction, kept inside a bracket whose
-///    Illinois estimate (regula falsi) takes over where Newton's steps stop shrinking fast, as
-///    where the surface touches the edge; for other fields by the Illinois method.
-///  - Each cube's surface is built from the segments on its six faces: a face with four sign
-///    changes is resolved by the asymptotic decider (Nielson & Hamann 1991), computed from the
-///    face's own values in one canonical order, so both cubes that share a face connect the
-///    same points. The segments close into oriented cycles (positive side on the left, seen
-///    from outside the cube), every cycle is a disc, triangulated to maximise the smallest
-///    triangle quality, never with a diagonal between two points of one cube face. The
-///    result is a consistently oriented, watertight 2-manifold away from the grid's edge;
-///    triangles are counter-clockwise seen from the side ∇F points to.
-///  - Degenerate triangles (an edge shorter than `collapse_fraction` cells) are removed by
-///    edge collapses that keep the mesh watertight (see collapse_short_edges).
-///  - With `clip`, triangles are cut where the clip function G changes sign. A new vertex is
-///    put where the mesh edge meets G = 0 and then moved onto the curve F = 0 ∩ G = 0 by
-///    Newton's method on both constraints (minimum-norm steps); a vertex already within
-///    `clip_snap_fraction` cells of the clip surface is moved onto that curve instead of
-///    cutting next to it. Those vertices are flagged `is_boundary`; they satisfy |G| ≤ 1e-12
-///    (G is exactly zero up to rounding after the final projection onto the clip part).
-///    A triangle with all three vertices on the clip is kept only where F = 0 runs along the
-///    clip there (∇F and ∇G within 26° of parallel); elsewhere it is a sliver in the clip
-///    surface (a grid face in a box clip's plane), often facing against ∇F, and is dropped.
-///  - The sparse path samples the grid in bricks of `brick_cells`³ cells and only where the
-///    surface may be. A brick is kept when the signs of F at its 8 corners and its centre
-///    differ, or when min |F| over those 9 points ≤ `sparse_margin` · |∇F(centre)| · (brick
-///    half diagonal), a first-order distance test. It can miss surface parts that fit inside
-///    a brick without reaching its corners or centre where F varies much faster than its
-///    central gradient predicts (tiny components, thin spikes); raise `sparse_margin` or
-///    lower `brick_cells` when in doubt. Both paths number vertices and triangulate cubes
-///    alike, so they give the same mesh wherever the sparse one keeps every brick that meets
-///    the surface.
+/// What the result is:
+///  - a consistently oriented, watertight 2-manifold away from the grid's edge and the clip;
+///    triangles are counter-clockwise seen from the side ∇F points to;
+///  - with `clip`, the vertices where triangles were cut at the clip surface G = 0 lie on the
+///    curve F = 0 ∩ G = 0 and are flagged `is_boundary` (|G| ≤ 1e-12 there);
+///  - F ≥ 0 and NaN count as positive; a grid node where F is not finite is counted in
+///    PolygonizeStats::nan_samples;
+///  - the sparse path (GridMode::kSparse, or kAuto on large grids) samples only bricks that a
+///    first-order distance test keeps, and can miss surface parts that fit inside a brick
+///    without reaching its corners or centre (tiny components, thin spikes): raise
+///    `sparse_margin` or lower `brick_cells` when in doubt. Elsewhere it gives the dense path's
+///    mesh.
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -69,7 +38,7 @@ struct PolygonizeOptions {
   long long sparse_auto_nodes = 300LL * 300 * 300;
   /// Cells per side of a sparse brick.
   int brick_cells = 8;
-  /// Safety factor of the sparse brick test (see the header comment).
+  /// Safety factor of the sparse brick test (docs/algorithms.md D.7).
   double sparse_margin = 2.0;
   /// Refinement steps at most per edge vertex, one evaluation of F each (0: linear
   /// interpolation only).

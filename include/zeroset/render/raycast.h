@@ -1,18 +1,8 @@
 #pragma once
-/// Exact ray casting of one surface from one eye point (DESIGN §5, ALGORITHMS §E).
-///
-/// Polynomial surfaces: F is translated to the eye once (G(p) = F(eye + p)), so that along a
-/// ray eye + t·d the restriction is f(t) = Σ_k t^k G_k(d) with G_k the homogeneous parts of
-/// G. The rays of an image row have directions d = base + s·step; each G_k(base + s·step) is
-/// expanded once per row into a polynomial of degree k in s, so that a ray costs O(degree²)
-/// to restrict (Horner in s) whatever the number of terms. The ray is clipped to the clip
-/// volume and the first root in that interval is isolated by `RootFinder`, even roots
-/// included; a neighbouring ray's hit may guide the search (`RootGuess`), never change it.
-/// Other expressions (and polynomials above degree Field::kMaxExpansionDegree, 24, which are
-/// not expanded): interval arithmetic
-/// over the field's tape along the ray, subdivided where the enclosure of F
-/// contains 0 and F is not provably monotone (enclosure of ∇F·d), then sign-change
-/// refinement.
+/// Exact ray casting of one surface from one eye point (docs/algorithms.md E). Polynomials
+/// (up to Field::kMaxExpansionDegree, 24) are restricted exactly to each ray, one row of rays
+/// at a time, and the first root inside the clip is isolated by `RootFinder`, even roots
+/// included; other expressions go through interval arithmetic along the ray.
 #include <memory>
 #include <optional>
 #include <span>
