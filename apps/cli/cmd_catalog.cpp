@@ -71,7 +71,8 @@ void run_info(const SurfaceArgs& args, bool as_json) {
     fmt::print("degree:     not a polynomial (ray tracing uses interval arithmetic)\n");
   if (s.ranges.empty()) fmt::print("parameters: none\n");
   for (const auto& r : s.ranges)
-    fmt::print("parameter:  {} = {:g}   (range {:g} .. {:g})\n", r.name, r.value, r.min, r.max);
+    fmt::print("parameter:  {} = {:g}   (range {:g} .. {:g})\n", r.name,
+               s.field.parameter_values()[s.field.parameter_index(r.name)], r.min, r.max);
   if (s.clip.is_empty_spec())
     fmt::print("clip:       none (unbounded: give --clip sphere:R for sampling, meshing, "
                "rendering)\n");

@@ -17,8 +17,8 @@
 #include "zeroset/mesh/mesh_io.h"
 #include "zeroset/mesh/polygonize.h"
 #include "zeroset/mesh/quality.h"
+#include "zeroset/mesh/settings.h"
 #include "zeroset/render/render.h"
-#include "zeroset/surface/json_read.h"
 
 namespace zeroset::cli {
 namespace {
@@ -46,24 +46,23 @@ struct MeshArgs {
   CLI::Option* boundary_opt = nullptr;
 };
 
-// --improve: "off" → 0 steps, "auto" → until converged (at most the default maximum),
-// a number → at most that many steps.
-std::optional<int> parse_improve(const std::string& text, const std::string& where) {
-  if (text == "off") return 0;
-  if (text == "auto") return std::nullopt;
-  try {
-    size_t used = 0;
-    const long long n = std::stoll(text, &used);
-    if (used == text.size() && n >= 0 && n <= 1000000) return static_cast<int>(n);
-  } catch (const std::exception&) {
-  }
-  throw InvalidArgument(where, text, "use auto, off or a number of steps (0 to 1000000)");
-}
-
-BoundaryMode parse_boundary(const std::string& text, const std::string& where) {
-  if (text == "fix") return BoundaryMode::kFixed;
-  if (text == "constrain") return BoundaryMode::kConstrained;
-  throw InvalidArgument(where, text, "use fix or constrain");
+// Settings from a scene file's "mesh" object (as the viewer saves them, or with improve as
+// --improve takes it); flags given explicitly win. The scene's values are checked as it is
+// read, the flags' here, by the same validator.
+MeshSettings settings_from(const MeshArgs& a, const Scene& scene) {
+  MeshSettings m;
+  m.cells = a.resolution;
+  if (scene.settings.contains("mesh"))
+    apply_mesh_settings(scene.settings["mesh"], m, "'" + a.surface.spec + "'");
+  validate_flags(
+      [&] {
+        if (a.resolution_opt->count()) m.cells = a.resolution;
+        if (a.improve_opt->count()) apply_improve(a.improve, m);
+        if (a.boundary_opt->count()) m.boundary = parse_boundary(a.boundary);
+        validate_settings(m);
+      },
+      {{"cells", "--resolution"}, {"improve", "--improve"}, {"boundary", "--boundary"}});
+  return m;
 }
 
 double physical_memory_bytes() {
@@ -163,43 +162,8 @@ void run_mesh(const MeshArgs& a) {
   Scene scene = a.surface.resolve();
   const Surface& surface = scene.surface;
 
-  // Settings from a scene file's "mesh" object, as the viewer saves them (cells, improve as
-  // true or false) or with improve as --improve takes it; flags given explicitly win.
-  int resolution = a.resolution;
-  std::string improve_text = a.improve, boundary_text = a.boundary;
-  std::string improve_where = "--improve", boundary_where = "--boundary";
-  if (scene.settings.contains("mesh")) {
-    const auto& j = scene.settings["mesh"];
-    const std::string origin = "'" + a.surface.spec + "'";
-    if (!j.is_object()) json_read::fail(origin, "/mesh", "expected an object");
-    json_read::known_keys(j, {"cells", "improve", "boundary"}, origin, "/mesh");
-    if (j.contains("cells") && !a.resolution_opt->count())
-      resolution =
-          static_cast<int>(json_read::whole(j.at("cells"), origin, "/mesh/cells", 1, 32768));
-    if (j.contains("improve") && !a.improve_opt->count()) {
-      const auto& v = j.at("improve");
-      if (v.is_boolean())
-        improve_text = v.get<bool>() ? "auto" : "off";
-      else if (v.is_string())
-        improve_text = v.get<std::string>();
-      else if (v.is_number_integer())
-        improve_text = std::to_string(v.get<long long>());
-      else
-        json_read::fail(origin, "/mesh/improve",
-                        "expected true, false, \"auto\", \"off\" or a number of steps");
-      improve_where = origin + ": /mesh/improve";
-    }
-    if (j.contains("boundary") && !a.boundary_opt->count()) {
-      boundary_text = json_read::string(j.at("boundary"), origin, "/mesh/boundary");
-      boundary_where = origin + ": /mesh/boundary";
-    }
-  }
-  if (resolution < 1)
-    throw InvalidArgument("--resolution", std::to_string(resolution),
-                          "must be at least 1 (cells along the longest side of the clip box)");
-  if (resolution > 32768)
-    throw InvalidArgument("--resolution", std::to_string(resolution), "must be at most 32768");
-  const std::optional<int> improve_steps = parse_improve(improve_text, improve_where);
+  const MeshSettings settings = settings_from(a, scene);
+  const int resolution = settings.cells;
 
   PolygonizeOptions po;
   po.cells = resolution;
@@ -209,13 +173,13 @@ void run_mesh(const MeshArgs& a) {
   else if (a.grid == "sparse") po.mode = GridMode::kSparse;
   else if (a.grid != "auto") throw InvalidArgument("--grid", a.grid, "use auto, dense or sparse");
   ImproveOptions io;
-  io.boundary = parse_boundary(boundary_text, boundary_where);
+  io.boundary = settings.boundary;
   io.use_curvature = !a.no_curvature;
   io.use_singularity = !a.no_singularity;
   io.flip_edges = !a.no_flips;
   io.find_singular_points = !a.no_find_singular;
   io.threads = global_flags().threads;
-  const int max_steps = improve_steps.value_or(io.max_steps);
+  const int max_steps = settings.improve ? settings.max_improve_steps.value_or(io.max_steps) : 0;
   check_memory(surface, po);
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -288,7 +252,7 @@ void run_mesh(const MeshArgs& a) {
                         {"flipped_triangles", is.flipped_triangles},
                         {"singular_points_found", found},
                         {"max_residual", is.max_residual},
-                        {"boundary", boundary_text},
+                        {"boundary", std::string(to_string(settings.boundary))},
                         {"curvature", io.use_curvature},
                         {"singularity", io.use_singularity},
                         {"flips", io.flip_edges},

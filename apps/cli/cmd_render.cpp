@@ -42,8 +42,7 @@ struct LookArgs {
     if (with_aa)
       aa_opt = cmd->add_option("--aa", aa,
                                "Anti-aliasing: N×N rays per pixel, 1 = none (default 2, or the "
-                               "scene file's)")
-                   ->check(CLI::Range(1, 16));
+                               "scene file's)");
     cmd->add_option("--camera", camera,
                     "Orbit camera AZIMUTH,ELEVATION[,DISTANCE] in degrees (z up); distance 0 or "
                     "omitted fits the clip volume")
@@ -96,6 +95,11 @@ struct LookArgs {
     if (!background.empty()) o.background = parse_display_color(background, "--background");
     if (!front.empty()) o.front.diffuse = parse_display_color(front, "--front");
     if (!back.empty()) o.back.diffuse = parse_display_color(back, "--back");
+    validate_flags([&] { validate_settings(o); }, {{"size", "--size"},
+                                                   {"samples", "--aa"},
+                                                   {"background", "--background"},
+                                                   {"front/diffuse", "--front"},
+                                                   {"back/diffuse", "--back"}});
     return o;
   }
 

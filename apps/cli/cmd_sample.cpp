@@ -32,7 +32,7 @@ struct SampleArgs {
   bool no_clip_projection = false;
   bool no_snap = false;
   bool plain_repulsion = false;
-  double grading = -1;
+  double grading = 0;
   std::string radius_adapt;
   std::string animate;
   std::size_t settle_steps = 1000;
@@ -51,10 +51,13 @@ struct SampleArgs {
   CLI::Option* seed_count_opt = nullptr;
   CLI::Option* seed_opt = nullptr;
   CLI::Option* steps_opt = nullptr;
+  CLI::Option* grading_opt = nullptr;
 };
 
+
 // Settings from a scene file's "floaters" object (keys named as the FloaterOptions fields);
-// command-line flags given explicitly win.
+// command-line flags given explicitly win. The scene's values are checked as it is read, the
+// flags' here, by the same validator.
 FloaterOptions options_from(const SampleArgs& a, const Scene& scene) {
   FloaterOptions o;
   if (scene.settings.contains("floaters"))
@@ -67,9 +70,14 @@ FloaterOptions options_from(const SampleArgs& a, const Scene& scene) {
   if (a.no_clip_projection) o.clip_projection = false;
   if (a.no_snap) o.snap_to_nodes = false;
   if (a.plain_repulsion) o.scaled_repulsion = false;
-  if (a.grading >= 0) o.radius_grading = a.grading;
+  if (a.grading_opt->count()) o.radius_grading = a.grading;
   if (!a.radius_adapt.empty())
     o.radius_adapt = parse_radius_adapt(a.radius_adapt, "--radius-adapt");
+  validate_flags([&] { validate_settings(o); }, {{"radius", "--radius"},
+                                                  {"max_count", "--max-count"},
+                                                  {"seed_count", "--seed-count"},
+                                                  {"seed", "--seed"},
+                                                  {"radius_grading", "--grading"}});
   o.threads = global_flags().threads;
   return o;
 }
@@ -173,8 +181,6 @@ void run_sample(const SampleArgs& a) {
     throw InvalidArgument("--stats", a.stats, "use a .json name");
   if (!(a.disk_scale > 0) || !std::isfinite(a.disk_scale))
     throw InvalidArgument("--disk-scale", fmt::format("{}", a.disk_scale), "must be positive");
-  if (a.radius_opt->count() && !(a.radius > 0 && std::isfinite(a.radius)))
-    throw InvalidArgument("--radius", fmt::format("{}", a.radius), "must be a positive length");
   if (a.band < 0 || !std::isfinite(a.band))
     throw InvalidArgument("--band", fmt::format("{}", a.band), "must not be negative");
   const auto [width, height] = parse_size(a.size, "--size");
@@ -334,12 +340,12 @@ void register_sample_command(CLI::App& app) {
   a->surface.add_to(cmd);
   a->radius_opt = cmd->add_option("--radius", a->radius,
                                   "Nominal floater radius sigma^ (the density knob; spacing is "
-                                  "about 1.5 sigma^). Default: from the surface's area so that "
+                                  "about 1.5 sigma^). Default (or 0): from the surface's area so that "
                                   "about max-count/3 floaters would cover it uniformly. "
                                   "Kept within [1e-9, 1] times the scene radius")
                       ->type_name("LENGTH");
-  a->max_count_opt = cmd->add_option("--max-count", a->max_count, "Population cap (default 2000)")
-                         ->check(CLI::Range(std::size_t{1}, std::size_t{100'000'000}));
+  a->max_count_opt = cmd->add_option("--max-count", a->max_count,
+                                     "Population cap (default 2000, at most 100000000)");
   a->seed_count_opt = cmd->add_option("--seed-count", a->seed_count,
                                       "Random floaters inserted at the start (default 200)");
   a->steps_opt = cmd->add_option("--steps", a->steps,
@@ -360,14 +366,12 @@ void register_sample_command(CLI::App& app) {
   cmd->add_flag("--plain-repulsion", a->plain_repulsion,
                 "Witkin-Heckbert's desired velocity exactly, instead of pair forces scaled by "
                 "the pair's mean radius (with it a graded density never settles)");
-  cmd->add_option("--grading", a->grading,
-                  "How fast the fission radius may grow with distance from a neighbour's "
-                  "(default 0.1; 0: off)")
-      ->check(CLI::NonNegativeNumber);
+  a->grading_opt = cmd->add_option("--grading", a->grading,
+                                   "How fast the fission radius may grow with distance from a "
+                                   "neighbour's (default 0.1; 0: off)");
   cmd->add_option("--radius-adapt", a->radius_adapt,
                   "Per-floater fission radius: wh (global, original method), curvature, "
-                  "singular or mixed (default, alpha/3 + 2 beta/3)")
-      ->check(CLI::IsMember({"wh", "curvature", "singular", "mixed"}));
+                  "singular or mixed (default, alpha/3 + 2 beta/3)");
   cmd->add_option("--animate", a->animate,
                   "Move a parameter while sampling, e.g. mu=1.02:2.44 (after settling at the "
                   "start value; needs --steps)")

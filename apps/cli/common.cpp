@@ -9,6 +9,7 @@
 
 #include "zeroset/error.h"
 #include "zeroset/io/atomic_file.h"
+#include "zeroset/render/settings.h"
 
 namespace zeroset::cli {
 
@@ -87,10 +88,26 @@ std::pair<int, int> parse_size(const std::string& text, const std::string& flag)
   if (x == std::string::npos) throw InvalidArgument(flag, text, "expected WIDTHxHEIGHT, e.g. 800x600");
   const double w = parse_finite(text.substr(0, x), flag, text);
   const double h = parse_finite(text.substr(x + 1), flag, text);
-  if (w < 1 || h < 1 || w != std::floor(w) || h != std::floor(h))
-    throw InvalidArgument(flag, text, "width and height must be positive whole numbers");
-  if (w * h > 100e6) throw InvalidArgument(flag, text, "larger than 100 megapixels");
+  if (w != std::floor(w) || h != std::floor(h))
+    throw InvalidArgument(flag, text, "width and height must be whole numbers");
+  try {
+    validate_image_size(static_cast<long long>(std::clamp(w, -1e15, 1e15)),
+                        static_cast<long long>(std::clamp(h, -1e15, 1e15)));
+  } catch (const SettingError& e) {
+    throw InvalidArgument(flag, text, e.why());
+  }
   return {static_cast<int>(w), static_cast<int>(h)};
+}
+
+void validate_flags(const std::function<void()>& validate, FlagNames flags) {
+  try {
+    validate();
+  } catch (const SettingError& e) {
+    std::string flag = e.key();
+    for (const auto& [key, name] : flags)
+      if (key == e.key()) flag = name;
+    throw InvalidArgument(flag, e.value(), e.why());
+  }
 }
 
 Progress::Progress(std::string label, bool quiet)

@@ -2,7 +2,10 @@
 // Shared pieces of the `zeroset` subcommands: the SURFACE argument, --param/--clip,
 // progress bars, --stats files. Every subcommand registers itself through one function.
 #include <CLI/CLI.hpp>
+#include <functional>
+#include <initializer_list>
 #include <map>
+#include <string_view>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -32,8 +35,15 @@ struct ParamRange {
   double from = 0, to = 0;
 };
 ParamRange parse_range(const std::string& text, const std::string& flag);
-/// Parses "WxH" (positive). Throws InvalidArgument.
+/// Parses "WxH" (whole numbers within validate_image_size's limits). Throws InvalidArgument.
 std::pair<int, int> parse_size(const std::string& text, const std::string& flag);
+
+/// Which flag sets each key of a settings object, e.g. {"max_count", "--max-count"}.
+using FlagNames = std::initializer_list<std::pair<std::string_view, std::string_view>>;
+/// Runs a settings validator on what the flags set; its SettingError becomes InvalidArgument
+/// naming the flag that sets the key (the key itself when no flag does), with the validator's
+/// words, so a flag and a scene file's entry are refused alike.
+void validate_flags(const std::function<void()>& validate, FlagNames flags);
 
 /// A progress bar on stderr; silent when stderr is not a terminal or --quiet was given.
 class Progress {

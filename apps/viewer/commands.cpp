@@ -6,60 +6,268 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <limits>
 
+#include "viewer_state.h"
+#include "viewer_state_detail.h"
 #include "zeroset/error.h"
+#include "zeroset/floaters/floaters.h"
+#include "zeroset/mesh/settings.h"
 
 namespace zeroset::viewer {
+
+namespace {
+
+// ---- the handlers of the state commands (frame-loop commands are the script runner's) -------
+
+// The actions report their own failures through the guard; the command fails with them.
+void require(bool ok) {
+  if (!ok) throw detail::ActionFailed{};
+}
+
+using Args = std::vector<std::string>;
+
+void run_equation(ViewerState& s, const CommandLine& c) { require(s.set_equation(c.rest)); }
+void run_catalog(ViewerState& s, const CommandLine& c) { require(s.select_catalog(c.args[0])); }
+void run_load(ViewerState& s, const CommandLine& c) { require(s.load_scene(c.args[0])); }
+
+void run_param(ViewerState& s, const CommandLine& c) {
+  require(s.set_parameter(c.args[0], parse_number(c.args[1], c.args[0])));
+}
+
+void run_range(ViewerState& s, const CommandLine& c) {
+  const Args& a = c.args;
+  require(s.set_parameter_range(a[0], parse_number(a[1], "min"), parse_number(a[2], "max")));
+}
+
+void run_clip(ViewerState& s, const CommandLine& c) { require(s.set_clip_specs(c.args)); }
+void run_mode(ViewerState& s, const CommandLine& c) { s.set_mode(parse_mode(c.args[0])); }
+
+void run_play(ViewerState& s, const CommandLine& c) {
+  require(s.play(c.args.empty() ? std::string_view{} : std::string_view(c.args[0])));
+}
+
+void run_pause(ViewerState& s, const CommandLine&) { s.pause(); }
+void run_loop(ViewerState& s, const CommandLine& c) { s.set_loop(parse_on_off(c.args[0], "loop")); }
+
+void run_speed(ViewerState& s, const CommandLine& c) {
+  require(s.set_speed(parse_number(c.args[0], "speed")));
+}
+
+// KEY=VALUE → (KEY, VALUE); `command` names the command in the message.
+std::pair<std::string, std::string> split_key_value(const std::string& kv, const char* command) {
+  const size_t eq = kv.find('=');
+  if (eq == std::string::npos)
+    throw InvalidArgument(fmt::format("{}: expected KEY=VALUE, got '{}'", command, kv));
+  return {kv.substr(0, eq), kv.substr(eq + 1)};
+}
+
+void run_floaters(ViewerState& s, const CommandLine& c) {
+  if (c.args.size() == 1 && c.args[0] == "reset") {
+    s.reset_floaters();
+    return;
+  }
+  // The values' types here; their ranges are the library's validator's (set_floater_options).
+  constexpr long long kMost = std::numeric_limits<long long>::max();
+  FloaterOptions o = s.floater_options();
+  for (const auto& kv : c.args) {
+    const auto [key, value] = split_key_value(kv, "floaters");
+    if (key == "max_count")
+      o.max_count = static_cast<std::size_t>(parse_integer(value, key, 0, kMost));
+    else if (key == "seed_count")
+      o.seed_count = static_cast<std::size_t>(parse_integer(value, key, 0, kMost));
+    else if (key == "seed")
+      o.seed = static_cast<std::uint64_t>(parse_integer(value, key, 0, kMost));
+    else if (key == "radius")
+      o.radius = parse_number(value, key);
+    else if (key == "radius_grading")
+      o.radius_grading = parse_number(value, key);
+    else if (key == "cos_weight")
+      o.cos_weight = parse_on_off(value, key);
+    else if (key == "clip_projection")
+      o.clip_projection = parse_on_off(value, key);
+    else if (key == "snap_to_nodes")
+      o.snap_to_nodes = parse_on_off(value, key);
+    else if (key == "scaled_repulsion")
+      o.scaled_repulsion = parse_on_off(value, key);
+    else if (key == "radius_adapt")
+      o.radius_adapt = parse_radius_adapt(value, key);
+    else
+      throw InvalidArgument(fmt::format(
+          "floaters: unknown key '{}' (max_count, seed_count, seed, radius, radius_grading, "
+          "cos_weight, clip_projection, snap_to_nodes, scaled_repulsion, radius_adapt)", key));
+  }
+  require(s.set_floater_options(o));
+}
+
+void run_mesh(ViewerState& s, const CommandLine& c) {
+  // The values' types here; their ranges are the library's validator's (set_mesh_settings).
+  constexpr long long kMost = std::numeric_limits<int>::max();
+  MeshSettings m = s.mesh_settings();
+  for (const auto& kv : c.args) {
+    const auto [key, value] = split_key_value(kv, "mesh");
+    if (key == "cells") {
+      m.cells = static_cast<int>(parse_integer(value, key, -kMost, kMost));
+    } else if (key == "improve") {
+      // on and off as every on/off setting of the viewer; auto, off or steps as scene files.
+      try {
+        m.improve = parse_on_off(value, key);
+      } catch (const InvalidArgument&) {
+        apply_improve(value, m);
+      }
+    } else if (key == "max_steps") {
+      m.max_improve_steps = static_cast<int>(parse_integer(value, key, -kMost, kMost));
+    } else if (key == "boundary") {
+      m.boundary = parse_boundary(value);
+    } else {
+      throw InvalidArgument(
+          fmt::format("mesh: unknown key '{}' (cells, improve, max_steps, boundary)", key));
+    }
+  }
+  require(s.set_mesh_settings(m));
+}
+
+void run_draw(ViewerState& s, const CommandLine& c) {
+  const std::string& how = c.args[0];
+  if (how != "disks" && how != "points")
+    throw InvalidArgument("draw", how, "expected disks or points");
+  DisplaySettings d = s.display();
+  d.draw_points = how == "points";
+  require(s.set_display(d));
+}
+
+void run_disk_scale(ViewerState& s, const CommandLine& c) {
+  DisplaySettings d = s.display();
+  d.disk_scale = parse_number(c.args[0], "disk-scale");
+  require(s.set_display(d));
+}
+
+void run_point_size(ViewerState& s, const CommandLine& c) {
+  DisplaySettings d = s.display();
+  d.point_size_px = parse_number(c.args[0], "point-size");
+  require(s.set_display(d));
+}
+
+void run_wireframe(ViewerState& s, const CommandLine& c) {
+  DisplaySettings d = s.display();
+  d.wireframe = parse_on_off(c.args[0], "wireframe");
+  require(s.set_display(d));
+}
+
+void run_lights(ViewerState& s, const CommandLine& c) {
+  const std::string& how = c.args[0];
+  if (how != "follow" && how != "fixed")
+    throw InvalidArgument("lights", how, "expected follow or fixed");
+  s.set_lights_follow_camera(how == "follow");
+}
+
+void run_color(ViewerState& s, const CommandLine& c) {
+  const Args& a = c.args;
+  RenderOptions look = s.look();
+  const Color rgb(parse_number(a[1], "red"), parse_number(a[2], "green"),
+                  parse_number(a[3], "blue"));
+  if (a[0] == "front")
+    look.front.diffuse = rgb;
+  else if (a[0] == "back")
+    look.back.diffuse = rgb;
+  else if (a[0] == "background")
+    look.background = rgb;
+  else
+    throw InvalidArgument("color", a[0], "expected front, back or background");
+  require(s.set_look(look));
+}
+
+void run_camera(ViewerState& s, const CommandLine& c) {
+  const Args& a = c.args;
+  Camera cam = s.camera();
+  cam.azimuth_deg = parse_number(a[0], "azimuth");
+  cam.elevation_deg = parse_number(a[1], "elevation");
+  if (a.size() == 3) {
+    cam.distance = parse_number(a[2], "distance");
+    if (!(cam.distance > 0)) throw InvalidArgument("distance", a[2], "must be positive");
+  }
+  require(s.set_camera(cam));
+}
+
+void run_orbit(ViewerState& s, const CommandLine& c) {
+  Camera cam = s.camera();
+  cam.azimuth_deg += parse_number(c.args[0], "azimuth change");
+  cam.elevation_deg += parse_number(c.args[1], "elevation change");
+  require(s.set_camera(cam));
+}
+
+void run_zoom(ViewerState& s, const CommandLine& c) {
+  const double f = parse_number(c.args[0], "zoom");
+  if (!(f > 0)) throw InvalidArgument("zoom", c.args[0], "must be positive");
+  s.zoom(1 / f);
+}
+
+void run_pan(ViewerState& s, const CommandLine& c) {
+  s.pan(parse_number(c.args[0], "dx"), parse_number(c.args[1], "dy"));
+}
+
+void run_reset_view(ViewerState& s, const CommandLine&) { s.reset_view(); }
+void run_save_scene(ViewerState& s, const CommandLine& c) { require(s.save_scene(c.args[0])); }
+void run_save_mesh(ViewerState& s, const CommandLine& c) { require(s.save_mesh(c.args[0])); }
+
+void run_save_floaters(ViewerState& s, const CommandLine& c) {
+  require(s.save_floaters(c.args[0]));
+}
+
+void run_save_pov(ViewerState& s, const CommandLine& c) { require(s.save_pov(c.args[0])); }
+
+}  // namespace
 
 const std::vector<CommandInfo>& command_table() {
   static const std::vector<CommandInfo> table = {
       // surface
-      {"equation", 1, -1, "equation TEXT", "type an equation (the rest of the line)"},
-      {"catalog", 1, 1, "catalog NAME", "open a catalog surface with its defaults"},
-      {"load", 1, 1, "load FILE.json", "open a scene file"},
-      {"param", 2, 2, "param NAME VALUE", "set a parameter"},
-      {"range", 3, 3, "range NAME MIN MAX", "set a parameter's slider range"},
-      {"clip", 1, -1, "clip SPEC...", "replace the clip: sphere:R, box:H, plane:nx,ny,nz,d, ..."},
+      {"equation", 1, -1, "equation TEXT", "type an equation (the rest of the line)", run_equation},
+      {"catalog", 1, 1, "catalog NAME", "open a catalog surface with its defaults", run_catalog},
+      {"load", 1, 1, "load FILE.json", "open a scene file", run_load},
+      {"param", 2, 2, "param NAME VALUE", "set a parameter", run_param},
+      {"range", 3, 3, "range NAME MIN MAX", "set a parameter's slider range", run_range},
+      {"clip", 1, -1, "clip SPEC...", "replace the clip: sphere:R, box:H, plane:nx,ny,nz,d, ...", run_clip},
       // modes and animation
-      {"mode", 1, 1, "mode floaters|mesh|raytrace", "switch what the view shows"},
-      {"play", 0, 1, "play [NAME]", "animate a parameter through its range"},
-      {"pause", 0, 0, "pause", "stop the animation"},
-      {"loop", 1, 1, "loop on|off", "animate back and forth, or stop at the end"},
-      {"speed", 1, 1, "speed RANGES_PER_SECOND", "animation speed (0.1: one sweep in 10 s)"},
+      {"mode", 1, 1, "mode floaters|mesh|raytrace", "switch what the view shows", run_mode},
+      {"play", 0, 1, "play [NAME]", "animate a parameter through its range", run_play},
+      {"pause", 0, 0, "pause", "stop the animation", run_pause},
+      {"loop", 1, 1, "loop on|off", "animate back and forth, or stop at the end", run_loop},
+      {"speed", 1, 1, "speed RANGES_PER_SECOND", "animation speed (0.1: one sweep in 10 s)", run_speed},
       {"floaters", 1, -1, "floaters KEY=VALUE... | floaters reset",
        "max_count, radius (σ̂, 0 auto), cos_weight, radius_adapt (wh|curvature|singular|mixed), "
-       "clip_projection, snap_to_nodes, seed"},
-      {"mesh", 1, -1, "mesh KEY=VALUE...", "cells, improve (on|off), max_steps"},
-      {"draw", 1, 1, "draw disks|points", "how floaters are drawn"},
-      {"disk-scale", 1, 1, "disk-scale S", "disk radius as a multiple of the floater radius"},
-      {"point-size", 1, 1, "point-size PIXELS", "size of floaters drawn as points"},
-      {"wireframe", 1, 1, "wireframe on|off", "overlay the mesh edges"},
-      {"lights", 1, 1, "lights follow|fixed", "lights follow the camera, or stay in the world"},
-      {"color", 4, 4, "color front|back|background R G B", "a colour (components in [0, 1])"},
+       "clip_projection, snap_to_nodes, scaled_repulsion, seed, seed_count, radius_grading",
+       run_floaters},
+      {"mesh", 1, -1, "mesh KEY=VALUE...",
+       "cells, improve (on|off|auto|STEPS), max_steps, boundary (fix|constrain)", run_mesh},
+      {"draw", 1, 1, "draw disks|points", "how floaters are drawn", run_draw},
+      {"disk-scale", 1, 1, "disk-scale S", "disk radius as a multiple of the floater radius", run_disk_scale},
+      {"point-size", 1, 1, "point-size PIXELS", "size of floaters drawn as points", run_point_size},
+      {"wireframe", 1, 1, "wireframe on|off", "overlay the mesh edges", run_wireframe},
+      {"lights", 1, 1, "lights follow|fixed", "lights follow the camera, or stay in the world", run_lights},
+      {"color", 4, 4, "color front|back|background R G B", "a colour (components in [0, 1])", run_color},
       // camera
-      {"camera", 2, 3, "camera AZIMUTH ELEVATION [DISTANCE]", "set the orbit camera (degrees)"},
-      {"orbit", 2, 2, "orbit D_AZIMUTH D_ELEVATION", "turn the camera (degrees)"},
-      {"zoom", 1, 1, "zoom FACTOR", "come closer by FACTOR (< 1 moves away)"},
-      {"pan", 2, 2, "pan DX DY", "move the picture by pixels"},
-      {"reset-view", 0, 0, "reset-view", "back to the surface's camera"},
+      {"camera", 2, 3, "camera AZIMUTH ELEVATION [DISTANCE]", "set the orbit camera (degrees)", run_camera},
+      {"orbit", 2, 2, "orbit D_AZIMUTH D_ELEVATION", "turn the camera (degrees)", run_orbit},
+      {"zoom", 1, 1, "zoom FACTOR", "come closer by FACTOR (< 1 moves away)", run_zoom},
+      {"pan", 2, 2, "pan DX DY", "move the picture by pixels", run_pan},
+      {"reset-view", 0, 0, "reset-view", "back to the surface's camera", run_reset_view},
       // files
-      {"save-scene", 1, 1, "save-scene FILE.json", "surface, camera and settings"},
-      {"save-mesh", 1, 1, "save-mesh FILE.ply|obj|stl", "the current mesh (mesh mode)"},
-      {"save-floaters", 1, 1, "save-floaters FILE.ply", "the current floaters (floaters mode)"},
-      {"save-pov", 1, 1, "save-pov FILE.pov", "the view as a POV-Ray scene"},
+      {"save-scene", 1, 1, "save-scene FILE.json", "surface, camera and settings", run_save_scene},
+      {"save-mesh", 1, 1, "save-mesh FILE.ply|obj|stl", "the current mesh (mesh mode)", run_save_mesh},
+      {"save-floaters", 1, 1, "save-floaters FILE.ply", "the current floaters (floaters mode)", run_save_floaters},
+      {"save-pov", 1, 1, "save-pov FILE.pov", "the view as a POV-Ray scene", run_save_pov},
       // frame loop
-      {"frames", 1, 1, "frames N", "run N frames", true},
+      {"frames", 1, 1, "frames N", "run N frames"},
       {"wait", 0, 1, "wait [SECONDS]",
-       "run frames until the mode's work is done (default: at most 60 s)", true},
-      {"steps", 1, 2, "steps N [SECONDS]", "run frames until the floaters took N more steps",
-       true},
-      {"sleep", 1, 1, "sleep SECONDS", "run frames for this long", true},
-      {"screenshot", 1, 1, "screenshot FILE.png", "save the next frame", true},
-      {"ui", 1, 1, "ui on|off", "show or hide the panel", true},
-      {"stats", 0, 0, "stats", "print the live statistics as one JSON line", true},
+       "run frames until the mode's work is done (default: at most 60 s)"},
+      {"steps", 1, 2, "steps N [SECONDS]", "run frames until the floaters took N more steps"},
+      {"sleep", 1, 1, "sleep SECONDS", "run frames for this long"},
+      {"screenshot", 1, 1, "screenshot FILE.png", "save the next frame"},
+      {"ui", 1, 1, "ui on|off", "show or hide the panel"},
+      {"stats", 0, 0, "stats", "print the live statistics as one JSON line"},
       {"expect-error", 0, -1, "expect-error [TEXT]",
-       "the previous command must have failed (with TEXT in its message)", true},
-      {"quit", 0, 0, "quit", "close the viewer", true},
+       "the previous command must have failed (with TEXT in its message)"},
+      {"quit", 0, 0, "quit", "close the viewer"},
   };
   return table;
 }

@@ -9,16 +9,26 @@
 
 namespace zeroset::viewer {
 
+class ViewerState;
+struct CommandLine;
+
+/// Runs a state command on the viewer (its arguments already counted by check_command).
+/// Throws on bad arguments; a failed action has already set the error status.
+using CommandHandler = void (*)(ViewerState& state, const CommandLine& command);
+
 struct CommandInfo {
   std::string_view name;
   int min_args = 0;
   int max_args = 0;          ///< -1: any number (the rest of the line)
   std::string_view usage;    ///< e.g. "param NAME VALUE"
   std::string_view help;     ///< one line
-  bool is_frame_loop = false;  ///< needs the window's frame loop (handled by the script runner)
+  /// What the command does to the viewer state; nullptr for a command that needs the
+  /// window's frame loop (the script runner handles those).
+  CommandHandler run = nullptr;
+  bool is_frame_loop() const { return run == nullptr; }
 };
 
-/// Every command, in the order docs/viewer.md lists them.
+/// Every command, in the order docs/viewer.md lists them, each with its handler.
 const std::vector<CommandInfo>& command_table();
 /// The command with that name, or nullptr.
 const CommandInfo* find_command(std::string_view name);

@@ -86,9 +86,11 @@ void surface_section(ViewerState& state, PanelState& panel) {
     ImGui::Separator();
     ImGui::TextUnformatted("Parameters");
   }
-  for (const ParamSpec& r : ranges) {
+  const std::vector<double> values = state.surface().field.parameter_values();
+  for (size_t i = 0; i < ranges.size(); ++i) {
+    const ParamSpec& r = ranges[i];  // one per parameter, in the field's order
     ImGui::PushID(r.name.c_str());
-    double v = r.value, lo = r.min, hi = r.max;
+    double v = values[i], lo = r.min, hi = r.max;
     if (ImGui::SliderScalar(r.name.c_str(), ImGuiDataType_Double, &v, &lo, &hi, "%.5g"))
       state.set_parameter(r.name, v);
     if (ImGui::TreeNode("range")) {
@@ -229,8 +231,12 @@ void mesh_settings(ViewerState& state) {
   if (ImGui::Checkbox("Improve", &m.improve)) state.set_mesh_settings(m);
   help_marker("Run the paper's improver after marching cubes: a spring-mass system on F = 0 "
               "that pulls vertices into creases and singular points.");
-  ImGui::SliderInt("Max steps", &m.max_improver_steps, 1, 2000, "%d", ImGuiSliderFlags_Logarithmic);
-  if (ImGui::IsItemDeactivatedAfterEdit()) state.set_mesh_settings(m);
+  int steps = m.max_improve_steps.value_or(kLiveImproveSteps);
+  ImGui::SliderInt("Max steps", &steps, 1, 2000, "%d", ImGuiSliderFlags_Logarithmic);
+  if (ImGui::IsItemDeactivatedAfterEdit()) {
+    m.max_improve_steps = steps;
+    state.set_mesh_settings(m);
+  }
   DisplaySettings d = state.display();
   if (ImGui::Checkbox("Wireframe", &d.wireframe)) state.set_display(d);
 }

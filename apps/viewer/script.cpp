@@ -56,7 +56,7 @@ Script Script::parse(std::string_view text, const std::string& origin) {
     if (c.is_empty()) continue;
     try {
       const CommandInfo& info = check_command(c);
-      if (info.is_frame_loop) frame_loop_numbers(c);
+      if (info.is_frame_loop()) frame_loop_numbers(c);
       if (c.name == "mode") parse_mode(c.args[0]);
     } catch (const BadInput& e) {
       throw InvalidArgument(fmt::format("{}:{}: {}", origin, number, e.what()));
@@ -82,7 +82,7 @@ void Script::advance(ViewerState& state, ScriptHost& host, double now_s) {
     run(line, state, host, now_s);
     if (wait_ != Wait::kNone || is_finished_) return;
     const CommandInfo* info = find_command(line.command.name);
-    changed_since_frame = changed_since_frame || !info->is_frame_loop || line.command.name == "ui";
+    changed_since_frame = changed_since_frame || !info->is_frame_loop() || line.command.name == "ui";
   }
   settle_pending_failure(host);
   is_finished_ = true;

@@ -19,6 +19,7 @@
 #include "zeroset/floaters/floaters.h"
 #include "zeroset/io/image.h"
 #include "zeroset/mesh/improve.h"
+#include "zeroset/mesh/settings.h"
 #include "zeroset/mesh/mesh.h"
 #include "zeroset/mesh/polygonize.h"
 #include "zeroset/render/render.h"
@@ -78,12 +79,31 @@ struct DisplaySettings {
   bool wireframe = false;    ///< mesh: overlay the edges
 };
 
-/// Mesh mode settings.
-struct MeshSettings {
-  int cells = 64;          ///< marching cubes cells along the longest side of the clip box
-  bool improve = true;     ///< run the improver after polygonizing
-  int max_improver_steps = 200;
-};
+/// Checks disk_scale in (0, 10] and point_size_px in [1, 64]; throws SettingError naming the
+/// command ("disk-scale", "point-size").
+void validate_display(const DisplaySettings& display);
+
+// The viewer computes live and draws every result while the user watches, so it keeps tighter
+// limits than the library's (zeroset sample and zeroset mesh take the library's). They are
+// checked after the library's validators, for viewer commands and scene files alike.
+
+/// Most floaters the viewer simulates live (the library takes up to kMaxFloaterCount).
+inline constexpr std::size_t kMaxLiveFloaters = 2'000'000;
+/// Marching cubes cells for live meshing (the library takes kMinMeshCells to kMaxMeshCells).
+inline constexpr int kMinLiveCells = 4;
+inline constexpr int kMaxLiveCells = 512;
+/// The viewer's mesh settings before a scene or the user changes them.
+inline constexpr MeshSettings kLiveMeshDefaults{.cells = 64,
+                                                .improve = true,
+                                                .max_improve_steps = std::nullopt,
+                                                .boundary = BoundaryMode::kConstrained};
+/// Improver steps at most when "improve" is auto (each step is drawn).
+inline constexpr int kLiveImproveSteps = 200;
+
+/// Refuses settings beyond the viewer's live limits with SettingError ("max_count", "cells"),
+/// saying which limit and that the command line takes more.
+void check_live_limits(const FloaterOptions& options);
+void check_live_limits(const MeshSettings& settings);
 
 /// A status line: the result of the last action, or a worker's message.
 struct StatusLine {
@@ -179,10 +199,12 @@ class ViewerState {
   bool set_speed(double ranges_per_second);
   const Animation& animation() const { return animation_; }
 
+  /// Validated as the library does, then within the live limits.
   bool set_floater_options(const FloaterOptions& options);
   const FloaterOptions& floater_options() const { return floater_options_; }
   /// Removes every floater and seeds again.
   void reset_floaters();
+  /// Validated as the library does, then within the live limits.
   bool set_mesh_settings(const MeshSettings& settings);
   const MeshSettings& mesh_settings() const { return mesh_settings_; }
   bool set_display(const DisplaySettings& display);
@@ -267,7 +289,6 @@ class ViewerState {
   bool collect_results(double now_s);
   void restart_if_needed();
   int floater_threads() const;
-  void command_unguarded(const CommandLine& command);
 
   // what is shown
   Surface surface_;
@@ -278,7 +299,7 @@ class ViewerState {
   Mode mode_ = Mode::kRaytrace;
   Animation animation_;
   FloaterOptions floater_options_;
-  MeshSettings mesh_settings_;
+  MeshSettings mesh_settings_ = kLiveMeshDefaults;
   DisplaySettings display_;
   RenderOptions look_;
   int threads_ = 0;

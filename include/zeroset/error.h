@@ -41,6 +41,24 @@ class InvalidArgument : public BadInput {
   explicit InvalidArgument(const std::string& message) : BadInput(message) {}
 };
 
+/// A setting (a key of a scene file's "floaters", "mesh" or "render" object) has a value its
+/// rule refuses. The settings' validators throw it; each entry point names the setting its own
+/// way (a flag, a JSON pointer, a viewer command's key) and passes why() on unchanged, so one
+/// bad value gets the same words everywhere.
+class SettingError : public InvalidArgument {
+ public:
+  SettingError(const std::string& key, const std::string& value, const std::string& why)
+      : InvalidArgument(key, value, why), key_(key), value_(value), why_(why) {}
+  const std::string& key() const { return key_; }      ///< e.g. "max_count", "front/diffuse"
+  const std::string& value() const { return value_; }  ///< the refused value as text
+  const std::string& why() const { return why_; }      ///< e.g. "must lie in [1, 100000000]"
+
+ private:
+  std::string key_;
+  std::string value_;
+  std::string why_;
+};
+
 /// A file could not be read or written (unreadable input is bad input: exit code 2).
 class IoError : public BadInput {
  public:

@@ -1,5 +1,9 @@
 #include "zeroset/floaters/settings.h"
 
+#include <fmt/core.h>
+
+#include <cmath>
+
 #include "zeroset/error.h"
 #include "zeroset/surface/json_read.h"
 
@@ -10,33 +14,47 @@ using nlohmann::json;
 
 using json_read::boolean;
 using json_read::fail;
+using json_read::number;
 using json_read::whole;
 
-double non_negative(const json& j, const std::string& origin, const std::string& path) {
-  const double v = json_read::number(j, origin, path);
-  if (v < 0) fail(origin, path, "must not be negative");
-  return v;
+void check(bool ok, const char* key, const std::string& value, const std::string& why) {
+  if (!ok) throw SettingError(key, value, why);
 }
 
 }  // namespace
+
+void validate_settings(const FloaterOptions& o) {
+  check(std::isfinite(o.radius) && o.radius >= 0, "radius", fmt::format("{}", o.radius),
+        "must be a finite length ≥ 0 (0: chosen from the surface's area)");
+  check(o.max_count >= 1 && o.max_count <= kMaxFloaterCount, "max_count",
+        std::to_string(o.max_count), fmt::format("must lie in [1, {}]", kMaxFloaterCount));
+  check(o.seed_count <= kMaxFloaterCount, "seed_count", std::to_string(o.seed_count),
+        fmt::format("must lie in [0, {}] (0: min(max_count, 200))", kMaxFloaterCount));
+  check(o.seed <= kMaxFloaterSeed, "seed", std::to_string(o.seed),
+        fmt::format("must lie in [0, {}]", kMaxFloaterSeed));
+  check(std::isfinite(o.radius_grading) && o.radius_grading >= 0, "radius_grading",
+        fmt::format("{}", o.radius_grading), "must be finite and ≥ 0 (0: off)");
+}
 
 void apply_floater_settings(const json& floaters, FloaterOptions& options,
                             const std::string& origin) {
   const std::string base = "/floaters";
   if (!floaters.is_object()) fail(origin, base, "expected an object");
   FloaterOptions o = options;
+  // The types here; the ranges are validate_settings' (the same for every entry point).
+  const double most = 1e19;  // any whole number a std::uint64_t holds
   for (const auto& [key, value] : floaters.items()) {
     const std::string p = base + "/" + key;
     if (key == "max_count")
-      o.max_count = whole(value, origin, p, 1, 1e8);
+      o.max_count = whole(value, origin, p, 0, most);
     else if (key == "seed_count")
-      o.seed_count = whole(value, origin, p, 0, 1e8);
+      o.seed_count = whole(value, origin, p, 0, most);
     else if (key == "seed")
-      o.seed = whole(value, origin, p, 0, 9007199254740992.0);
+      o.seed = whole(value, origin, p, 0, most);
     else if (key == "radius")
-      o.radius = non_negative(value, origin, p);
+      o.radius = number(value, origin, p);
     else if (key == "radius_grading")
-      o.radius_grading = non_negative(value, origin, p);
+      o.radius_grading = number(value, origin, p);
     else if (key == "cos_weight")
       o.cos_weight = boolean(value, origin, p);
     else if (key == "clip_projection")
@@ -56,6 +74,11 @@ void apply_floater_settings(const json& floaters, FloaterOptions& options,
            "unknown key (known: max_count, seed_count, seed, radius, radius_grading, "
            "cos_weight, clip_projection, snap_to_nodes, scaled_repulsion, radius_adapt)");
     }
+  }
+  try {
+    validate_settings(o);
+  } catch (const SettingError& e) {
+    fail(origin, base + "/" + e.key(), e.why());
   }
   options = o;
 }

@@ -1,5 +1,7 @@
 #include "zeroset/render/settings.h"
 
+#include <fmt/core.h>
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -15,8 +17,29 @@ namespace {
 using nlohmann::json;
 
 using json_read::fail;
-using json_read::number_in;
+using json_read::number;
 using json_read::vec3;
+
+void check(bool ok, const std::string& key, const std::string& value, const std::string& why) {
+  if (!ok) throw SettingError(key, value, why);
+}
+
+std::string text(const Vec3& v) { return fmt::format("[{}, {}, {}]", v.x(), v.y(), v.z()); }
+
+void check_color(const Color& c, const std::string& key) {
+  check(c.allFinite() && (c.array() >= 0).all() && (c.array() <= 1).all(), key, text(c),
+        "components must lie in [0, 1]");
+}
+
+void check_material(const Material& m, const std::string& key) {
+  check_color(m.diffuse, key + "/diffuse");
+  check(m.ambient >= 0 && m.ambient <= 1, key + "/ambient", fmt::format("{}", m.ambient),
+        "must lie in [0, 1]");
+  check(m.specular >= 0 && m.specular <= 10, key + "/specular", fmt::format("{}", m.specular),
+        "must lie in [0, 10]");
+  check(m.shininess >= 0 && m.shininess <= 10000, key + "/shininess",
+        fmt::format("{}", m.shininess), "must lie in [0, 10000]");
+}
 
 Color color(const json& j, const std::string& origin, const std::string& path) {
   if (j.is_string()) {
@@ -27,10 +50,7 @@ Color color(const json& j, const std::string& origin, const std::string& path) {
     }
   }
   if (!j.is_array()) fail(origin, path, "expected '#rrggbb' or [r, g, b]");
-  const Vec3 c = vec3(j, origin, path);
-  if ((c.array() < 0).any() || (c.array() > 1).any())
-    fail(origin, path, "linear colour components must lie in [0, 1]");
-  return c;
+  return vec3(j, origin, path);  // its range is checked by validate_settings
 }
 
 void material(const json& j, Material& m, const std::string& origin, const std::string& path) {
@@ -40,11 +60,11 @@ void material(const json& j, Material& m, const std::string& origin, const std::
     if (key == "diffuse")
       m.diffuse = color(value, origin, p);
     else if (key == "ambient")
-      m.ambient = number_in(value, origin, p, 0, 1);
+      m.ambient = number(value, origin, p);
     else if (key == "specular")
-      m.specular = number_in(value, origin, p, 0, 10);
+      m.specular = number(value, origin, p);
     else if (key == "shininess")
-      m.shininess = number_in(value, origin, p, 0, 10000);
+      m.shininess = number(value, origin, p);
     else
       fail(origin, p, "unknown key (known: diffuse, ambient, specular, shininess)");
   }
@@ -60,6 +80,31 @@ json material_json(const Material& m) {
 }
 
 }  // namespace
+
+void validate_image_size(long long width, long long height) {
+  check(width >= 1 && height >= 1 && width <= kMaxImageSide && height <= kMaxImageSide, "size",
+        fmt::format("{}x{}", width, height),
+        fmt::format("width and height must lie in [1, {}]", kMaxImageSide));
+  check(static_cast<double>(width) * static_cast<double>(height) <= kMaxImagePixels, "size",
+        fmt::format("{}x{}", width, height),
+        fmt::format("must have at most {:.0f} pixels", kMaxImagePixels));
+}
+
+void validate_settings(const RenderOptions& o) {
+  validate_image_size(o.width, o.height);
+  check(o.samples >= 1 && o.samples <= kMaxSamples, "samples", std::to_string(o.samples),
+        fmt::format("must lie in [1, {}]", kMaxSamples));
+  check_color(o.background, "background");
+  check_material(o.front, "front");
+  check_material(o.back, "back");
+  for (size_t i = 0; i < o.lights.size(); ++i) {
+    const std::string key = "lights/" + std::to_string(i);
+    const Light& l = o.lights[i];
+    check(l.direction.allFinite() && l.direction.norm() > 0, key + "/direction",
+          text(l.direction), "must be finite and not zero");
+    check_color(l.color, key + "/color");
+  }
+}
 
 Color parse_display_color(const std::string& text, const std::string& what) {
   Color display;
@@ -89,8 +134,10 @@ Color parse_display_color(const std::string& text, const std::string& what) {
   return display.array().pow(2.2).matrix();
 }
 
-void apply_render_settings(const json& render, RenderOptions& o, const std::string& origin) {
+void apply_render_settings(const json& render, RenderOptions& options,
+                           const std::string& origin) {
   if (!render.is_object()) fail(origin, "/render", "expected an object");
+  RenderOptions o = options;
   for (const auto& [key, value] : render.items()) {
     const std::string p = "/render/" + key;
     if (key == "size") {
@@ -98,12 +145,15 @@ void apply_render_settings(const json& render, RenderOptions& o, const std::stri
           !value[1].is_number_integer())
         fail(origin, p, "expected [width, height]");
       const long long w = value[0].get<long long>(), h = value[1].get<long long>();
-      if (w < 1 || h < 1 || w > 32768 || h > 32768)
-        fail(origin, p, "width and height must lie in [1, 32768]");
+      try {
+        validate_image_size(w, h);  // before narrowing to int
+      } catch (const SettingError& e) {
+        fail(origin, p, e.why());
+      }
       o.width = static_cast<int>(w);
       o.height = static_cast<int>(h);
     } else if (key == "samples") {
-      o.samples = static_cast<int>(json_read::whole(value, origin, p, 1, 16));
+      o.samples = static_cast<int>(json_read::whole(value, origin, p, 0, 1e9));
     } else if (key == "background") {
       o.background = color(value, origin, p);
     } else if (key == "front") {
@@ -121,7 +171,6 @@ void apply_render_settings(const json& render, RenderOptions& o, const std::stri
         for (const auto& [lk, lv] : l.items()) {
           if (lk == "direction") {
             light.direction = vec3(lv, origin, lp + "/direction");
-            if (!(light.direction.norm() > 0)) fail(origin, lp + "/direction", "must not be zero");
           } else if (lk == "color") {
             light.color = color(lv, origin, lp + "/color");
           } else if (lk == "follows_camera") {
@@ -137,6 +186,12 @@ void apply_render_settings(const json& render, RenderOptions& o, const std::stri
       fail(origin, p, "unknown key (known: size, samples, background, front, back, lights)");
     }
   }
+  try {
+    validate_settings(o);
+  } catch (const SettingError& e) {
+    fail(origin, "/render/" + e.key(), e.why());
+  }
+  options = o;
 }
 
 json render_settings_to_json(const RenderOptions& o) {

@@ -233,10 +233,12 @@ Surface make_surface(const CatalogEntry& e) {
   s.name = e.name;
   s.title = e.title;
   s.field = compile_field(e.equation);
-  for (const auto& p : e.params) s.field.set_parameter(p.name, p.value);
+  for (const auto& p : e.params) {
+    s.field.set_parameter(p.name, p.value);
+    s.ranges.push_back({p.name, p.min, p.max});
+  }
   s.clip = e.clip;
   s.camera = e.camera;
-  s.ranges = e.params;
   s.singular_points_fn = e.singular_points;
   return s;
 }

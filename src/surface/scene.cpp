@@ -25,12 +25,6 @@ using json_read::known_keys;
 using json_read::number;
 using json_read::vec3;
 
-// Default slider range for a parameter the user introduced: around its value.
-ParamSpec default_range(const std::string& name, double value) {
-  const double span = std::max(1.0, std::abs(value));
-  return {name, value, value - span, value + span};
-}
-
 bool is_bare_name(const std::string& s) {
   if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
   for (char c : s)
@@ -124,30 +118,11 @@ Clip default_clip(const Field& field) {
 Surface surface_from_equation(const std::string& equation) {
   Surface s;
   s.field = compile_field(equation);
-  for (const auto& name : s.field.parameter_names())
-    s.ranges.push_back({name, std::nan(""), 0, 1});
+  for (const auto& name : s.field.parameter_names()) s.ranges.push_back({name, 0, 1});
   return s;
 }
 
 namespace {
-
-// Makes `ranges` follow the field's parameters and current values.
-void sync_ranges(Surface& s) {
-  std::vector<ParamSpec> out;
-  const auto& names = s.field.parameter_names();
-  const auto& values = s.field.parameter_values();
-  for (size_t i = 0; i < names.size(); ++i) {
-    ParamSpec spec = default_range(names[i], std::isfinite(values[i]) ? values[i] : 0.0);
-    for (const auto& r : s.ranges)
-      if (r.name == names[i] && r.min < r.max) {
-        spec.min = r.min;
-        spec.max = r.max;
-      }
-    spec.value = values[i];
-    out.push_back(spec);
-  }
-  s.ranges = std::move(out);
-}
 
 void apply_overrides(Scene& scene, const SurfaceOverrides& o) {
   Surface& s = scene.surface;
@@ -166,7 +141,7 @@ void apply_overrides(Scene& scene, const SurfaceOverrides& o) {
     for (const auto& spec : o.clip_specs) c.add(spec);
     s.clip = c;
   }
-  sync_ranges(s);
+  s.fit_ranges();  // a typed equation comes without ranges
 }
 
 }  // namespace
@@ -207,7 +182,7 @@ json scene_to_json(const Scene& scene) {
   for (const auto& r : s.ranges) {
     json p = {{"min", r.min}, {"max", r.max}};
     const int idx = s.field.parameter_index(r.name);
-    const double v = idx >= 0 ? s.field.parameter_values()[idx] : r.value;
+    const double v = idx >= 0 ? s.field.parameter_values()[idx] : std::nan("");
     if (std::isfinite(v)) p["value"] = v;
     params[r.name] = p;
   }
@@ -252,20 +227,21 @@ Scene scene_from_json(const json& j, const std::string& origin) {
       const std::string where = "/parameters/" + name;
       if (s.field.parameter_index(name) < 0)
         fail(origin, where, "the equation has no parameter '" + name + "'");
-      ParamSpec spec{name, std::nan(""), 0, 1};
+      ParamSpec spec{name, 0, 1};
+      double value = std::nan("");
       if (p.is_number()) {
-        spec.value = number(p, origin, where);
-        spec = default_range(name, spec.value);
+        value = number(p, origin, where);
+        spec.max = spec.min;  // no range given: fit_ranges makes one around the value
       } else if (p.is_object()) {
         known_keys(p, {"value", "min", "max"}, origin, where);
-        if (p.contains("value")) spec.value = number(p["value"], origin, where + "/value");
+        if (p.contains("value")) value = number(p["value"], origin, where + "/value");
         if (p.contains("min")) spec.min = number(p["min"], origin, where + "/min");
         if (p.contains("max")) spec.max = number(p["max"], origin, where + "/max");
         if (!(spec.min < spec.max)) fail(origin, where, "needs min < max");
       } else {
         fail(origin, where, "expected a number or {\"value\", \"min\", \"max\"}");
       }
-      if (std::isfinite(spec.value)) s.field.set_parameter(name, spec.value);
+      if (std::isfinite(value)) s.field.set_parameter(name, value);
       std::erase_if(s.ranges, [&](const ParamSpec& r) { return r.name == name; });
       s.ranges.push_back(spec);
     }
@@ -300,7 +276,7 @@ Scene scene_from_json(const json& j, const std::string& origin) {
       fail(origin, "/camera/fov_deg", "must lie between 0 and 180 degrees");
     if (c.contains("target")) s.camera.target = vec3(c["target"], origin, "/camera/target");
   }
-  sync_ranges(s);
+  s.fit_ranges();
   for (const auto& [key, value] : j.items())
     if (key != "zeroset_scene" && key != "name" && key != "equation" && key != "parameters" &&
         key != "clip" && key != "camera")

@@ -1,5 +1,6 @@
 #include "zeroset/surface/surface.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "zeroset/error.h"
@@ -38,6 +39,21 @@ double Surface::scene_radius() const {
   double r = 0.5 * b.diagonal();
   for (const auto& s : clip.spheres) r = std::min(r, (s.center - b.center()).norm() + s.radius);
   return r;
+}
+
+void Surface::fit_ranges() {
+  std::vector<ParamSpec> out;
+  const auto& names = field.parameter_names();
+  const auto& values = field.parameter_values();
+  for (size_t i = 0; i < names.size(); ++i) {
+    const double value = std::isfinite(values[i]) ? values[i] : 0.0;
+    const double span = std::max(1.0, std::abs(value));
+    ParamSpec spec{names[i], value - span, value + span};
+    for (const auto& r : ranges)
+      if (r.name == names[i] && r.min < r.max) spec = r;
+    out.push_back(spec);
+  }
+  ranges = std::move(out);
 }
 
 std::string Surface::label() const { return name.empty() ? field.source() : name; }

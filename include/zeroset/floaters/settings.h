@@ -1,13 +1,17 @@
 #pragma once
-/// The "floaters" object of a scene file: the FloaterOptions a scene carries, by field name,
-/// read by `zeroset sample` and the viewer and written by the viewer's save-scene.
+/// The floater settings a user gives, and the "floaters" object of a scene file: the
+/// FloaterOptions a scene carries, by field name, read by `zeroset sample` and the viewer and
+/// written by the viewer's save-scene.
 ///
 ///   "floaters": {"max_count": 2000, "radius": 0, "seed": 1, "seed_count": 200,
 ///                "cos_weight": true, "clip_projection": true, "snap_to_nodes": true,
 ///                "scaled_repulsion": true, "radius_grading": 0.1, "radius_adapt": "mixed"}
 ///
 /// Every key is optional; missing ones keep their current value. radius 0 chooses σ̂ from the
-/// surface's area.
+/// surface's area. The command line, scene files and the viewer check these settings with
+/// validate_settings below, so each refuses a bad value with the same words.
+#include <cstddef>
+#include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -15,10 +19,21 @@
 
 namespace zeroset {
 
-/// Applies `floaters` (the object above) to `options`. Throws BadInput naming `origin` and the
-/// JSON pointer of a malformed or out-of-range entry (e.g. "scene.json: /floaters/max_count:
-/// expected a whole number from 1 to 100000000"). Unknown keys are an error too, so typos do
-/// not pass silently.
+/// Most floaters (max_count) and most random seeds (seed_count) a run may ask for.
+inline constexpr std::size_t kMaxFloaterCount = 100'000'000;
+/// Largest random seed: scene files are JSON, whose numbers hold every whole number up to 2^53.
+inline constexpr std::uint64_t kMaxFloaterSeed = std::uint64_t{1} << 53;
+
+/// Checks the settings a user gives: radius finite and ≥ 0 (0: chosen from the surface's
+/// area), max_count in [1, kMaxFloaterCount], seed_count in [0, kMaxFloaterCount], seed in
+/// [0, kMaxFloaterSeed], radius_grading finite and ≥ 0. Throws SettingError naming the key as
+/// the scene file does.
+void validate_settings(const FloaterOptions& options);
+
+/// Applies `floaters` (the object above) to `options`, then validates them. Throws BadInput
+/// naming `origin` and the JSON pointer of a malformed or refused entry (e.g. "scene.json:
+/// /floaters/max_count: must lie in [1, 100000000]"). Unknown keys are an error too, so typos
+/// do not pass silently.
 void apply_floater_settings(const nlohmann::json& floaters, FloaterOptions& options,
                             const std::string& origin);
 

@@ -8,12 +8,20 @@
 
 namespace zeroset {
 
+/// A catalog surface's parameter: its default value and slider range.
+struct CatalogParam {
+  std::string name;
+  double value = 0;
+  double min = 0;
+  double max = 1;
+};
+
 struct CatalogEntry {
   std::string name;         ///< e.g. "kummer"
   std::string title;        ///< e.g. "Kummer quartic family (Rösch–Ruhl–Saupe 1997)"
   std::string equation;     ///< source in the surface language
   std::string description;  ///< one or two sentences, with what is known about its singularities
-  std::vector<ParamSpec> params;
+  std::vector<CatalogParam> params;
   Clip clip;
   Camera camera;
   SingularPointsFn singular_points;  ///< empty when none are known

@@ -11,10 +11,10 @@
 
 namespace zeroset {
 
-/// A parameter with its range (for sliders and animation).
+/// A parameter's range (for sliders and animation). Its value lives in the surface's field
+/// (Field::parameter_values), nowhere else.
 struct ParamSpec {
   std::string name;
-  double value = 0;
   double min = 0;
   double max = 1;
 };
@@ -45,6 +45,11 @@ struct Surface {
   Camera camera;
   std::vector<ParamSpec> ranges;  ///< one per parameter of `field`, in its order
   SingularPointsFn singular_points_fn;
+
+  /// Makes `ranges` one per parameter of `field`, in its order: a range given for the name
+  /// (with min < max) is kept, a missing one spans value ± max(1, |value|) (0 ± 1 for a
+  /// parameter without a value).
+  void fit_ranges();
 
   /// Known singular points for the current parameter values, inside the clip.
   std::vector<Vec3> singular_points() const;
