@@ -5,47 +5,18 @@
 #include <cmath>
 #include <limits>
 
-#include "critical_detail.h"
 #include "rng_detail.h"
 #include "spatial_hash_detail.h"
 #include "zeroset/detail/parallel.h"
+#include "zeroset/surface/analysis.h"
 
 namespace zeroset {
 namespace {
 
 constexpr std::size_t kBlock = 16384;  // candidates per parallel round
 constexpr std::size_t kChunk = 256;    // candidates per batched evaluation
-constexpr int kNewtonIterations = 40;
-
-// Newton's method onto F = 0 from p; false when it does not converge to `tolerance` (in
-// |F|/|∇F|) or strays more than `max_move` from where it started.
-bool project_onto_surface(Evaluator& ev, Vec3& p, double tolerance, double max_move) {
-  const Vec3 start = p;
-  for (int it = 0; it < kNewtonIterations; ++it) {
-    Vec3 g;
-    const double f = ev.value_gradient(p, g);
-    const double g2 = g.squaredNorm();
-    if (!std::isfinite(f) || !(g2 > 0) || !std::isfinite(g2)) return f == 0;
-    if (std::abs(f) / std::sqrt(g2) < tolerance) return (p - start).norm() <= max_move;
-    p -= (f / g2) * g;
-    if ((p - start).norm() > max_move) return false;
-  }
-  return false;
-}
-
-std::vector<Evaluator> make_evaluators(const Surface& surface) {
-  std::vector<Evaluator> evs;
-  for (int t = 0; t < detail::worker_count(0); ++t) evs.emplace_back(surface.field);
-  return evs;
-}
 
 }  // namespace
-
-double singular_distance(const Vec3& gradient, const Mat3& hessian) {
-  if (gradient.squaredNorm() == 0) return 0;
-  const detail::Corrector c = detail::newton_corrector(gradient, hessian);
-  return c.reaches ? c.step.norm() : std::numeric_limits<double>::infinity();
-}
 
 ReferenceSampling reference_sampling(const Surface& surface, const ReferenceOptions& options) {
   ReferenceSampling out;
@@ -56,7 +27,8 @@ ReferenceSampling reference_sampling(const Surface& surface, const ReferenceOpti
                                  ? options.max_candidates
                                  : 400 * std::max<std::size_t>(options.count, 1);
   const double tolerance = 1e-9 * radius;
-  std::vector<Evaluator> evs = make_evaluators(surface);
+  const int workers = detail::worker_count(0);
+  detail::EvaluatorPool evs(surface.field, workers);
   std::size_t in_shell = 0;
 
   while (out.points.size() < options.count && out.candidates < budget) {
@@ -65,9 +37,9 @@ ReferenceSampling reference_sampling(const Surface& surface, const ReferenceOpti
     const auto chunks = static_cast<std::int64_t>((m + kChunk - 1) / kChunk);
     std::vector<std::vector<Vec3>> found(static_cast<std::size_t>(chunks));
     std::vector<std::size_t> shell_hits(static_cast<std::size_t>(chunks), 0);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(static_cast <int>(evs.size()))
+#pragma omp parallel for schedule(dynamic, 1) num_threads(workers)
     for (std::int64_t c = 0; c < chunks; ++c) {
-      Evaluator& ev = evs[detail::worker_index()];
+      Evaluator& ev = evs.local();
       const std::size_t b = static_cast<std::size_t>(c) * kChunk;
       const std::size_t e = std::min(m, b + kChunk);
       std::array<double, kChunk> x, y, z, f, gx, gy, gz;
@@ -167,10 +139,7 @@ SampleMetrics measure_samples(const Surface& surface, std::span<const Vec3> samp
     }
     Vec3 g;
     const double f = ev.value_gradient(p, g);
-    const double gn = g.norm();
-    double r = f == 0 ? 0 : std::abs(f) / gn;
-    if (!std::isfinite(r)) r = std::numeric_limits<double>::max();
-    residuals.push_back(r);
+    residuals.push_back(residual(f, g.norm()));
   }
   if (!residuals.empty()) {
     const auto mid = residuals.begin() + static_cast<std::ptrdiff_t>(residuals.size() / 2);

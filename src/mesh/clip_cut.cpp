@@ -1,4 +1,4 @@
-// Cutting a mesh at the clip surface (polygonize.h) and projections onto the clip curve.
+// Cutting a mesh at the clip surface (polygonize.h).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -10,6 +10,7 @@
 #include "zeroset/detail/bracket.h"
 #include "zeroset/detail/parallel.h"
 #include "zeroset/mesh/adjacency.h"
+#include "zeroset/surface/analysis.h"
 
 namespace zeroset::detail {
 namespace {
@@ -28,40 +29,6 @@ Vec3 clip_crossing(const Clip& clip, const Vec3& in, const Vec3& out) {
 }
 
 }  // namespace
-
-Vec3 snap_to_clip(const Clip& clip, Vec3 p) {
-  for (int it = 0; it < 4; ++it) {
-    Vec3 grad;
-    const double g = clip.value_gradient(p, grad);
-    const double n2 = grad.squaredNorm();
-    if (!std::isfinite(g) || n2 == 0) break;
-    if (g == 0) break;
-    p -= (g / n2) * grad;
-  }
-  return p;
-}
-
-Vec3 project_onto_clip_curve(Evaluator& ev, const Clip& clip, const Vec3& p, double max_move) {
-  Vec3 x = p;
-  for (int it = 0; it < 40; ++it) {
-    Vec3 gf, gg;
-    const double f = ev.value_gradient(x, gf);
-    const double g = clip.value_gradient(x, gg);
-    if (!std::isfinite(f) || !gf.allFinite()) return snap_to_clip(clip, p);
-    // Minimum-norm step: x -= Jᵀ (J Jᵀ)⁻¹ (f, g), J = [∇F; ∇G], regularised where ∇F ∥ ∇G.
-    double a = gf.dot(gf), b = gf.dot(gg), d = gg.dot(gg);
-    const double reg = 1e-12 * (a + d);
-    a += reg, d += reg;
-    const double det = a * d - b * b;
-    if (!(det > 0)) return snap_to_clip(clip, p);
-    const double l0 = (d * f - b * g) / det, l1 = (a * g - b * f) / det;
-    const Vec3 step = l0 * gf + l1 * gg;
-    x -= step;
-    if ((x - p).norm() > max_move || !x.allFinite()) return snap_to_clip(clip, p);
-    if (step.norm() <= 1e-15 * (1 + x.norm())) break;
-  }
-  return snap_to_clip(clip, x);
-}
 
 void flag_open_boundary(Mesh& mesh) {
   mesh.is_boundary.resize(mesh.positions.size(), 0);

@@ -8,7 +8,6 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
 #include <fmt/core.h>
 
 #include "mesh_detail.h"
@@ -16,6 +15,7 @@
 #include "zeroset/error.h"
 #include "zeroset/mesh/adjacency.h"
 #include "zeroset/mesh/mesh_ops.h"
+#include "zeroset/surface/analysis.h"
 
 namespace zeroset {
 namespace {
@@ -50,21 +50,6 @@ void check_options(const ImproveOptions& o) {
   if (!(o.min_area_fraction >= 0 && o.min_area_fraction < 1))
     bad("min_area_fraction", o.min_area_fraction, "must be in [0, 1)");
   if (o.threads < 0) bad("threads", o.threads, "must be ≥ 0");
-}
-
-// Pseudo-inverse solve of H r = g (H symmetric): the Newton step towards ∇F = 0. Directions
-// where H (nearly) vanishes are left out, so a singular Hessian gives a long, not an
-// infinite, step; H = 0 gives infinity (no critical point in sight).
-Vec3 critical_point_step(const Mat3& h, const Vec3& g) {
-  if (!h.allFinite() || !g.allFinite()) return Vec3::Constant(std::numeric_limits<double>::infinity());
-  Eigen::SelfAdjointEigenSolver<Mat3> es(h);
-  const Vec3 lam = es.eigenvalues();
-  const double lmax = lam.cwiseAbs().maxCoeff();
-  if (!(lmax > 0)) return Vec3::Constant(std::numeric_limits<double>::infinity());
-  Vec3 r = Vec3::Zero();
-  for (int k = 0; k < 3; ++k)
-    if (std::abs(lam[k]) > 1e-9 * lmax) r += (es.eigenvectors().col(k).dot(g) / lam[k]) * es.eigenvectors().col(k);
-  return r;
 }
 
 }  // namespace
@@ -207,7 +192,7 @@ struct MeshImprover::State {
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 256)
     for (long long v = 0; v < n; ++v) {
       const FieldSample s = pool.local().sample(mesh.positions[static_cast<size_t>(v)], true, false);
-      const double r = critical_point_step(s.hessian, s.gradient).norm();
+      const double r = pseudo_inverse_step(s.gradient, s.hessian).norm();
       step_to_critical[static_cast<size_t>(v)] = r;
       beta[static_cast<size_t>(v)] = gamma > 0 && std::isfinite(r) ? std::min(r / gamma, 1.0) : 1.0;
     }
@@ -223,27 +208,15 @@ struct MeshImprover::State {
     std::vector<std::uint8_t> ok(cand.size(), 0);
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 4)
     for (long long c = 0; c < nc; ++c) {
-      Evaluator& ev = pool.local();
-      const Vec3 start = mesh.positions[cand[static_cast<size_t>(c)]];
-      Vec3 x = start;
-      bool converged_here = false;
-      for (int it = 0; it < 30; ++it) {
-        const FieldSample s = ev.sample(x, true, false);
-        const Vec3 d = critical_point_step(s.hessian, s.gradient);
-        if (!d.allFinite()) break;
-        x -= d;
-        if ((x - start).norm() > 2 * mean_edge) break;
-        if (d.norm() <= 1e-13 * (1 + x.norm())) {
-          converged_here = true;
-          break;
-        }
-      }
-      if (!converged_here) continue;
-      Vec3 g;
-      const double fx = ev.value_gradient(x, g);
-      if (g.norm() <= 1e-8 * grad_ref && std::abs(fx) <= 1e-8 * grad_ref * mean_edge &&
-          (surface.clip.is_empty_spec() || surface.clip.contains(x))) {
-        found[static_cast<size_t>(c)] = x;
+      // Any critical point, singular curves too (min_conditioning 0).
+      const auto x = find_critical_point(
+          pool.local(), mesh.positions[cand[static_cast<size_t>(c)]],
+          {.iterations = 30, .reach = 2 * mean_edge, .tolerance = 1e-13, .length = 1});
+      if (!x) continue;
+      if (x->gradient.norm() <= 1e-8 * grad_ref &&
+          std::abs(x->value) <= 1e-8 * grad_ref * mean_edge &&
+          (surface.clip.is_empty_spec() || surface.clip.contains(x->point))) {
+        found[static_cast<size_t>(c)] = x->point;
         ok[static_cast<size_t>(c)] = 1;
       }
     }
@@ -291,7 +264,7 @@ struct MeshImprover::State {
 
   Vec3 target(std::uint32_t v) const {
     Vec3 p = mesh.positions[v] + scale[v] * move[v];
-    if (mode[v] == kOnCurve) p = detail::snap_to_clip(surface.clip, p);
+    if (mode[v] == kOnCurve) p = snap_to_clip(surface.clip, p);
     return p;
   }
 
@@ -603,12 +576,12 @@ void MeshImprover::finish() {
         shortest = std::min(shortest, (s.mesh.positions[s.nb(v)[k]] - s.mesh.positions[v]).norm());
       Vec3 d;
       if (s.mode[v] == kOnCurve) {
-        d = detail::project_onto_clip_curve(s.pool.local(), s.surface.clip, s.mesh.positions[v],
+        d = project_onto_clip_curve(s.pool.local(), s.surface.clip, s.mesh.positions[v],
                                             0.5 * shortest) - s.mesh.positions[v];
       } else {
         const Vec3& g = s.grad[v];
         if (!(g.norm() > tiny)) continue;
-        d = -(s.f[v] / g.squaredNorm()) * g;
+        d = surface_newton_step(s.f[v], g);
       }
       const double len = d.norm(), limit = 0.25 * shortest;
       if (len > limit) d *= limit / len;
@@ -621,7 +594,7 @@ void MeshImprover::finish() {
   for (size_t v = 0; v < s.nv(); ++v) {
     if (s.mode[v] == kHeld && !s.mesh.is_boundary[v]) continue;  // singular points, held border
     const double g = s.grad[v].norm();
-    if (g > 0 && std::isfinite(g)) worst = std::max(worst, std::abs(s.f[v]) / g);
+    if (has_residual(s.f[v], g)) worst = std::max(worst, residual(s.f[v], g));
   }
   s.stats.max_residual = worst;
   compute_field_normals(s.mesh, s.surface, s.opt.threads);

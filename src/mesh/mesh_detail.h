@@ -23,13 +23,6 @@ ClipCutStats cut_at_clip(Mesh& mesh, const Surface& surface, double snap_distanc
 // Flags the vertices of edges that lie in one triangle only.
 void flag_open_boundary(Mesh& mesh);
 
-// Moves p exactly onto the clip surface G = 0 along ∇G (exact for spheres and planes).
-Vec3 snap_to_clip(const Clip& clip, Vec3 p);
-
-// Newton's method with minimum-norm steps on (F, G) = 0 from p, then snap_to_clip. When it
-// wanders farther than `max_move` from p it gives up and only snaps p onto G = 0.
-Vec3 project_onto_clip_curve(Evaluator& ev, const Clip& clip, const Vec3& p, double max_move);
-
 // Unit normal of triangle (a, b, c) times twice its area.
 inline Vec3 area_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
   return (b - a).cross(c - a);

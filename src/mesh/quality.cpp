@@ -7,6 +7,7 @@
 
 #include "mesh_detail.h"
 #include "zeroset/detail/parallel.h"
+#include "zeroset/surface/analysis.h"
 
 namespace zeroset {
 namespace {
@@ -102,8 +103,8 @@ MeshQuality measure_quality(const Mesh& mesh, const Surface& surface, const Qual
   for (size_t v = 0; v < P.size(); ++v) {
     if (near_singular(P[v])) continue;
     const double gl = g[v].norm();
-    if (!(gl > 0) || !std::isfinite(f[v])) continue;
-    const double r = std::abs(f[v]) / gl;
+    if (!has_residual(f[v], gl)) continue;
+    const double r = residual(f[v], gl);
     q.max_residual = std::max(q.max_residual, r);
     sq += r * r;
     ++q.residual_vertices;

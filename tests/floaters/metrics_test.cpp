@@ -69,31 +69,6 @@ TEST(ReferenceSampling, EmptySurfaceGivesNothing) {
   EXPECT_EQ(ref.candidates, 50000u);
 }
 
-TEST(SingularDistance, IsTheDistanceToTheConeTip) {
-  // F = x² + y² − z²: ∇F = 2(x, y, −z), Hessian diag(2, 2, −2): r = p exactly.
-  const Vec3 p(0.3, -0.2, 0.5);
-  EXPECT_NEAR(singular_distance(Vec3(2 * p.x(), 2 * p.y(), -2 * p.z()),
-                                Vec3(2, 2, -2).asDiagonal().toDenseMatrix()),
-              p.norm(), 1e-12);
-}
-
-TEST(SingularDistance, IsTheDistanceToTheLineOfTwoPlanes) {
-  // F = x·y: ∇F = (y, x, 0), singular Hessian; the singular set is the z axis.
-  Mat3 h = Mat3::Zero();
-  h(0, 1) = h(1, 0) = 1;
-  const Vec3 p(0.4, 0.3, 7.0);
-  EXPECT_NEAR(singular_distance(Vec3(p.y(), p.x(), 0), h), 0.5, 1e-12);
-}
-
-TEST(SingularDistance, IsInfiniteWhereTheGradientCannotVanish) {
-  // F = x + y²: ∇F = (1, 2y, 0) never vanishes; the Hessian has a null direction along x.
-  Mat3 h = Mat3::Zero();
-  h(1, 1) = 2;
-  EXPECT_TRUE(std::isinf(singular_distance(Vec3(1, 0.6, 0), h)));
-  EXPECT_TRUE(std::isinf(singular_distance(Vec3(1, 0, 0), Mat3::Zero())));  // a plane
-  EXPECT_EQ(singular_distance(Vec3::Zero(), h), 0);
-}
-
 // Points of the Fibonacci lattice on the unit sphere: nearly uniform.
 std::vector<Vec3> fibonacci_sphere(int n) {
   std::vector<Vec3> out;

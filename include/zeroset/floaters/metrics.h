@@ -7,6 +7,7 @@
 #include <span>
 #include <vector>
 
+#include "zeroset/surface/analysis.h"
 #include "zeroset/surface/surface.h"
 #include "zeroset/types.h"
 
@@ -43,12 +44,7 @@ ReferenceSampling reference_sampling(const Surface& surface, const ReferenceOpti
 /// Area of F = 0 inside the clip (reference_sampling with a coarser budget). 0 when empty.
 double estimate_area(const Surface& surface, std::uint64_t seed = 1);
 
-/// Estimated distance from p to the nearest point where ∇F = 0: the length of the Newton
-/// corrector r with ∇²F(p) r = ∇F(p) (Rösch et al. §3.3, the β estimator), solved in the
-/// Hessian's eigenbasis so a singular Hessian gives the least-squares answer, or +∞ when ∇F
-/// has a component along a null direction (no critical point ahead, e.g. a parabolic
-/// cylinder). 0 where ∇F = 0.
-double singular_distance(const Vec3& gradient, const Mat3& hessian);
+// singular_distance(), which the band density uses, is in zeroset/surface/analysis.h.
 
 struct MetricsOptions {
   /// Radius of the balls around known singular points left out of the residual statistics,

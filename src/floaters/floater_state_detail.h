@@ -1,0 +1,302 @@
+#pragma once
+// The state of a FloaterSystem, shared by the files of the floaters module: a plain struct
+// with one array per floater property, and the free functions that work on it, declared here
+// and defined by responsibility (state.cpp: storage and field evaluation; seeding.cpp: set-up
+// and random insertion; estimators.cpp: α/β estimators and nodes; motion.cpp: neighbours and
+// the move; population.cpp: fission and death; convergence.cpp: convergence and residuals).
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <deque>
+#include <limits>
+#include <optional>
+#include <span>
+#include <tuple>
+#include <vector>
+
+#include "neighbour_filter_detail.h"
+#include "pair_kernel_detail.h"
+#include "rng_detail.h"
+#include "spatial_hash_detail.h"
+#include "zeroset/detail/parallel.h"
+#include "zeroset/floaters/floaters.h"
+#include "zeroset/surface/analysis.h"
+
+namespace zeroset::detail {
+
+// Floaters are processed in fixed chunks, whatever the thread count, so batched field
+// evaluation sees the same batches (and gives the same bits) on 1 or 2 threads.
+constexpr std::size_t kChunk = 256;
+// Fewer floaters than this are stepped on one thread: a parallel region costs more than it
+// saves, and much more when other processes keep the cores busy.
+constexpr std::size_t kParallelMin = 4096;
+// Storage is re-sorted by spatial cell this often, so neighbours stay close in memory.
+constexpr std::size_t kResortInterval = 16;
+// A box that widen() grows to the points given to it.
+inline Box3 empty_bounds() {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  return {Vec3::Constant(kInf), Vec3::Constant(-kInf)};
+}
+// Widens b to hold p; a NaN coordinate does not count.
+inline void widen(Box3& b, const Vec3& p) {
+  for (int k = 0; k < 3; ++k) {
+    b.lo[k] = p[k] < b.lo[k] ? p[k] : b.lo[k];
+    b.hi[k] = p[k] > b.hi[k] ? p[k] : b.hi[k];
+  }
+}
+// A floater still far from F = 0 after this many steps is a stray (it never settles).
+constexpr std::uint32_t kStrayAge = 200;
+// Snapping to nodes: a floater whose Newton step towards ∇F = 0 is shorter than this fraction
+// of its radius tries to reach the node; a node's Hessian has no eigenvalue below kNondegenerate
+// times its largest (singular curves, with a null direction, are left to the dynamics).
+constexpr double kSnapFraction = 0.5;
+constexpr double kNondegenerate = 1e-3;
+constexpr int kNodeIterations = 12;
+// Settled: the population changed by at most this fraction over the convergence window.
+constexpr double kStationary = 0.01;
+// σ never leaves [kMinRadius·σ̂, kMaxRadius·σ_max]; reaching the floor marks it degenerate.
+constexpr double kMinRadius = 0.01;
+constexpr double kMaxRadius = 2.0;
+// One step moves a floater by at most this fraction of the scene radius, tangentially and
+// normally, so a near-critical point of F (tiny ∇F, F ≠ 0) cannot fling it away.
+constexpr double kMaxStepScene = 0.1;
+// σ̂ chosen from the area assumes each floater covers about this many σ̂² at equilibrium
+// (hexagonal spacing between 1.25σ̂ and 1.78σ̂).
+constexpr double kAreaPerFloater = 2.0;
+// A given σ̂ is kept at least this fraction of the scene radius (below, squares underflow).
+constexpr double kMinNominal = 1e-9;
+// Binary exponents of a nonnegative double (with its sign bit 0): the residual histogram's bins.
+constexpr std::size_t kOctaves = 2048;
+inline std::size_t octave_of(double r) { return std::bit_cast<std::uint64_t>(r) >> 52; }
+// The residual of a floater held on a node, which is left out of the statistics: negative,
+// so in no octave.
+constexpr double kNotListed = -1;
+
+// Resizes v to n, with room for an eighth more when it must grow: the floaters' number changes
+// a little every step, and an array swapped with another from step to step (pos and new_pos,
+// say) would otherwise be reallocated, every element moved, whenever the number grows.
+template <class T>
+void fit(std::vector<T>& v, std::size_t n) {
+  if (v.capacity() < n) v.reserve(n + n / 8);
+  v.resize(n);
+}
+
+// Two unit vectors spanning the plane orthogonal to the unit vector n (any basis if n = 0).
+inline void tangent_basis(const Vec3& n, Vec3& t1, Vec3& t2) {
+  if (n.squaredNorm() == 0) {
+    t1 = Vec3::UnitX();
+    t2 = Vec3::UnitY();
+    return;
+  }
+  const Vec3 a = std::abs(n.x()) < 0.6 ? Vec3::UnitX() : Vec3::UnitY();
+  t1 = n.cross(a).normalized();
+  t2 = n.cross(t1);
+}
+
+// What the gather pass reads of a floater, in hash slot order: one cache line each, as
+// neighbours are visited in an order the slots only roughly follow.
+struct alignas(64) Neighbour {
+  double x, y, z;
+  double sigma;
+  double smax;        // σ_max^j
+  double nx, ny, nz;  // unit normal, or 0 (pinned on a node, or ∇F = 0)
+};
+static_assert(sizeof(Neighbour) == kRecordFields * sizeof(double));
+
+// The last converge_window steps, for StepStats::converged.
+struct RecentStep {
+  std::size_t events = 0, count = 0;
+  double speed = 0;
+};
+
+// Fates judged in move_one(), carried out in decide_fates().
+enum FateFlag : std::uint8_t { kStray = 1, kFission = 2, kDeath = 4 };
+
+// What decide_fates() did.
+struct FateCounts {
+  std::size_t births = 0, deaths = 0, removed = 0;
+};
+
+// The constants of move_one() in this step.
+struct MoveConstants {
+  double dt, e_hat, max_scene_step, lo, hi;
+};
+
+// Per-thread scratch of the pair pass: a cell's floaters, then those of its forward cells
+// (SpatialHash::ForwardWalk) that may be within reach of one of them, their slots and their
+// single-precision coordinates and thresholds, contiguous; the indices into these one
+// floater's test kept; and the batch.
+struct PairScratch {
+  std::array<SpatialHash::Range, SpatialHash::kMaxForwardRanges> ranges;
+  std::vector<std::uint32_t> slot;
+  std::vector<float> x, y, z, cut;
+  std::vector<std::uint32_t> near;
+  PairBatch batch;
+
+  void reserve_candidates(std::size_t candidates) {
+    const std::size_t size = candidates + kFilterPad;
+    if (slot.size() >= size) return;
+    for (auto* v : {&slot, &near}) v->resize(size);
+    for (auto* v : {&x, &y, &z, &cut}) v->resize(size);
+  }
+};
+
+struct FloaterState {
+  Surface surface;
+  FloaterOptions opt;
+  double sigma_hat = 1;       // σ̂ in use
+  double singular_scale = 1;  // γ_s in use
+  double scene_radius = 1;
+  Box3 box;
+  std::size_t step_count = 0;
+  std::uint64_t next_id = 0;
+  std::deque<RecentStep> recent;
+
+  // Floater state, one entry per floater. value/gnorm/unit always belong to the current
+  // positions and parameters.
+  std::vector<Vec3> pos;
+  std::vector<double> sigma;
+  std::vector<std::uint64_t> id;
+  std::vector<double> mu;    // μ_i from the estimators
+  std::vector<double> smax;  // σ_max^i = μ_i σ_max, graded (see repulsion_and_move())
+  std::vector<std::uint32_t> age;
+  std::vector<std::uint8_t> pinned;  // sits on a node (snap_candidates) and does not move
+  std::vector<double> value;
+  std::vector<double> gnorm;
+  std::vector<Vec3> unit;  // ∇F/|∇F|, or 0 where that is undefined
+
+  // permute_state()'s output, one array per array of state_arrays(), kept from call to call.
+  std::tuple<std::vector<Vec3>, std::vector<double>, std::vector<std::uint64_t>,
+             std::vector<double>, std::vector<double>, std::vector<std::uint32_t>,
+             std::vector<std::uint8_t>, std::vector<double>, std::vector<double>, std::vector<Vec3>>
+      permuted;
+
+  // Per-step scratch.
+  std::vector<double> graded, fq, new_sigma;
+  std::vector<Vec3> new_pos;
+  std::vector<double> speed_sq;         // (|ṗ_i|/σ_i)²
+  std::vector<std::uint8_t> near_flag;  // |ṗ_i| < γσ_i
+  std::vector<std::uint8_t> fate;       // FateFlag bits
+  std::vector<std::uint32_t> gone;
+  std::vector<double> chunk_speed;      // per chunk of kChunk floaters: Σ (|ṗ_i|/σ_i)²
+  std::vector<std::size_t> chunk_near;  // and the count near equilibrium
+  // residual_stats(): residuals (kNotListed for floaters on nodes), and their binary exponents
+  // counted per thread (evaluate_all()), the largest per thread, and the residuals in the
+  // median's bin.
+  std::vector<double> residuals, thread_largest, median_octave;
+  std::vector<std::array<std::size_t, kOctaves>> octave_counts;
+  // The largest σ_i, and the floaters' bounding box (non-finite coordinates do not count), at
+  // the last evaluate_all() (node snapping, which moves floaters after it, widens the latter);
+  // per thread while they are found.
+  double largest_sigma = 0;
+  Box3 bounds;
+  std::vector<double> thread_sigma;
+  std::vector<Box3> thread_bounds;
+  std::vector<Neighbour> packed;  // in slot order
+  double prefilter_scale = 0;     // single-precision coordinates are scaled by it
+  std::vector<std::uint64_t> pid;
+  std::vector<float> fx, fy, fz, fcut;  // the prefilter's coordinates and thresholds
+  const FilterPath filter = best_filter_path();
+  SpatialHash hash;
+  std::vector<PairScratch> scratch;  // one per thread, kept from step to step
+  std::vector<PairSums> pair_sums;   // per slot
+
+  std::vector<Evaluator> evaluators;
+  // Per thread: the perimeter points of curvature_estimates() and their F and ∇F; and the
+  // points of update_estimators() with F, ∇F and the Hessian's six entries.
+  std::vector<std::array<std::vector<double>, 7>> perimeter;
+  std::vector<std::array<std::vector<double>, 13>> hessian_batch;
+  int threads = 1;
+  mutable std::vector<Vec3> shown_normals;
+  mutable bool shown_normals_valid = false;
+};
+
+inline std::size_t floater_count(const FloaterState& sys) { return sys.pos.size(); }
+inline double sigma_max(const FloaterState& sys) {
+  return sys.opt.max_radius_factor * sys.sigma_hat;
+}
+inline double desired_energy(const FloaterState& sys) {
+  return sys.opt.desired_energy_factor * sys.opt.repulsion;
+}
+template <class Body>
+void parallel_chunks(FloaterState& sys, std::size_t n, Body&& body) {
+  const auto chunks = static_cast<std::int64_t>((n + kChunk - 1) / kChunk);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(sys.threads) if (n >= kParallelMin)
+  for (std::int64_t c = 0; c < chunks; ++c) {
+    const std::size_t b = static_cast<std::size_t>(c) * kChunk;
+    body(b, std::min(n, b + kChunk), sys.evaluators[worker_index()]);
+  }
+}
+
+// ---- storage and field evaluation (state.cpp) ----------------------------------------------
+
+void push_floater(FloaterState& sys, const Vec3& p, double s, double m);
+void move_floater(FloaterState& sys, std::size_t from, std::size_t to);
+void resize_state(FloaterState& sys, std::size_t n);
+// Reorders every floater's state by `order` (new index → old index).
+void permute_state(FloaterState& sys, std::span<const std::uint32_t> order);
+// F and ∇F at every floater, the residual statistics' counts and the floaters' extent.
+void evaluate_all(FloaterState& sys);
+
+// ---- set-up and seeding (seeding.cpp) ------------------------------------------------------
+
+std::size_t initial_count(const FloaterState& sys);
+void adopt_surface(FloaterState& sys, const Surface& s);
+void resolve_lengths(FloaterState& sys);
+void ensure_evaluators(FloaterState& sys);
+std::size_t insert_random(FloaterState& sys, std::size_t count);
+void apply_parameters(FloaterState& sys, std::span<const double> q);
+void check_parameters(const FloaterState& sys, std::span<const double> q);
+
+// ---- estimators and nodes (estimators.cpp) -------------------------------------------------
+
+// μ_i from the α/β estimators, and snapping onto nodes.
+void update_estimators(FloaterState& sys);
+// Pinned floaters follow their nodes after a parameter change.
+void track_nodes(FloaterState& sys);
+
+// ---- neighbours and motion (motion.cpp) ----------------------------------------------------
+
+void build_neighbours(FloaterState& sys);
+void parameter_terms(FloaterState& sys, std::span<const double> qdot);
+void repulsion_and_move(FloaterState& sys);
+
+// ---- fission and death (population.cpp) ----------------------------------------------------
+
+// What happens to floater i after its move (energy e, radius s, fission radius local_max,
+// speed |ṗ|), ALGORITHMS A.7: a stray is
+// removed; a floater near equilibrium may fission, or else die by the randomised density
+// rule. Whether a fission happens also depends on the population, so decide_fates() settles
+// that, serially. Pure: safe to call in parallel.
+inline std::uint8_t judge_fate(const FloaterState& sys, std::size_t i, double e, double s,
+                               double local_max, double speed, bool outside) {
+  const bool near_eq = speed < sys.opt.equilibrium_speed * s;
+  const double r = residual(sys.value[i], sys.gnorm[i]);
+  const bool stray =
+      !std::isfinite(sys.value[i]) ||
+      (!sys.pinned[i] && (s <= kMinRadius * sys.sigma_hat || outside ||
+                          (r > sys.sigma_hat && (near_eq || sys.age[i] > kStrayAge))));
+  if (stray) return kStray;
+  if (!near_eq) return 0;
+  const double local_nominal = std::min(sys.sigma_hat, local_max);
+  std::uint8_t f = 0;
+  if (s > local_max ||
+      (e > sys.opt.fission_energy_factor * desired_energy(sys) && s > local_nominal))
+    f |= kFission;
+  const double threshold = sys.opt.death_radius_factor * local_nominal;
+  if (s < threshold && !sys.pinned[i]) {
+    Rng rng(sys.opt.seed, sys.id[i], sys.step_count, Stream::kDeath);
+    if (rng.uniform() > s / threshold) f |= kDeath;
+  }
+  return f;
+}
+FateCounts decide_fates(FloaterState& sys);
+
+// ---- convergence (convergence.cpp) ---------------------------------------------------------
+
+bool judge_convergence(FloaterState& sys, const StepStats& st);
+void residual_stats(FloaterState& sys, StepStats& st);
+
+}  // namespace zeroset::detail
