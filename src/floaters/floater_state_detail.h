@@ -266,7 +266,7 @@ void repulsion_and_move(FloaterState& sys);
 // ---- fission and death (population.cpp) ----------------------------------------------------
 
 // What happens to floater i after its move (energy e, radius s, fission radius local_max,
-// speed |ṗ|), ALGORITHMS A.7: a stray is
+// speed |ṗ|), docs/algorithms.md A.7: a stray is
 // removed; a floater near equilibrium may fission, or else die by the randomised density
 // rule. Whether a fission happens also depends on the population, so decide_fates() settles
 // that, serially. Pure: safe to call in parallel.

@@ -115,7 +115,7 @@ void accumulate_pairs(FloaterState& sys, PairBatch& batch, const PairConstants& 
                    sys.pid.data(), sys.pair_sums);
 }
 
-// ALGORITHMS A.3–A.6 for floater i once its pair sums are complete (energy, σ_i³ ∂E_i/∂σ_i,
+// docs/algorithms.md A.3–A.6 for floater i once its pair sums are complete (energy, σ_i³ ∂E_i/∂σ_i,
 // desired velocity and graded fission radius): radius adaptation, constrained velocity with the
 // φF and F_q·q̇ terms, bounded Euler step, clip projection; then its fate (judge_fate()) and its
 // squared speed in radii per time unit and whether it is near equilibrium (for

@@ -147,8 +147,8 @@ struct PairTermsBoth {
 /// The terms of the pair of floaters i and j, both ways, with offset r_ij = (dx, dy, dz),
 /// |r_ij|² = d2 and |r_ij| = dist, radii σ_i = si and σ_j = sj, fission radii σ_max = pi and
 /// pj, |n_i·n_j| = cosine for their unit normals and `no_normal` 1 when either has none, else 0
-/// (ALGORITHMS A.1–A.2, B, and the scaled form, see FloaterOptions::scaled_repulsion). The
-/// energies E_ij = αw·e^{−u}(1 − 2u/9) with u = |r|²/2σ_i² (cut off at u = 9/2), and E_ji
+/// (docs/algorithms.md A.1–A.2, B.1, and the scaled form, see FloaterOptions::scaled_repulsion).
+/// The energies E_ij = αw·e^{−u}(1 − 2u/9) with u = |r|²/2σ_i² (cut off at u = 9/2), and E_ji
 /// alike with σ_j. Forces along r_ij: scaled, 2(σ_i/σ_ij)·αw·e^{−x/2}(1 − x/9) with
 /// x = |r|²/σ_ij², σ_ij = (σ_i + σ_j)/2, one exponential for both floaters; A.2,
 /// E_ij + (σ_i/σ_j)² E_ji, whose E_ji is the other floater's energy: two exponentials in all.

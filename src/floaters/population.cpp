@@ -47,8 +47,8 @@ bool split_floater(FloaterState& sys, std::size_t i) {
 
 }  // namespace
 
-// ALGORITHMS A.7 with the fates judge_fate() chose, serial so the outcome is the same on any
-// number of threads: at most one event per floater, and no fission beyond the cap.
+// docs/algorithms.md A.7 with the fates judge_fate() chose, serial so the outcome is the same on
+// any number of threads: at most one event per floater, and no fission beyond the cap.
 FateCounts decide_fates(FloaterState& sys) {
   FateCounts result;
   const std::size_t n = floater_count(sys);

@@ -183,7 +183,7 @@ struct MeshImprover::State {
     mean_edge = count > 0 ? sum / static_cast<double>(count) : 0.0;
   }
 
-  // β of ALGORITHMS §B at every vertex, and the Newton step length towards ∇F = 0.
+  // β of docs/algorithms.md B.3 and C.1 at every vertex, and the Newton step length towards ∇F = 0.
   void update_singularity_estimates() {
     const long long n = static_cast<long long>(nv());
     beta.assign(nv(), 1.0);

@@ -1,5 +1,5 @@
 // The neighbour pass's numerical pieces: the pair terms and their sums (the same bits on every
-// path, and the formulas of ALGORITHMS A.1–A.2 and B), the exponential they use, and the
+// path, and the formulas of docs/algorithms.md A.1–A.2 and B.1), the exponential they use, and the
 // single-precision prefilter, which must never drop a pair within reach.
 #include "pair_kernel_detail.h"
 
@@ -182,7 +182,7 @@ TEST(PairBatch, EveryPathGivesTheSameBits) {
     }
 }
 
-// The sums of floater s over every listed pair it is in, from ALGORITHMS A.1–A.2 and B
+// The sums of floater s over every listed pair it is in, from docs/algorithms.md A.1–A.2 and B.1
 // written out with std::exp, one way at a time.
 PairSums expected(const Scene& scene, const Candidates& c, std::size_t s, bool scaled,
                   const PairConstants& k) {

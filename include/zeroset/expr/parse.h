@@ -1,5 +1,6 @@
 #pragma once
-/// Parsing the surface language (DESIGN §1) into a compiled `Field`.
+/// Parsing the surface language (docs/architecture.md, "From text to output") into a compiled
+/// `Field`.
 ///
 /// Grammar (informal):
 ///   program    := { definition (';' | newline) } expression [ '=' expression ]

@@ -2,8 +2,8 @@
 /// Floaters: particles that spread over an implicit surface F(x; q) = 0 and follow it while the
 /// parameters q move (Witkin & Heckbert 1994, with the extensions of Rösch, Ruhl & Saupe 1997
 /// §3: clip projection, cosine-weighted repulsion, per-particle fission radius from curvature
-/// and singularity estimators). Every formula and constant is in ALGORITHMS.md §A–B; every
-/// constant is a field of FloaterOptions.
+/// and singularity estimators). Every formula and constant is in docs/algorithms.md, sections A and
+/// B; every constant is a field of FloaterOptions.
 ///
 /// A few lines sample a surface:
 /// ```cpp
@@ -46,7 +46,7 @@ RadiusAdapt parse_radius_adapt(std::string_view text, std::string_view flag = "r
 std::string_view to_string(RadiusAdapt mode);
 
 /// Settings of a FloaterSystem. Lengths are in world units, times in the system's time unit
-/// (one step advances time by `dt`). Defaults are those of ALGORITHMS.md §A–B.
+/// (one step advances time by `dt`). Defaults are those of docs/algorithms.md, sections A and B.
 struct FloaterOptions {
   // --- population -------------------------------------------------------------------------
   /// σ̂, the nominal repulsion radius: the density knob (spacing at equilibrium ≈ 1.5σ̂).

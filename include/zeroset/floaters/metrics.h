@@ -1,5 +1,5 @@
 #pragma once
-/// How well a point set samples a surface (ALGORITHMS.md §F, DESIGN §7): residual, spacing
+/// How well a point set samples a surface (docs/algorithms.md F.2): residual, spacing
 /// regularity, covering radius, coverage of known singular points, and the density of samples
 /// near the singular set (self-intersection curves, cusps) relative to elsewhere.
 #include <cstddef>

@@ -1,5 +1,6 @@
 #pragma once
-/// Writing output files so that an error never leaves a partial file (DESIGN §6).
+/// Writing output files so that an error never leaves a partial file (docs/architecture.md,
+/// "Errors").
 #include <functional>
 #include <ostream>
 #include <string>

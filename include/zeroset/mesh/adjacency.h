@@ -1,6 +1,6 @@
 #pragma once
-/// Mesh connectivity built on demand (DESIGN §4): unique edges with the triangles on each
-/// side, vertex rings, and a topology summary (closedness, Euler characteristic).
+/// Mesh connectivity built on demand (docs/architecture.md, "Modules"): unique edges with the
+/// triangles on each side, vertex rings, and a topology summary (closedness, Euler characteristic).
 #include <array>
 #include <cstdint>
 #include <span>

@@ -35,7 +35,7 @@ struct ImproveOptions {
   double spring_base = 1.0;          ///< κ_0
   bool use_curvature = true;         ///< add the curvature estimator (paper eq. 6)
   double curvature_weight = 8.0;     ///< κ_d
-  bool use_singularity = true;       ///< add the singularity estimator β (ALGORITHMS §B)
+  bool use_singularity = true;       ///< add the singularity estimator β (docs/algorithms.md B.3)
   double singularity_weight = 4.0;   ///< κ_s
   double singularity_scale = 3.0;    ///< γ_s in mean edge lengths
   int singularity_interval = 5;      ///< steps between Hessian evaluations for β

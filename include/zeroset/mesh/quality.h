@@ -1,5 +1,5 @@
 #pragma once
-/// Mesh quality metrics (DESIGN §7, ALGORITHMS §F), computed the same way for every mesh.
+/// Mesh quality metrics (docs/algorithms.md F.1), computed the same way for every mesh.
 #include <array>
 #include <vector>
 

@@ -1,7 +1,7 @@
 #pragma once
-/// Export of a ray-traced view to POV-Ray 3.7 (DESIGN §5): the same camera, lights, colours
-/// and clip, with the surface as a `polynomial { N, xyz(i,j,k):c, ... sturm }` object, so
-/// users can render it in the tool they know:
+/// Export of a ray-traced view to POV-Ray 3.7 (docs/architecture.md, "Modules"): the same camera,
+/// lights, colours and clip, with the surface as a `polynomial { N, xyz(i,j,k):c, ... sturm }`
+/// object, so users can render it in the tool they know:
 ///   povray +W800 +H800 +Iscene.pov +Oscene.png
 #include <string>
 

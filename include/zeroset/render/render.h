@@ -1,6 +1,6 @@
 #pragma once
-/// The CPU renderer (DESIGN §5): exact ray casting of algebraic surfaces, and shaded
-/// point sets and meshes, so every figure can be made without a GPU.
+/// The CPU renderer (docs/architecture.md, "Modules"): exact ray casting of algebraic surfaces, and
+/// shaded point sets and meshes, so every figure can be made without a GPU.
 #include <functional>
 #include <optional>
 #include <span>

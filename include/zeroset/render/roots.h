@@ -1,6 +1,6 @@
 #pragma once
 /// Robust isolation of the first real root of a univariate polynomial in an interval, the
-/// core of exact ray casting (ALGORITHMS §E): Bernstein coefficients on the interval,
+/// core of exact ray casting (docs/algorithms.md E.2): Bernstein coefficients on the interval,
 /// Descartes' rule of signs with subdivision (Reimers & Seland 2008 style, depth first so the
 /// first root is found first), then refinement by the Illinois method. Roots of even
 /// multiplicity (a ray tangent to a surface, a squared equation) have no sign change; they are

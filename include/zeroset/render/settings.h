@@ -1,6 +1,7 @@
 #pragma once
-/// The "render" object of a scene file (DESIGN §2): picture size, anti-aliasing, background,
-/// front and back materials and lights, so that a scene reproduces its picture.
+/// The "render" object of a scene file (docs/architecture.md, "Modules"): picture size,
+/// anti-aliasing, background, front and back materials and lights, so that a scene reproduces its
+/// picture.
 ///
 ///   "render": {
 ///     "size": [800, 800], "samples": 2, "background": "#ffffff",

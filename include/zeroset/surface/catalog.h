@@ -1,5 +1,5 @@
 #pragma once
-/// The catalog of named surfaces with defaults (DESIGN §2).
+/// The catalog of named surfaces with defaults (docs/architecture.md, "Modules").
 #include <string>
 #include <string_view>
 #include <vector>

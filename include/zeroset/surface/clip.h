@@ -1,5 +1,5 @@
 #pragma once
-/// Clip volumes (DESIGN §2, paper §3.2): an intersection of spheres and half spaces.
+/// Clip volumes (docs/algorithms.md A.6; paper §3.2): an intersection of spheres and half spaces.
 #include <string>
 #include <string_view>
 #include <vector>

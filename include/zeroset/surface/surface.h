@@ -1,5 +1,6 @@
 #pragma once
-/// A surface: compiled field + parameter values + clip + how to look at it (DESIGN §2).
+/// A surface: compiled field + parameter values + clip + how to look at it (docs/architecture.md,
+/// "From text to output").
 #include <functional>
 #include <map>
 #include <string>
