@@ -54,8 +54,8 @@ HessianShape hessian_shape(const Mat3& h);
 Vec3 curve_tangent(const Mat3& h, const Vec3& previous, double hess_scale);
 
 // det Q / ‖Q‖² for Q = H restricted to the plane normal to t: < 0 crossing, > 0 isolated;
-// 0 when Q vanishes or is singular.
-double normal_form_det(const Mat3& h, const Vec3& t, double hess_scale);
+// 0 when Q vanishes, or (unless `exact`) when Q is singular to about 1e-9.
+double normal_form_det(const Mat3& h, const Vec3& t, double hess_scale, bool exact = false);
 CurveKind kind_of(double normal_det);
 
 // A unit basis of the plane normal to the unit vector t.

@@ -9,6 +9,8 @@
 #include <limits>
 #include <string>
 
+#include <fmt/core.h>
+
 #include "singular_detail.h"
 #include "zeroset/error.h"
 
@@ -233,7 +235,8 @@ std::vector<SingularCurve> split_by_kind(Evaluator& ev, const SingularCurve& cur
         const detail::Converged m =
             detail::converge_in_plane(ev, 0.5 * (lo + hi), t, s, (hi - lo).norm());
         if (!m.ok) break;
-        const double dm = detail::normal_form_det(ev.sample(m.p, true, false).hessian, t, s.hess);
+        const double dm =
+            detail::normal_form_det(ev.sample(m.p, true, false).hessian, t, s.hess, true);
         if (dm == 0) {
           lo = hi = m.p;
           break;
@@ -455,6 +458,55 @@ SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& 
         add_point(out.points, end, SingularPointKind::kClipEnd, same_point);
   }
   return out;
+}
+
+namespace {
+nlohmann::json json_vec(const Vec3& p) { return {p.x(), p.y(), p.z()}; }
+}  // namespace
+
+nlohmann::json singular_set_json(const SingularSet& set, bool with_polylines) {
+  nlohmann::json j;
+  j["points"] = nlohmann::json::array();
+  for (const SingularPoint& p : set.points)
+    j["points"].push_back({{"kind", to_string(p.kind)}, {"position", json_vec(p.position)}});
+  j["curves"] = nlohmann::json::array();
+  for (const SingularCurve& c : set.curves) {
+    nlohmann::json jc = {{"kind", to_string(c.kind)},
+                         {"closed", c.closed},
+                         {"length", c.length()},
+                         {"vertices", c.points.size()},
+                         {"from", json_vec(c.points.front())},
+                         {"to", json_vec(c.points.back())}};
+    if (with_polylines) {
+      jc["points"] = nlohmann::json::array();
+      for (const Vec3& p : c.points) jc["points"].push_back(json_vec(p));
+    }
+    j["curves"].push_back(std::move(jc));
+  }
+  j["singular_sheet"] = set.has_singular_sheet;
+  if (set.has_singular_sheet) j["singular_sheet_example"] = json_vec(set.singular_sheet_example);
+  return j;
+}
+
+std::string singular_set_summary(const SingularSet& set) {
+  if (set.has_singular_sheet)
+    return "grad F vanishes on a whole sheet of F = 0 (F is a square or worse)";
+  if (set.empty()) return "none found";
+  std::string curves, points;
+  for (CurveKind k : {CurveKind::kCrossing, CurveKind::kIsolated, CurveKind::kDegenerate})
+    if (const int n = set.count(k); n > 0)
+      curves += fmt::format("{}{} {} curve{}", curves.empty() ? "" : ", ", n, to_string(k),
+                            n == 1 ? "" : "s");
+  for (SingularPointKind k : {SingularPointKind::kNode, SingularPointKind::kTriple,
+                              SingularPointKind::kPinch, SingularPointKind::kDegenerate,
+                              SingularPointKind::kClipEnd})
+    if (const size_t n = set.points_of(k).size(); n > 0)
+      points += fmt::format("{}{} {}{}", points.empty() ? "" : ", ", n,
+                            k == SingularPointKind::kNode ? "node" : std::string(to_string(k)) + " point",
+                            n == 1 ? "" : "s");
+  if (curves.empty()) return points;
+  if (points.empty()) return curves;
+  return curves + "; " + points;
 }
 
 }  // namespace zeroset

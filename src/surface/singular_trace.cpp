@@ -143,14 +143,14 @@ void normal_basis(const Vec3& t, Vec3& u, Vec3& v) {
   v = t.cross(u).normalized();
 }
 
-double normal_form_det(const Mat3& h, const Vec3& t, double hess_scale) {
+double normal_form_det(const Mat3& h, const Vec3& t, double hess_scale, bool exact) {
   Vec3 u, v;
   normal_basis(t, u, v);
   const double quu = u.dot(h * u), quv = u.dot(h * v), qvv = v.dot(h * v);
   const double norm2 = quu * quu + 2 * quv * quv + qvv * qvv;
   if (!(norm2 > 1e-16 * hess_scale * hess_scale)) return 0;
   const double d = (quu * qvv - quv * quv) / norm2;
-  return std::abs(d) <= 1e-9 ? 0.0 : d;
+  return !exact && std::abs(d) <= 1e-9 ? 0.0 : d;
 }
 
 CurveKind kind_of(double normal_det) {

@@ -42,8 +42,8 @@ TEST(SingularSet, RomanHasThreeCrossingSegmentsATriplePointAndSixPinches) {
   EXPECT_EQ(points_of(set, SingularPointKind::kTriple), 1);
   ASSERT_EQ(points_of(set, SingularPointKind::kPinch), 6);
   for (const Vec3& p : set.points_of(SingularPointKind::kPinch)) {
-    EXPECT_NEAR(p.norm(), 0.5, 1e-9);
-    EXPECT_NEAR(p.cwiseAbs().maxCoeff(), 0.5, 1e-9);  // on an axis
+    EXPECT_NEAR(p.norm(), 0.5, 1e-12);
+    EXPECT_NEAR(p.cwiseAbs().maxCoeff(), 0.5, 1e-12);  // on an axis
   }
   EXPECT_LT(set.points_of(SingularPointKind::kTriple)[0].norm(), 1e-9);
   for (const SingularCurve& c : set.curves) {
@@ -58,7 +58,7 @@ TEST(SingularSet, WhitneyHasAPinchACrossingHalfLineAndAnIsolatedHandle) {
   const SingularSet set = find_singular_set(s);
   ASSERT_EQ(set.curves.size(), 2u);
   ASSERT_EQ(points_of(set, SingularPointKind::kPinch), 1);
-  EXPECT_LT(set.points_of(SingularPointKind::kPinch)[0].norm(), 1e-9);
+  EXPECT_LT(set.points_of(SingularPointKind::kPinch)[0].norm(), 1e-12);
   for (const SingularCurve& c : set.curves) {
     const double z = 0.5 * (c.points.front().z() + c.points.back().z());
     EXPECT_EQ(c.kind, z > 0 ? CurveKind::kCrossing : CurveKind::kIsolated);

@@ -4,7 +4,9 @@
 /// by the Hessian across them, and the special points where curves change (pinch points,
 /// triple points, ends on the clip). See docs/singular.md for the method and its limits.
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <stop_token>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -79,5 +81,13 @@ struct SingularSetOptions {
 /// has, when `stop` is requested.
 SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& options = {},
                               std::stop_token stop = {});
+
+/// The set as JSON: {"points": [{"kind", "position"}], "curves": [{"kind", "closed", "length",
+/// "points"}], "singular_sheet": bool[, "singular_sheet_example"]}, for --json and --stats.
+/// `with_polylines` false leaves out the curves' vertices (ends only).
+nlohmann::json singular_set_json(const SingularSet& set, bool with_polylines = true);
+
+/// One line: "3 crossing curves, 6 isolated; 1 triple, 6 pinch, 6 clip-end points".
+std::string singular_set_summary(const SingularSet& set);
 
 }  // namespace zeroset
