@@ -6,10 +6,12 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "bins_detail.h"
+#include "overlay_detail.h"
 #include "render_detail.h"
 #include "zeroset/error.h"
 #include "zeroset/render/render.h"
@@ -32,9 +34,10 @@ struct SampleHit {
 /// ray from the eye along `dir` meets primitive `id` nearer than hit.t. Each tile keeps the
 /// nearest hit of every sample (a z-buffer) and visits, per primitive of its bin, only the
 /// pixels of that primitive's bounding box, so the cost follows the primitives' screen area.
+/// The singular overlay, when given, then replaces the samples it is nearer on.
 template <class Intersect>
 Image render_binned(const RenderOptions& options, const View& view, const Bins& bins,
-                    const Intersect& intersect) {
+                    const Intersect& intersect, const detail::OverlayScene* overlay) {
   const detail::Shader shader(options, view);
   const std::vector<Vec2> offsets = detail::sample_offsets(options.samples);
   const int ns = static_cast<int>(offsets.size());
@@ -65,13 +68,28 @@ Image render_binned(const RenderOptions& options, const View& view, const Bins& 
                 if (intersect(id, dirs[k], hits[k])) any[k] = 1;
               }
         }
+        // The overlay's hits where they are nearer than hits[k] (entries of touched pixels).
+        std::vector<detail::OverlayHit> on_top;
+        std::vector<std::uint8_t> touched;
+        if (overlay) {
+          on_top.resize(hits.size());
+          touched.assign(static_cast<size_t>(w * (y1 - y0)), 0);
+          overlay->trace(
+              x0, y0, x1, y1, ns,
+              [&](int x, int y, int s) -> const Vec3& { return dirs[sample(x, y, s)]; },
+              [&](int x, int y, int s) { return hits[sample(x, y, s)].t; }, touched.data(),
+              on_top.data());
+        }
         for (int y = y0; y < y1; ++y)
           for (int x = x0; x < x1; ++x) {
             Color sum = Color::Zero();
             for (int s = 0; s < ns; ++s) {
               const size_t k = sample(x, y, s);
               const SampleHit& hit = hits[k];
-              if (!any[k]) {
+              if (!touched.empty() && touched[k / static_cast<size_t>(ns)] &&
+                  on_top[k].primitive >= 0) {
+                sum += overlay->shade(on_top[k], dirs[k]);
+              } else if (!any[k]) {
                 sum += options.background;
               } else if (hit.edge) {
                 sum += edge_color;
@@ -119,6 +137,7 @@ Image render_points(const Surface& surface, std::span<const Vec3> positions,
       corners[k] = positions[i] + r * Vec3(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1);
     bins.add(static_cast<std::uint32_t>(i), corners, 8, view);
   }
+  const std::optional<detail::OverlayScene> overlay = detail::make_overlay(options, scene, view);
   return render_binned(options, view, bins, [&](std::uint32_t id, const Vec3& dir, SampleHit& hit) {
     const Vec3 n = normal(id);
     const double nd = n.dot(dir);
@@ -132,7 +151,7 @@ Image render_points(const Surface& surface, std::span<const Vec3> positions,
     hit.normal = hit.front ? n : Vec3(-n);
     hit.edge = false;
     return true;
-  });
+  }, overlay ? &*overlay : nullptr);
 }
 
 Image render_mesh(const Surface& surface, const Mesh& mesh, const RenderOptions& options,
@@ -172,6 +191,8 @@ Image render_mesh(const Surface& surface, const Mesh& mesh, const RenderOptions&
     bins.add(static_cast<std::uint32_t>(f), p, 3, view);
   }
   const double pixel = view.pixel_angle();
+  const std::optional<detail::OverlayScene> overlay =
+      detail::make_overlay(options, surface.scene_radius(), view);
   return render_binned(options, view, bins, [&](std::uint32_t id, const Vec3& dir, SampleHit& hit) {
     // Möller–Trumbore.
     const auto& tri = mesh.triangles[id];
@@ -208,7 +229,7 @@ Image render_mesh(const Surface& surface, const Mesh& mesh, const RenderOptions&
       hit.edge = d < 0.7 * pixel * t;
     }
     return true;
-  });
+  }, overlay ? &*overlay : nullptr);
 }
 
 }  // namespace zeroset
