@@ -11,20 +11,28 @@ namespace zeroset {
 
 const Color& SingularOverlay::color(CurveKind kind) const {
   switch (kind) {
-    case CurveKind::kCrossing: return crossing;
-    case CurveKind::kIsolated: return isolated;
-    case CurveKind::kDegenerate: return degenerate;
+    case CurveKind::kCrossing:
+      return crossing;
+    case CurveKind::kIsolated:
+      return isolated;
+    case CurveKind::kDegenerate:
+      return degenerate;
   }
   return crossing;
 }
 
 const Color& SingularOverlay::color(SingularPointKind kind) const {
   switch (kind) {
-    case SingularPointKind::kNode: return node;
-    case SingularPointKind::kPinch: return pinch;
-    case SingularPointKind::kTriple: return triple;
-    case SingularPointKind::kClipEnd: return clip_end;
-    case SingularPointKind::kDegenerate: return degenerate_point;
+    case SingularPointKind::kNode:
+      return node;
+    case SingularPointKind::kPinch:
+      return pinch;
+    case SingularPointKind::kTriple:
+      return triple;
+    case SingularPointKind::kClipEnd:
+      return clip_end;
+    case SingularPointKind::kDegenerate:
+      return degenerate_point;
   }
   return node;
 }
@@ -41,8 +49,8 @@ double resolve_radius(double given, double fraction, double scene_radius, const 
 
 }  // namespace
 
-OverlayScene::OverlayScene(const SingularOverlay& overlay, double scene_radius,
-                           const View& view, const RenderOptions& options)
+OverlayScene::OverlayScene(const SingularOverlay& overlay, double scene_radius, const View& view,
+                           const RenderOptions& options)
     : eye_(view.eye), bins_(view.width, view.height, 0) {
   const double tube =
       resolve_radius(overlay.tube_radius, 0.006, scene_radius, "singular overlay tube radius");
@@ -56,8 +64,7 @@ OverlayScene::OverlayScene(const SingularOverlay& overlay, double scene_radius,
     for (size_t i = 0; i < colors.size(); ++i)
       if (colors[i] == c) return static_cast<int>(i);
     RenderOptions lit = options;
-    lit.front = lit.back = Material{.diffuse = c, .ambient = 0.3, .specular = 0.3,
-                                    .shininess = 30};
+    lit.front = lit.back = Material{.diffuse = c, .ambient = 0.3, .specular = 0.3, .shininess = 30};
     colors.push_back(c);
     shaders_.emplace_back(lit, view);
     return static_cast<int>(colors.size() - 1);
@@ -75,7 +82,8 @@ OverlayScene::OverlayScene(const SingularOverlay& overlay, double scene_radius,
   if (point > 0)
     for (const SingularPoint& p : overlay.set.points) {
       if (!p.position.allFinite()) continue;
-      primitives_.push_back({p.position, p.position, point, true, shader_of(overlay.color(p.kind))});
+      primitives_.push_back(
+          {p.position, p.position, point, true, shader_of(overlay.color(p.kind))});
     }
 
   bins_.rects.resize(primitives_.size());
@@ -107,8 +115,8 @@ Color OverlayScene::shade(const OverlayHit& hit, const Vec3& ray) const {
 std::optional<OverlayScene> make_overlay(const RenderOptions& options, double scene_radius,
                                          const View& view) {
   if (!options.singular_overlay) return std::nullopt;
-  return std::optional<OverlayScene>(std::in_place, *options.singular_overlay, scene_radius,
-                                     view, options);
+  return std::optional<OverlayScene>(std::in_place, *options.singular_overlay, scene_radius, view,
+                                     options);
 }
 
 }  // namespace detail

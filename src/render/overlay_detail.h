@@ -67,8 +67,8 @@ std::optional<OverlayScene> make_overlay(const RenderOptions& options, double sc
                                          const View& view);
 
 template <class Ray, class Depth>
-void OverlayScene::trace(int x0, int y0, int x1, int y1, int ns, const Ray& ray,
-                         const Depth& depth, std::uint8_t* touched, OverlayHit* hits) const {
+void OverlayScene::trace(int x0, int y0, int x1, int y1, int ns, const Ray& ray, const Depth& depth,
+                         std::uint8_t* touched, OverlayHit* hits) const {
   if (primitives_.empty()) return;
   const int w = x1 - x0;
   for (int ty = y0 - y0 % kTile; ty < y1; ty += kTile)
@@ -88,7 +88,8 @@ void OverlayScene::trace(int x0, int y0, int x1, int y1, int ns, const Ray& ray,
               for (int s = 0; s < ns; ++s) h[s] = {depth(x, y, s), -1};
             }
             for (int s = 0; s < ns; ++s)
-              if (intersect(p, ray(x, y, s), h[s].t)) h[s].primitive = static_cast<std::int32_t>(id);
+              if (intersect(p, ray(x, y, s), h[s].t))
+                h[s].primitive = static_cast<std::int32_t>(id);
           }
       }
 }
