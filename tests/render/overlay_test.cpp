@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "render/sphere_shapes.h"
 #include "zeroset/error.h"
 #include "zeroset/render/render.h"
 #include "zeroset/render/view.h"
@@ -16,6 +17,9 @@
 
 namespace zeroset {
 namespace {
+
+using test::sphere_points;
+using test::uv_sphere;
 
 Surface catalog_surface(const char* name) { return make_surface(*find_catalog_entry(name)); }
 
@@ -68,35 +72,6 @@ SingularSet set_around_the_sphere(const View& v) {
   set.curves.push_back({CurveKind::kCrossing, {Vec3(-0.5 * v.right), Vec3(0.5 * v.right)}});
   set.points.push_back({Vec3(0.3 * v.up - 0.4 * v.right), SingularPointKind::kNode});
   return set;
-}
-
-/// Points on the unit sphere (a Fibonacci lattice), outward normals.
-std::vector<Vec3> sphere_points(int n) {
-  std::vector<Vec3> p;
-  const double golden = std::numbers::pi * (3 - std::sqrt(5.0));
-  for (int i = 0; i < n; ++i) {
-    const double z = 1 - 2 * (i + 0.5) / n, r = std::sqrt(1 - z * z);
-    p.emplace_back(r * std::cos(golden * i), r * std::sin(golden * i), z);
-  }
-  return p;
-}
-
-/// A UV sphere of radius 1.
-Mesh uv_sphere(int rings, int segments) {
-  Mesh m;
-  for (int i = 0; i <= rings; ++i)
-    for (int j = 0; j < segments; ++j) {
-      const double th = std::numbers::pi * i / rings, ph = 2 * std::numbers::pi * j / segments;
-      m.positions.emplace_back(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph),
-                               std::cos(th));
-    }
-  auto id = [&](int i, int j) { return static_cast<std::uint32_t>(i * segments + j % segments); };
-  for (int i = 0; i < rings; ++i)
-    for (int j = 0; j < segments; ++j) {
-      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
-  return m;
 }
 
 /// The three renderers, each drawing the unit sphere.
