@@ -7,6 +7,7 @@
 #include "zeroset/error.h"
 #include "zeroset/expr/polynomial.h"
 #include "zeroset/surface/catalog.h"
+#include "zeroset/surface/singular_set.h"
 
 namespace zeroset::cli {
 namespace {
@@ -39,6 +40,33 @@ void run_list() {
   }
 }
 
+// The singular set found numerically: one line per curve and per special point.
+void print_singular_set(const Surface& s) {
+  if (!s.clip.is_bounded()) {
+    fmt::print("singular set: not searched (no bounded clip; give --clip sphere:R)\n");
+    return;
+  }
+  const SingularSet set = find_singular_set(s);
+  // Coordinates within rounding of zero print as 0.
+  const double tiny = 1e-14 * s.scene_radius();
+  auto show = [&](Vec3 p) {
+    for (int a = 0; a < 3; ++a)
+      if (std::abs(p[a]) < tiny) p[a] = 0;
+    return fmt_vec(p);
+  };
+  fmt::print("singular set (found): {}\n", singular_set_summary(set));
+  if (set.has_singular_sheet) {
+    fmt::print("  for example at {}: sampling and meshing see no sign change there\n",
+               fmt_vec(set.singular_sheet_example));
+    return;
+  }
+  for (const SingularCurve& c : set.curves)
+    fmt::print("  {:<10} curve  length {:.6g}{}  {} .. {}\n", to_string(c.kind), c.length(),
+               c.closed ? " (closed)" : "", show(c.points.front()), show(c.points.back()));
+  for (const SingularPoint& p : set.points)
+    fmt::print("  {:<10} point  {}\n", to_string(p.kind), show(p.position));
+}
+
 void run_info(const SurfaceArgs& args, bool as_json) {
   const Scene scene = args.resolve();
   const Surface& s = scene.surface;
@@ -55,6 +83,7 @@ void run_info(const SurfaceArgs& args, bool as_json) {
       pts.push_back({{"point", {p.x(), p.y(), p.z()}}, {"F", f}, {"grad_norm", g.norm()}});
     }
     j["singular_points"] = pts;
+    if (s.clip.is_bounded()) j["singular_set"] = singular_set_json(find_singular_set(s));
     fmt::print("{}\n", j.dump(2));
     return;
   }
@@ -87,6 +116,7 @@ void run_info(const SurfaceArgs& args, bool as_json) {
       fmt::print("  {}   F = {:.1e}  |grad F| = {:.1e}\n", fmt_vec(p), f, g.norm());
     }
   }
+  print_singular_set(s);
 }
 
 void run_eval(const SurfaceArgs& args, const std::vector<std::string>& at, bool as_json) {

@@ -40,6 +40,7 @@ struct MeshArgs {
   std::string png_raw;
   std::string size = "500x500";
   bool wireframe = false;
+  bool show_singular = false;
 
   CLI::Option* resolution_opt = nullptr;
   CLI::Option* improve_opt = nullptr;
@@ -137,12 +138,13 @@ nlohmann::json topology_json(const Mesh& m) {
 }
 
 void write_picture(const Surface& surface, const Mesh& mesh, const std::string& path, int width,
-                   int height, bool wireframe) {
+                   int height, bool wireframe, const SingularSet* singular) {
   RenderOptions ro;
   ro.width = width;
   ro.height = height;
   ro.samples = 2;
   ro.threads = global_flags().threads;
+  if (singular) ro.singular_overlay = SingularOverlay{.set = *singular};
   write_png(render_mesh(surface, mesh, ro, wireframe), path);
 }
 
@@ -182,6 +184,11 @@ void run_mesh(const MeshArgs& a) {
   const int max_steps = settings.improve ? settings.max_improve_steps.value_or(io.max_steps) : 0;
   check_memory(surface, po);
 
+  // Searched for --stats as well: it costs milliseconds, next to the mesh's seconds.
+  std::optional<SingularSet> singular;
+  if (a.show_singular || !a.stats.empty()) singular = singular_set_if_bounded(surface);
+  const SingularSet* overlay = a.show_singular && singular ? &*singular : nullptr;
+
   const auto t0 = std::chrono::steady_clock::now();
   PolygonizeStats ps;
   Mesh mesh = polygonize(surface, po, &ps);
@@ -192,6 +199,7 @@ void run_mesh(const MeshArgs& a) {
   for (size_t k = 0; k < names.size(); ++k) params[names[k]] = surface.field.parameter_values()[k];
   stats["parameters"] = params;
   stats["clip"] = surface.clip.to_specs();
+  stats["singular_set"] = singular_stats(singular);
   stats["polygonize"] = {
       {"resolution", resolution},
       {"cells", ps.cells},
@@ -226,7 +234,8 @@ void run_mesh(const MeshArgs& a) {
     stats["quality_before"] = quality_json(*before);
     stats["topology_before"] = topology_json(mesh);
   }
-  if (!a.png_raw.empty()) write_picture(surface, mesh, a.png_raw, width, height, a.wireframe);
+  if (!a.png_raw.empty())
+    write_picture(surface, mesh, a.png_raw, width, height, a.wireframe, overlay);
 
   ImproveStats is;
   if (max_steps > 0 && !mesh.empty()) {
@@ -266,7 +275,8 @@ void run_mesh(const MeshArgs& a) {
     stats["topology_after"] = topology_json(mesh);
   }
   if (!a.output.empty()) write_mesh(mesh, a.output);
-  if (!a.png.empty()) write_picture(surface, mesh, a.png, width, height, a.wireframe);
+  if (!a.png.empty())
+    write_picture(surface, mesh, a.png, width, height, a.wireframe, overlay);
   stats["seconds_total"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!a.stats.empty()) write_json(stats, a.stats);
 
@@ -333,11 +343,13 @@ void register_mesh_command(CLI::App& app) {
                 "Do not search singular points by Newton's method on grad F = 0");
   cmd->add_option("-o,--output", args->output, "Mesh file: .obj, .ply, .stl or .glb");
   cmd->add_option("--stats", args->stats,
-                  "JSON file with counts, timings and quality before and after improvement");
+                  "JSON file with counts, timings, quality before and after improvement and the "
+                  "singular set found");
   cmd->add_option("--png", args->png, "Picture of the final mesh");
   cmd->add_option("--png-raw", args->png_raw, "Picture of the polygonizer's mesh before improvement");
   cmd->add_option("--size", args->size, "Picture size WxH")->capture_default_str();
   cmd->add_flag("--wireframe", args->wireframe, "Draw the mesh edges in the pictures");
+  add_show_singular_flag(cmd, args->show_singular, "the pictures (--png, --png-raw)");
   cmd->callback([args] { run_mesh(*args); });
 }
 

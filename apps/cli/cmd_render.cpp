@@ -135,7 +135,7 @@ bool on_path(const std::string& program) {
 
 // ---------------------------------------------------------------------------------- render
 void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string& output,
-                const std::string& stats_path) {
+                const std::string& stats_path, bool show_singular) {
   const auto& formats = image_file_extensions();
   if (std::find(formats.begin(), formats.end(), file_extension(output)) == formats.end())
     throw InvalidArgument("--output", output, "the file name must end in .png or .ppm");
@@ -144,6 +144,10 @@ void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string
   const Scene scene = args.resolve();
   const Surface& surface = scene.surface;
   RenderOptions o = look.options(scene, args.spec);
+  // Searched for --stats as well: the search costs milliseconds, the render far more.
+  std::optional<SingularSet> singular;
+  if (show_singular || !stats_path.empty()) singular = singular_set_if_bounded(surface);
+  if (show_singular && singular) o.singular_overlay = SingularOverlay{.set = *singular};
   Progress progress("render", global_flags().quiet);
   o.progress = [&](double f) { progress.update(f); };
   RenderStats stats;
@@ -163,7 +167,8 @@ void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string
                 {"seconds", stats.seconds},
                 {"rays", stats.rays},
                 {"hits", stats.hits},
-                {"singular_normals", stats.singular_normals}},
+                {"singular_normals", stats.singular_normals},
+                {"singular_set", singular_stats(singular)}},
                stats_path);
 }
 
@@ -175,6 +180,7 @@ struct AnimateArgs {
   std::string dir;
   std::string video;
   bool no_video = false;
+  bool show_singular = false;
 };
 
 void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArgs& a) {
@@ -227,6 +233,8 @@ void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArg
     cam.azimuth_deg += s * a.orbit_deg;
     o.camera = cam;
     o.progress = [&](double x) { progress.update((f + x) / a.frames); };
+    // The set of this frame's parameters: it moves with them.
+    if (a.show_singular) o.singular_overlay = SingularOverlay{.set = find_singular_set(surface)};
     const Image image = render_surface(surface, o);
     write_png(image, (dir / fmt::format("frame_{:04d}.png", f)).string());
   }
@@ -293,7 +301,8 @@ void register_render_commands(CLI::App& app) {
         "  zeroset render barth6 --size 1200x900 --aa 3 -o barth.png\n"
         "  zeroset render \"x^2 + y^2 - z^2\" --clip sphere:1.5 --camera 30,20 -o cone.png\n"
         "  zeroset render roman --background '#202020' --stats roman.json -o roman.png\n"
-        "  zeroset render cayley --aa 1 -o cayley.ppm    (uncompressed, for pipelines)");
+        "  zeroset render cayley --aa 1 -o cayley.ppm    (uncompressed, for pipelines)\n"
+        "  zeroset render whitney --show-singular -o whitney.png   (the umbrella's handle too)");
     auto args = std::make_shared<SurfaceArgs>();
     auto look = std::make_shared<LookArgs>();
     auto output = std::make_shared<std::string>();
@@ -303,9 +312,12 @@ void register_render_commands(CLI::App& app) {
     cmd->add_option("-o,--output", *output,
                     "Output picture: .png, or .ppm (binary netpbm, uncompressed: the fastest "
                     "to write)")->required()->type_name("FILE");
-    cmd->add_option("--stats", *stats, "Write figures (rays, hits, seconds) as JSON to FILE")
+    cmd->add_option("--stats", *stats,
+                    "Write figures (rays, hits, seconds, the singular set found) as JSON to FILE")
         ->type_name("FILE");
-    cmd->callback([=] { run_render(*args, *look, *output, *stats); });
+    auto show_singular = std::make_shared<bool>(false);
+    add_show_singular_flag(cmd, *show_singular, "the picture");
+    cmd->callback([=] { run_render(*args, *look, *output, *stats, *show_singular); });
   }
   {
     auto* cmd = app.add_subcommand(
@@ -338,6 +350,7 @@ void register_render_commands(CLI::App& app) {
     cmd->add_option("--video", a->video, "Video file (default: DIR/animation.mp4)")
         ->type_name("FILE.mp4");
     cmd->add_flag("--no-video", a->no_video, "Only write the frames, even if ffmpeg is there");
+    add_show_singular_flag(cmd, a->show_singular, "every frame (found anew for each frame)");
     cmd->callback([=] { run_animate(*args, *look, *a); });
   }
   {

@@ -40,6 +40,7 @@ struct SampleArgs {
   bool ascii = false;
   std::string stats;
   std::string png;
+  bool show_singular = false;
   std::string size = "500x500";
   std::string camera;
   double disk_scale = 0.75;
@@ -267,6 +268,9 @@ void run_sample(const SampleArgs& a) {
   progress.finish();
 
   const Surface& final_surface = sys.surface();
+  // The set of the final parameters, for --show-singular and --stats (milliseconds).
+  std::optional<SingularSet> singular;
+  if (a.show_singular || !a.stats.empty()) singular = singular_set_if_bounded(final_surface);
   if (!a.output.empty())
     write_points_ply(a.output, sys.positions(), sys.normals(), sys.radii(),
                      a.ascii ? PlyFormat::kAscii : PlyFormat::kBinaryLittleEndian);
@@ -278,6 +282,7 @@ void run_sample(const SampleArgs& a) {
     std::vector<double> disks(sys.radii().begin(), sys.radii().end());
     for (double& r : disks) r *= a.disk_scale;
     ro.camera = framing(camera, final_surface, sys.positions());
+    if (a.show_singular && singular) ro.singular_overlay = SingularOverlay{.set = *singular};
     write_png(render_points(final_surface, sys.positions(), sys.normals(), disks, ro), a.png);
   }
 
@@ -299,6 +304,7 @@ void run_sample(const SampleArgs& a) {
     stats["steps_per_second"] = seconds > 0 ? static_cast<double>(sys.steps_taken()) / seconds : 0;
     stats["updates_per_second"] = seconds > 0 ? static_cast<double>(updates) / seconds : 0;
     stats["metrics"] = metrics_json(m, band);
+    stats["singular_set"] = singular_stats(singular);
     write_json(stats, a.stats);
   }
   // Floaters that find no surface are reseeded, wander, and are removed as strays.
@@ -384,10 +390,12 @@ void register_sample_command(CLI::App& app) {
   cmd->add_flag("--ascii", a->ascii, "Write the PLY as ASCII");
   cmd->add_option("--stats", a->stats,
                   "Quality figures as JSON: count, steps/s, residual, spacing CV, covering "
-                  "radius, singular point coverage, density near the singular set")
+                  "radius, singular point coverage, density near the singular set, the singular "
+                  "set found")
       ->type_name("FILE.json");
   cmd->add_option("--png", a->png, "Picture of the floaters as shaded disks")
       ->type_name("FILE.png");
+  add_show_singular_flag(cmd, a->show_singular, "the --png picture");
   cmd->add_option("--camera", a->camera,
                   "Orbit camera AZIMUTH,ELEVATION[,DISTANCE] in degrees (z up) for --png; "
                   "without a distance the picture is framed on the floaters")

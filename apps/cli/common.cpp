@@ -26,6 +26,26 @@ void warn(const std::string& line) {
   if (!global_flags().quiet) fmt::print(stderr, "zeroset: warning: {}\n", line);
 }
 
+void add_show_singular_flag(CLI::App* cmd, bool& flag, const std::string& pictures) {
+  cmd->add_flag("--show-singular", flag,
+                "Draw the singular set (where F = 0 and ∇F = 0, as `zeroset info` lists it) "
+                "over " + pictures + ": curves as thin tubes, green where two sheets cross, "
+                "magenta where the curve is isolated (no sheet through it, e.g. Whitney's "
+                "handle; the surface alone would not show it), cyan where degenerate (e.g. a "
+                "cuspidal edge); special points as small spheres, black: node, red: pinch "
+                "point, yellow: triple point, grey: a curve leaves the clip, cyan: degenerate "
+                "point. Whatever is in front hides them");
+}
+
+std::optional<SingularSet> singular_set_if_bounded(const Surface& surface) {
+  if (!surface.clip.is_bounded()) return std::nullopt;
+  return find_singular_set(surface);
+}
+
+nlohmann::json singular_stats(const std::optional<SingularSet>& set) {
+  return set ? singular_set_json(*set, false) : nlohmann::json();
+}
+
 void SurfaceArgs::add_to(CLI::App* cmd, bool optional) {
   auto* opt = cmd->add_option("SURFACE", spec,
                               "Catalog name (zeroset list), equation in quotes, or scene file "

@@ -7,10 +7,12 @@
 #include <map>
 #include <string_view>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "zeroset/surface/scene.h"
+#include "zeroset/surface/singular_set.h"
 
 namespace zeroset::cli {
 
@@ -61,6 +63,16 @@ class Progress {
 
 /// Writes a JSON document atomically (pretty-printed).
 void write_json(const nlohmann::json& j, const std::string& path);
+
+/// Adds --show-singular (draw the singular set over the pictures) to `cmd`, setting `flag`;
+/// `pictures` names what it draws on ("the picture", "the --png picture").
+void add_show_singular_flag(CLI::App* cmd, bool& flag, const std::string& pictures);
+/// The singular set of `surface` (find_singular_set) when its clip is bounded, else none:
+/// what --show-singular draws and --stats reports.
+std::optional<SingularSet> singular_set_if_bounded(const Surface& surface);
+/// The "singular_set" entry of a --stats file: the set without its polylines, or null when it
+/// was not searched.
+nlohmann::json singular_stats(const std::optional<SingularSet>& set);
 
 /// Global flags every subcommand sees.
 struct GlobalFlags {

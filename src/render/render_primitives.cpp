@@ -6,9 +6,12 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "bins_detail.h"
+#include "overlay_detail.h"
 #include "render_detail.h"
 #include "zeroset/error.h"
 #include "zeroset/render/render.h"
@@ -16,61 +19,8 @@
 namespace zeroset {
 namespace {
 
-constexpr int kTile = 16;  // screen tiles: the bins, and the tiles rendered
-
-/// Primitive indices per screen tile, and each primitive's pixel bounding box.
-struct Bins {
-  struct Rect {
-    int x0 = 0, y0 = 0, x1 = -1, y1 = -1;  // inclusive pixel range
-  };
-  int tiles_x = 0, tiles_y = 0;
-  std::vector<std::vector<std::uint32_t>> bins;
-  std::vector<Rect> rects;
-
-  Bins(int width, int height, size_t primitives)
-      : tiles_x((width + kTile - 1) / kTile),
-        tiles_y((height + kTile - 1) / kTile),
-        bins(static_cast<size_t>(tiles_x) * tiles_y),
-        rects(primitives) {}
-
-  /// Adds primitive `id` covering the projections of `points` (all of the image when one of
-  /// them is behind the eye; nothing when all are).
-  void add(std::uint32_t id, const Vec3* points, int n, const View& view) {
-    double x0 = std::numeric_limits<double>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
-    int behind = 0;
-    for (int i = 0; i < n; ++i) {
-      double x, y, depth;
-      if (!view.project(points[i], x, y, depth)) {
-        ++behind;
-        continue;
-      }
-      x0 = std::min(x0, x);
-      x1 = std::max(x1, x);
-      y0 = std::min(y0, y);
-      y1 = std::max(y1, y);
-    }
-    if (behind == n) return;
-    if (behind > 0) {
-      x0 = y0 = 0;
-      x1 = view.width;
-      y1 = view.height;
-    }
-    if (!(x1 >= 0 && y1 >= 0 && x0 <= view.width && y0 <= view.height)) return;
-    // Pixels whose area meets [x0, x1] × [y0, y1] (every sample of a pixel lies inside it).
-    Rect r;
-    r.x0 = std::clamp(static_cast<int>(std::floor(x0)), 0, view.width - 1);
-    r.x1 = std::clamp(static_cast<int>(std::floor(x1)), 0, view.width - 1);
-    r.y0 = std::clamp(static_cast<int>(std::floor(y0)), 0, view.height - 1);
-    r.y1 = std::clamp(static_cast<int>(std::floor(y1)), 0, view.height - 1);
-    rects[id] = r;
-    for (int ty = r.y0 / kTile; ty <= r.y1 / kTile; ++ty)
-      for (int tx = r.x0 / kTile; tx <= r.x1 / kTile; ++tx)
-        bins[static_cast<size_t>(ty) * tiles_x + tx].push_back(id);
-  }
-  const std::vector<std::uint32_t>& at(int x0, int y0) const {
-    return bins[static_cast<size_t>(y0 / kTile) * tiles_x + x0 / kTile];
-  }
-};
+using detail::Bins;
+using detail::kTile;
 
 /// The nearest hit of one sample ray.
 struct SampleHit {
@@ -84,9 +34,10 @@ struct SampleHit {
 /// ray from the eye along `dir` meets primitive `id` nearer than hit.t. Each tile keeps the
 /// nearest hit of every sample (a z-buffer) and visits, per primitive of its bin, only the
 /// pixels of that primitive's bounding box, so the cost follows the primitives' screen area.
+/// The singular overlay, when given, then replaces the samples it is nearer on.
 template <class Intersect>
 Image render_binned(const RenderOptions& options, const View& view, const Bins& bins,
-                    const Intersect& intersect) {
+                    const Intersect& intersect, const detail::OverlayScene* overlay) {
   const detail::Shader shader(options, view);
   const std::vector<Vec2> offsets = detail::sample_offsets(options.samples);
   const int ns = static_cast<int>(offsets.size());
@@ -117,13 +68,28 @@ Image render_binned(const RenderOptions& options, const View& view, const Bins& 
                 if (intersect(id, dirs[k], hits[k])) any[k] = 1;
               }
         }
+        // The overlay's hits where they are nearer than hits[k] (entries of touched pixels).
+        std::vector<detail::OverlayHit> on_top;
+        std::vector<std::uint8_t> touched;
+        if (overlay) {
+          on_top.resize(hits.size());
+          touched.assign(static_cast<size_t>(w * (y1 - y0)), 0);
+          overlay->trace(
+              x0, y0, x1, y1, ns,
+              [&](int x, int y, int s) -> const Vec3& { return dirs[sample(x, y, s)]; },
+              [&](int x, int y, int s) { return hits[sample(x, y, s)].t; }, touched.data(),
+              on_top.data());
+        }
         for (int y = y0; y < y1; ++y)
           for (int x = x0; x < x1; ++x) {
             Color sum = Color::Zero();
             for (int s = 0; s < ns; ++s) {
               const size_t k = sample(x, y, s);
               const SampleHit& hit = hits[k];
-              if (!any[k]) {
+              if (!touched.empty() && touched[k / static_cast<size_t>(ns)] &&
+                  on_top[k].primitive >= 0) {
+                sum += overlay->shade(on_top[k], dirs[k]);
+              } else if (!any[k]) {
                 sum += options.background;
               } else if (hit.edge) {
                 sum += edge_color;
@@ -171,6 +137,7 @@ Image render_points(const Surface& surface, std::span<const Vec3> positions,
       corners[k] = positions[i] + r * Vec3(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1);
     bins.add(static_cast<std::uint32_t>(i), corners, 8, view);
   }
+  const std::optional<detail::OverlayScene> overlay = detail::make_overlay(options, scene, view);
   return render_binned(options, view, bins, [&](std::uint32_t id, const Vec3& dir, SampleHit& hit) {
     const Vec3 n = normal(id);
     const double nd = n.dot(dir);
@@ -184,7 +151,7 @@ Image render_points(const Surface& surface, std::span<const Vec3> positions,
     hit.normal = hit.front ? n : Vec3(-n);
     hit.edge = false;
     return true;
-  });
+  }, overlay ? &*overlay : nullptr);
 }
 
 Image render_mesh(const Surface& surface, const Mesh& mesh, const RenderOptions& options,
@@ -224,6 +191,8 @@ Image render_mesh(const Surface& surface, const Mesh& mesh, const RenderOptions&
     bins.add(static_cast<std::uint32_t>(f), p, 3, view);
   }
   const double pixel = view.pixel_angle();
+  const std::optional<detail::OverlayScene> overlay =
+      detail::make_overlay(options, surface.scene_radius(), view);
   return render_binned(options, view, bins, [&](std::uint32_t id, const Vec3& dir, SampleHit& hit) {
     // Möller–Trumbore.
     const auto& tri = mesh.triangles[id];
@@ -260,7 +229,7 @@ Image render_mesh(const Surface& surface, const Mesh& mesh, const RenderOptions&
       hit.edge = d < 0.7 * pixel * t;
     }
     return true;
-  });
+  }, overlay ? &*overlay : nullptr);
 }
 
 }  // namespace zeroset

@@ -3,9 +3,11 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <span>
 #include <vector>
 
+#include "overlay_detail.h"
 #include "render_detail.h"
 #include "zeroset/error.h"
 #include "zeroset/render/raycast.h"
@@ -48,6 +50,64 @@ struct ShadeQueue {
   int size = 0;
 };
 
+/// Draws the singular overlay into a band of pixels [x0, x1) × [y0, y1) whose rays are cast:
+/// `depth` holds the hit parameter of every ray (NaN: a miss) row by row, the ray in column
+/// c of row r being base[r] + ray_s[c]·step[r]; per pixel, `sums` and `hit_samples` hold the
+/// sum of the colours of the samples that hit the surface and their number. A sample the
+/// overlay meets nearer takes the overlay's colour in place of its own: a hit's own colour is
+/// not kept per sample, so the pixel's mean surface colour stands for it (exact without
+/// anti-aliasing, and wherever a pixel's hits have one colour). `sums` and `hit_samples` then
+/// hold the pixel's colour and samples × samples, or are left alone where nothing changed.
+void composite_overlay(const detail::OverlayScene& overlay, int x0, int y0, int x1, int y1,
+                       int samples, const std::vector<double>& ray_s, const Color& background,
+                       const std::vector<double>& depth, const std::vector<Vec3>& base,
+                       const std::vector<Vec3>& step, std::vector<detail::OverlayHit>& on_top,
+                       std::vector<std::uint8_t>& touched, std::vector<Color>& sums,
+                       std::vector<int>& hit_samples) {
+  const int width = x1 - x0, ns = samples * samples;
+  const size_t columns = static_cast<size_t>(width * samples);
+  // Sample s = j·samples + i of pixel (x, y) is the ray in row (y − y0)·samples + j, column
+  // (x − x0)·samples + i (the order of sample_offsets).
+  auto ray_at = [&](int x, int y, int s) {
+    return static_cast<size_t>((y - y0) * samples + s / samples) * columns +
+           static_cast<size_t>((x - x0) * samples + s % samples);
+  };
+  auto ray = [&](int x, int y, int s) {
+    const size_t row = static_cast<size_t>((y - y0) * samples + s / samples);
+    return Vec3(base[row] + ray_s[static_cast<size_t>((x - x0) * samples + s % samples)] *
+                                step[row]);
+  };
+  auto surface_t = [&](int x, int y, int s) {
+    const double t = depth[ray_at(x, y, s)];
+    return std::isnan(t) ? std::numeric_limits<double>::infinity() : t;
+  };
+  const size_t pixels = static_cast<size_t>(width * (y1 - y0));
+  on_top.resize(pixels * static_cast<size_t>(ns));
+  touched.assign(pixels, 0);
+  overlay.trace(x0, y0, x1, y1, ns, ray, surface_t, touched.data(), on_top.data());
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) {
+      const size_t pixel = static_cast<size_t>((y - y0) * width + (x - x0));
+      if (!touched[pixel]) continue;
+      int covered = 0, covered_hits = 0;  // samples the overlay takes, of them surface hits
+      Color color = Color::Zero();
+      for (int s = 0; s < ns; ++s) {
+        const detail::OverlayHit& h = on_top[pixel * static_cast<size_t>(ns) + s];
+        if (h.primitive < 0) continue;
+        ++covered;
+        covered_hits += !std::isnan(depth[ray_at(x, y, s)]);
+        color += overlay.shade(h, ray(x, y, s));
+      }
+      if (covered == 0) continue;
+      const int hits = hit_samples[pixel];
+      if (hits > covered_hits) color += sums[pixel] * (hits - covered_hits) / hits;
+      color += (ns - hits - (covered - covered_hits)) * background;
+      // The whole pixel now: its colour over all samples (see the band's output below).
+      sums[pixel] = color;
+      hit_samples[pixel] = ns;
+    }
+}
+
 }  // namespace
 
 Image render_surface(const Surface& surface, const RenderOptions& options, RenderStats* stats,
@@ -58,6 +118,8 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
                                       surface.scene_radius(), options.width, options.height);
   const detail::Shader shader(options, view);
   const int threads = detail::thread_count(options.threads);
+  const std::optional<detail::OverlayScene> overlay =
+      detail::make_overlay(options, surface.scene_radius(), view);
 
   // One caster per worker, built here so that bad input (no clip, missing parameters) is
   // reported before any thread starts. A picture needs the hit far below a pixel, not to
@@ -75,6 +137,12 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
     std::vector<double> above, current;
     std::vector<Color> sums;
     std::vector<int> hit_samples;
+    // With the singular overlay: the band's hit parameters row by row of rays, each row's
+    // base and step, and per sample the overlay's hit.
+    std::vector<double> depth;
+    std::vector<Vec3> row_base, row_step;
+    std::vector<detail::OverlayHit> on_top;
+    std::vector<std::uint8_t> touched;
     char pad[64];  // keeps the counters of different workers on different cache lines
   };
   std::vector<Worker> workers(static_cast<size_t>(threads));
@@ -182,7 +250,20 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
                                  queue.front[q]));
           queue.size = 0;
           w.rays += columns;
+          if (overlay) {
+            w.depth.insert(w.depth.end(), t, t + columns);
+            w.row_base.push_back(base);
+            w.row_step.push_back(step);
+          }
           std::swap(w.above, w.current);
+        }
+        if (overlay) {
+          composite_overlay(*overlay, x0, y0, x1, y1, samples, ray_s, options.background, w.depth,
+                            w.row_base, w.row_step, w.on_top, w.touched, w.sums,
+                            w.hit_samples);
+          w.depth.clear();
+          w.row_base.clear();
+          w.row_step.clear();
         }
         for (int y = y0; y < y1; ++y) {
           std::uint8_t* out = image.pixel(x0, y);

@@ -4,6 +4,10 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -122,6 +126,55 @@ TEST(Cli, RenderRejectsAnUnknownPictureFormatBeforeWritingAnything) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find(".ppm"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+TEST(Cli, ShowSingularDrawsTheSetOverRenderMeshAndSamplePictures) {
+  const std::string d = temp_dir();
+  const std::vector<std::pair<std::string, std::string>> commands = {
+      {"render", "render whitney --size 97x97 --aa 1 -o "},
+      {"mesh", "mesh whitney -r 16 --size 97x97 --png "},
+      {"sample", "sample whitney --seed 1 --steps 20 --size 97x97 --png "}};
+  for (const auto& [name, args] : commands) {
+    const std::string plain = d + "/" + name + "-plain.png", drawn = d + "/" + name + "-set.png";
+    auto r = run_command(zs("-q " + args + plain));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    r = run_command(zs("-q " + args + drawn + " --show-singular"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    // The handle below the umbrella is drawn in magenta (isolated curves). The picture
+    // itself may show it too where a ray passes exactly through the axis.
+    const Image a = read_image(plain), b = read_image(drawn);
+    auto is_magenta = [](const Image& img, size_t i) {
+      return img.rgb[i + 1] + 30 < img.rgb[i] && img.rgb[i + 1] + 30 < img.rgb[i + 2];
+    };
+    int magenta = 0;
+    for (size_t i = 0; i + 2 < a.rgb.size(); i += 3)
+      magenta += !is_magenta(a, i) && is_magenta(b, i);
+    EXPECT_GT(magenta, 5) << name;
+  }
+  const auto help = run_command(zs("render --help"));
+  EXPECT_NE(help.output.find("--show-singular"), std::string::npos);
+  EXPECT_NE(help.output.find("magenta"), std::string::npos);
+}
+
+TEST(Cli, StatsOfRenderMeshAndSampleListTheSingularSet) {
+  const std::string d = temp_dir();
+  for (const std::string& args :
+       {std::string("render roman --size 32x32 --aa 1 -o ") + d + "/s.png --stats ",
+        std::string("mesh roman -r 16 --stats "),
+        std::string("sample roman --seed 1 --steps 10 --stats ")}) {
+    const std::string stats = d + "/stats.json";
+    std::filesystem::remove(stats);
+    const auto r = run_command(zs("-q " + args + stats));
+    ASSERT_EQ(r.exit_code, 0) << args << r.output;
+    std::ifstream in(stats);
+    const nlohmann::json j = nlohmann::json::parse(in);
+    ASSERT_TRUE(j.contains("singular_set")) << args;
+    const auto& set = j.at("singular_set");
+    EXPECT_EQ(set.at("curves").size(), 9u) << args << ": 3 crossing, 6 isolated";
+    int triple = 0;
+    for (const auto& p : set.at("points")) triple += p.at("kind") == "triple";
+    EXPECT_EQ(triple, 1) << args;
+  }
 }
 
 }  // namespace

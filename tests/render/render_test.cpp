@@ -12,6 +12,7 @@
 
 #include "render/image_masks.h"
 #include "render/render_detail.h"
+#include "render/sphere_shapes.h"
 #include "zeroset/error.h"
 #include "zeroset/render/raycast.h"
 #include "zeroset/render/view.h"
@@ -23,7 +24,9 @@ namespace {
 
 using test::count_holes;
 using test::intersection_over_union;
+using test::sphere_points;
 using test::surface_mask;
+using test::uv_sphere;
 
 Surface catalog_surface(const char* name) { return make_surface(*find_catalog_entry(name)); }
 
@@ -213,17 +216,6 @@ TEST(RenderSurface, GivesTheSameImageWithAnyNumberOfThreads) {
   EXPECT_EQ(one.rgb, three.rgb);
 }
 
-/// Points on the unit sphere (a Fibonacci lattice) with outward normals.
-std::vector<Vec3> sphere_points(int n) {
-  std::vector<Vec3> p;
-  const double golden = std::numbers::pi * (3 - std::sqrt(5.0));
-  for (int i = 0; i < n; ++i) {
-    const double z = 1 - 2 * (i + 0.5) / n, r = std::sqrt(1 - z * z);
-    p.emplace_back(r * std::cos(golden * i), r * std::sin(golden * i), z);
-  }
-  return p;
-}
-
 TEST(RenderPoints, CoversTheSameSilhouetteAsTheSurface) {
   const Surface s = catalog_surface("sphere");
   const std::vector<Vec3> p = sphere_points(20000);
@@ -240,24 +232,6 @@ TEST(RenderPoints, RejectsMismatchedArrays) {
   const std::vector<Vec3> p = sphere_points(10);
   const std::vector<double> radii(3, 0.1);
   EXPECT_THROW(render_points(s, p, p, radii, small()), InvalidArgument);
-}
-
-/// A UV sphere of radius 1, counter-clockwise seen from outside.
-Mesh uv_sphere(int rings, int segments) {
-  Mesh m;
-  for (int i = 0; i <= rings; ++i)
-    for (int j = 0; j < segments; ++j) {
-      const double th = std::numbers::pi * i / rings, ph = 2 * std::numbers::pi * j / segments;
-      m.positions.emplace_back(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph),
-                               std::cos(th));
-    }
-  auto id = [&](int i, int j) { return static_cast<std::uint32_t>(i * segments + j % segments); };
-  for (int i = 0; i < rings; ++i)
-    for (int j = 0; j < segments; ++j) {
-      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
-  return m;
 }
 
 TEST(RenderMesh, CoversTheSameSilhouetteAsTheSurface) {

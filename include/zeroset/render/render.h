@@ -10,6 +10,7 @@
 #include "zeroset/io/image.h"
 #include "zeroset/mesh/mesh.h"
 #include "zeroset/render/lights.h"
+#include "zeroset/render/overlay.h"
 #include "zeroset/surface/surface.h"
 
 namespace zeroset {
@@ -32,6 +33,10 @@ struct RenderOptions {
   Material back{.diffuse = Color(0.06, 0.12, 0.35)};  ///< the other side, darker (paper's figures)
   Color background = Color(1, 1, 1);  ///< linear RGB (pictures are gamma encoded, 2.2)
   int threads = 0;                ///< 0: all cores; the picture does not depend on it
+  /// Draws the singular set over the picture (overlay.h); without it the picture is exactly
+  /// as before. Each sample ray meets the tubes and spheres exactly and keeps the nearest of
+  /// them and the surface, so the overlay is anti-aliased with the picture's samples.
+  std::optional<SingularOverlay> singular_overlay;
   /// Called now and then with the fraction done (from one thread at a time).
   std::function<void(double)> progress;
 };

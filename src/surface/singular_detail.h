@@ -1,0 +1,75 @@
+#pragma once
+// Private to the singular-set search: Newton correctors onto S = {F = 0, ∇F = 0}, the shape of
+// the Hessian there, and curve tracing. See docs/singular.md.
+#include <Eigen/Eigenvalues>
+#include <vector>
+
+#include "zeroset/expr/field.h"
+#include "zeroset/surface/clip.h"
+#include "zeroset/surface/singular_set.h"
+#include "zeroset/types.h"
+
+namespace zeroset::detail {
+
+// Sizes that make the tests scale-free: the grid cell, the scene radius, and typical |∇F| and
+// ‖H‖ near the surface (medians over grid points within a cell of F = 0).
+struct SingularScales {
+  double radius = 1;
+  double cell = 1;
+  double grad = 1;
+  double hess = 1;
+  // |∇F| and |F| below these count as zero at a converged point.
+  double grad_tolerance() const { return 1e-9 * grad; }
+  double value_tolerance() const { return 1e-9 * grad * cell; }
+};
+
+struct Converged {
+  Vec3 p = Vec3::Zero();
+  bool ok = false;
+};
+
+// Gauss–Newton on (F/h, ∇F) = 0 from `start` with minimum-norm least-squares steps (the system
+// is rank deficient on curves of S). ok when it converges inside `max_move` of `start` to a
+// point where F and ∇F vanish (SingularScales' tolerances).
+Converged converge_to_singular(Evaluator& ev, const Vec3& start, const SingularScales& s,
+                               double max_move);
+
+// The same, with the steps restricted to the plane through `start` normal to `t` (unit): finds
+// where a curve of S crosses that plane. ok also requires the point to stay within `max_move`.
+Converged converge_in_plane(Evaluator& ev, const Vec3& start, const Vec3& t,
+                            const SingularScales& s, double max_move);
+
+// The Hessian's eigen decomposition sorted by |eigenvalue|, largest first.
+struct HessianShape {
+  Vec3 abs_eigenvalues = Vec3::Zero();  // descending
+  Mat3 vectors = Mat3::Identity();      // column k belongs to abs_eigenvalues[k]
+  // Eigenvalues at most `fraction` of max(largest, scale) count as zero.
+  int nullity(double scale, double fraction = 1e-6) const;
+};
+HessianShape hessian_shape(const Mat3& h);
+
+// The direction of the curve of S at a point with Hessian h: its null vector, oriented along
+// `previous`. Where two or three eigenvalues are small (pinch and triple points), the projection
+// of `previous` onto their span. Zero when there is no direction.
+Vec3 curve_tangent(const Mat3& h, const Vec3& previous, double hess_scale);
+
+// det Q / ‖Q‖² for Q = H restricted to the plane normal to t: < 0 crossing, > 0 isolated;
+// 0 when Q vanishes, or (unless `exact`) when Q is singular to about 1e-9.
+double normal_form_det(const Mat3& h, const Vec3& t, double hess_scale, bool exact = false);
+CurveKind kind_of(double normal_det);
+
+// A unit basis of the plane normal to the unit vector t.
+void normal_basis(const Vec3& t, Vec3& u, Vec3& v);
+
+enum class WalkEnd { kClip, kClosed, kStalled, kBudget };
+
+// Follows the curve of S from `start` (on it) along `t`, one vertex every `spacing`, until it
+// leaves the clip (the last vertex then lies on the clip within 1e-13 of the scene radius), closes
+// on `start`, stalls or uses up `budget` vertices (decremented). Returns the vertices after start.
+std::vector<Vec3> walk_curve(Evaluator& ev, const Clip& clip, const Vec3& start, Vec3 t,
+                             const SingularScales& s, double spacing, int& budget, WalkEnd& end);
+
+// Distance from p to the segment [a, b].
+double segment_distance(const Vec3& p, const Vec3& a, const Vec3& b);
+
+}  // namespace zeroset::detail

@@ -1,0 +1,512 @@
+// The singular set: seeds from a grid, Newton onto S, curves traced and classified, then the
+// special points (triple points where curves meet, pinch points where the kind changes, ends on
+// the clip). See docs/singular.md.
+#include "zeroset/surface/singular_set.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include <fmt/core.h>
+
+#include "singular_detail.h"
+#include "zeroset/error.h"
+
+namespace zeroset {
+namespace {
+
+using detail::SingularScales;
+
+constexpr double kSqrt3 = 1.7320508075688772;
+
+// F, ∇F and H at the nodes of a grid over the clip's box, in rows along x.
+struct GridSamples {
+  std::array<int, 3> n{0, 0, 0};
+  Vec3 origin = Vec3::Zero();
+  double cell = 1;
+  std::vector<double> f;
+  std::vector<Vec3> g;
+  std::vector<Mat3> h;
+  Vec3 point(size_t i) const {
+    const size_t nx = static_cast<size_t>(n[0]), ny = static_cast<size_t>(n[1]);
+    return origin + cell * Vec3(static_cast<double>(i % nx), static_cast<double>((i / nx) % ny),
+                                static_cast<double>(i / (nx * ny)));
+  }
+};
+
+GridSamples sample_grid(const Field& field, const Box3& box, int cells) {
+  GridSamples gs;
+  gs.cell = box.size().maxCoeff() / cells;
+  for (int a = 0; a < 3; ++a)
+    gs.n[static_cast<size_t>(a)] =
+        std::max(2, static_cast<int>(std::ceil(box.size()[a] / gs.cell - 1e-9)) + 1);
+  gs.origin = box.center() - 0.5 * gs.cell * Vec3(gs.n[0] - 1, gs.n[1] - 1, gs.n[2] - 1);
+  const size_t nx = static_cast<size_t>(gs.n[0]);
+  const size_t total = nx * static_cast<size_t>(gs.n[1]) * static_cast<size_t>(gs.n[2]);
+  gs.f.resize(total);
+  gs.g.resize(total);
+  gs.h.resize(total);
+  Evaluator ev(field);
+  std::vector<double> x(nx), y(nx), z(nx), f(nx), gx(nx), gy(nx), gz(nx);
+  std::array<std::vector<double>, 6> hv;
+  for (auto& v : hv) v.resize(nx);
+  for (size_t row = 0; row < total / nx; ++row) {
+    for (size_t i = 0; i < nx; ++i) {
+      const Vec3 p = gs.point(row * nx + i);
+      x[i] = p.x(), y[i] = p.y(), z[i] = p.z();
+    }
+    ev.values_gradients_hessians(x, y, z, f, gx, gy, gz,
+                                 {hv[0], hv[1], hv[2], hv[3], hv[4], hv[5]});
+    for (size_t i = 0; i < nx; ++i) {
+      const size_t k = row * nx + i;
+      gs.f[k] = f[i];
+      gs.g[k] = Vec3(gx[i], gy[i], gz[i]);
+      gs.h[k] << hv[0][i], hv[1][i], hv[2][i], hv[1][i], hv[3][i], hv[4][i], hv[2][i], hv[4][i],
+          hv[5][i];
+    }
+  }
+  return gs;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+// Length of the minimum-norm Gauss–Newton step towards S from a grid node: short steps mark
+// nodes close to S (the first step of detail::converge_to_singular, from the stored samples).
+double first_step_length(double f, const Vec3& g, const Mat3& h, double cell) {
+  Eigen::Matrix<double, 4, 3> j;
+  j.row(0) = g.transpose() / cell;
+  j.bottomRows<3>() = h;
+  Eigen::Vector4d r;
+  r << f / cell, g;
+  const Mat3 a = j.transpose() * j;
+  const Vec3 b = j.transpose() * r;
+  Eigen::SelfAdjointEigenSolver<Mat3> es;
+  es.computeDirect(a);
+  const double top = es.eigenvalues().cwiseAbs().maxCoeff();
+  if (!(top > 0) || !std::isfinite(top)) return std::numeric_limits<double>::infinity();
+  Vec3 x = Vec3::Zero();
+  for (int k = 0; k < 3; ++k)
+    if (es.eigenvalues()[k] > 1e-24 * top)
+      x += (es.eigenvectors().col(k).dot(b) / es.eigenvalues()[k]) * es.eigenvectors().col(k);
+  return x.norm();
+}
+
+double distance_to_curves(const Vec3& p, const std::vector<SingularCurve>& curves) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const SingularCurve& c : curves)
+    for (size_t i = 0; i + 1 < c.points.size(); ++i)
+      best = std::min(best, detail::segment_distance(p, c.points[i], c.points[i + 1]));
+  return best;
+}
+
+// Sets S on a two-dimensional part of F = 0 (F = G²) apart from curves: around such a point
+// every direction of the Hessian's null space leads to more points of S.
+bool on_singular_sheet(Evaluator& ev, const Vec3& p, const detail::HessianShape& shape,
+                       const SingularScales& s) {
+  for (int k = 1; k < 3; ++k)
+    for (double sign : {-1.0, 1.0}) {
+      const Vec3 dir = shape.vectors.col(k);
+      const detail::Converged c = detail::converge_in_plane(ev, p + sign * s.cell * dir, dir, s,
+                                                            0.5 * s.cell);
+      if (!c.ok) return false;
+    }
+  return true;
+}
+
+// Traces the curve of S through p in both directions along t; empty when it does not move.
+SingularCurve trace_through(Evaluator& ev, const Clip& clip, const Vec3& p, const Vec3& t,
+                            const SingularScales& s, double spacing, int& budget) {
+  SingularCurve curve;
+  detail::WalkEnd end_fwd{}, end_back{};
+  std::vector<Vec3> fwd = detail::walk_curve(ev, clip, p, t, s, spacing, budget, end_fwd);
+  if (end_fwd == detail::WalkEnd::kClosed) {
+    curve.points.push_back(p);
+    curve.points.insert(curve.points.end(), fwd.begin(), fwd.end());
+    curve.points.push_back(p);
+    curve.closed = true;
+    return curve;
+  }
+  std::vector<Vec3> back = detail::walk_curve(ev, clip, p, -t, s, spacing, budget, end_back);
+  curve.points.assign(back.rbegin(), back.rend());
+  curve.points.push_back(p);
+  curve.points.insert(curve.points.end(), fwd.begin(), fwd.end());
+  if (curve.points.size() < 2) curve.points.clear();
+  return curve;
+}
+
+// Triple points on a curve: where three or more sheets meet, F vanishes to third order, so the
+// Hessian vanishes too; along the curve ‖H‖ falls to zero there (a V-shaped minimum). Each
+// vertex where ‖H‖ is a small local minimum is refined by golden-section search on ‖H‖ over the
+// curve between its neighbours (points of the curve found in planes normal to that chord).
+std::vector<Vec3> triple_points_on(Evaluator& ev, const SingularCurve& curve,
+                                   const SingularScales& s, double spacing) {
+  const auto& pts = curve.points;
+  const size_t n = pts.size();
+  std::vector<double> norm(n);
+  for (size_t i = 0; i < n; ++i) norm[i] = ev.sample(pts[i], true, false).hessian.norm();
+  std::vector<Vec3> found;
+  for (size_t k = 0; k < n; ++k) {
+    const bool local_min = (k == 0 || norm[k] <= norm[k - 1]) && (k + 1 == n || norm[k] <= norm[k + 1]);
+    if (!local_min || !(norm[k] < 0.2 * s.hess)) continue;
+    const Vec3 a = pts[k > 0 ? k - 1 : 0], b = pts[std::min(k + 1, n - 1)];
+    const double len = (b - a).norm();
+    if (!(len > 0)) continue;
+    const Vec3 dir = (b - a) / len;
+    Vec3 best = pts[k];
+    auto h_at = [&](double u) {
+      const detail::Converged c = detail::converge_in_plane(ev, a + u * dir, dir, s, spacing);
+      if (!c.ok) return std::numeric_limits<double>::infinity();
+      const double v = ev.sample(c.p, true, false).hessian.norm();
+      best = c.p;
+      return v;
+    };
+    constexpr double kGolden = 0.6180339887498949;
+    double lo = 0, hi = len;
+    double u1 = hi - kGolden * (hi - lo), u2 = lo + kGolden * (hi - lo);
+    double f1 = h_at(u1), f2 = h_at(u2);
+    for (int it = 0; it < 200 && hi - lo > 1e-15 * s.radius; ++it) {
+      if (f1 <= f2) {
+        hi = u2, u2 = u1, f2 = f1;
+        u1 = hi - kGolden * (hi - lo);
+        f1 = h_at(u1);
+      } else {
+        lo = u1, u1 = u2, f1 = f2;
+        u2 = lo + kGolden * (hi - lo);
+        f2 = h_at(u2);
+      }
+    }
+    const double at = h_at(0.5 * (lo + hi));
+    if (at <= 1e-6 * s.hess) found.push_back(best);
+  }
+  return found;
+}
+
+// Puts `q` into the polyline as a vertex where it lies on it (within `near` of a segment).
+void insert_vertex(SingularCurve& c, const Vec3& q, double near) {
+  size_t best = c.points.size();
+  double best_d = near;
+  for (size_t i = 0; i + 1 < c.points.size(); ++i) {
+    const double d = detail::segment_distance(q, c.points[i], c.points[i + 1]);
+    if (d <= best_d) best_d = d, best = i;
+  }
+  if (best == c.points.size()) return;
+  const double tiny = 1e-3 * near;
+  if ((c.points[best] - q).norm() <= tiny) {
+    c.points[best] = q;
+  } else if ((c.points[best + 1] - q).norm() <= tiny) {
+    c.points[best + 1] = q;
+  } else {
+    c.points.insert(c.points.begin() + static_cast<std::ptrdiff_t>(best + 1), q);
+  }
+}
+
+// Splits a curve where the form across it changes sign (pinch points, located by bisection on
+// the curve), and gives each piece its kind. Pinch points found are appended to `pinches`.
+std::vector<SingularCurve> split_by_kind(Evaluator& ev, const SingularCurve& curve,
+                                         const SingularScales& s, std::vector<Vec3>& pinches) {
+  const auto& pts = curve.points;
+  const size_t n = pts.size();
+  auto tangent_at = [&](size_t i) {
+    const Vec3 d = pts[std::min(i + 1, n - 1)] - pts[i > 0 ? i - 1 : 0];
+    return Vec3(d.normalized());
+  };
+  std::vector<double> det(n);
+  for (size_t i = 0; i < n; ++i)
+    det[i] = detail::normal_form_det(ev.sample(pts[i], true, false).hessian, tangent_at(i), s.hess);
+
+  std::vector<SingularCurve> pieces;
+  SingularCurve cur;
+  cur.points.push_back(pts[0]);
+  double last_sign = det[0];
+  for (size_t i = 1; i < n; ++i) {
+    if (det[i] != 0 && last_sign != 0 && (det[i] > 0) != (last_sign > 0)) {
+      // The sign changed on [i - 1, i]: bisect for det Q = 0 on the curve.
+      const Vec3 t = (pts[i] - pts[i - 1]).normalized();
+      Vec3 lo = pts[i - 1], hi = pts[i];
+      const bool lo_positive = last_sign > 0;
+      for (int it = 0; it < 80 && (hi - lo).norm() > 1e-14 * s.radius; ++it) {
+        const detail::Converged m =
+            detail::converge_in_plane(ev, 0.5 * (lo + hi), t, s, (hi - lo).norm());
+        if (!m.ok) break;
+        const double dm =
+            detail::normal_form_det(ev.sample(m.p, true, false).hessian, t, s.hess, true);
+        if (dm == 0) {
+          lo = hi = m.p;
+          break;
+        }
+        ((dm > 0) == lo_positive ? lo : hi) = m.p;
+      }
+      const Vec3 pinch = 0.5 * (lo + hi);
+      cur.points.push_back(pinch);
+      pieces.push_back(std::move(cur));
+      pinches.push_back(pinch);
+      cur = SingularCurve{};
+      cur.points.push_back(pinch);
+    }
+    cur.points.push_back(pts[i]);
+    if (det[i] != 0) last_sign = det[i];
+  }
+  pieces.push_back(std::move(cur));
+  // Each piece's kind: the sign its vertices share (zeros only at triple points or the ends).
+  for (SingularCurve& piece : pieces) {
+    double sum_neg = 0, sum_pos = 0;
+    for (size_t k = 0; k < piece.points.size(); ++k) {
+      const double d = detail::normal_form_det(
+          ev.sample(piece.points[k], true, false).hessian,
+          (piece.points[std::min(k + 1, piece.points.size() - 1)] - piece.points[k > 0 ? k - 1 : 0])
+              .normalized(),
+          s.hess);
+      (d < 0 ? sum_neg : sum_pos) += std::abs(d);
+    }
+    piece.kind = sum_neg == 0 && sum_pos == 0 ? CurveKind::kDegenerate
+                 : sum_neg > sum_pos          ? CurveKind::kCrossing
+                                              : CurveKind::kIsolated;
+  }
+  if (pieces.size() == 1) pieces[0].closed = curve.closed;
+  return pieces;
+}
+
+void add_point(std::vector<SingularPoint>& points, const Vec3& p, SingularPointKind kind,
+               double same) {
+  for (const SingularPoint& q : points)
+    if ((q.position - p).norm() < same) return;
+  points.push_back({p, kind});
+}
+
+}  // namespace
+
+std::string_view to_string(CurveKind kind) {
+  switch (kind) {
+    case CurveKind::kCrossing: return "crossing";
+    case CurveKind::kIsolated: return "isolated";
+    case CurveKind::kDegenerate: return "degenerate";
+  }
+  return "?";
+}
+
+std::string_view to_string(SingularPointKind kind) {
+  switch (kind) {
+    case SingularPointKind::kNode: return "node";
+    case SingularPointKind::kPinch: return "pinch";
+    case SingularPointKind::kTriple: return "triple";
+    case SingularPointKind::kClipEnd: return "clip end";
+    case SingularPointKind::kDegenerate: return "degenerate";
+  }
+  return "?";
+}
+
+double SingularCurve::length() const {
+  double l = 0;
+  for (size_t i = 0; i + 1 < points.size(); ++i) l += (points[i + 1] - points[i]).norm();
+  return l;
+}
+
+std::vector<Vec3> SingularSet::points_of(SingularPointKind kind) const {
+  std::vector<Vec3> out;
+  for (const SingularPoint& p : points)
+    if (p.kind == kind) out.push_back(p.position);
+  return out;
+}
+
+int SingularSet::count(CurveKind kind) const {
+  return static_cast<int>(
+      std::count_if(curves.begin(), curves.end(), [&](const auto& c) { return c.kind == kind; }));
+}
+
+double SingularSet::distance(const Vec3& p) const {
+  double best = distance_to_curves(p, curves);
+  for (const SingularPoint& q : points) best = std::min(best, (q.position - p).norm());
+  return best;
+}
+
+SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& options,
+                              std::stop_token stop) {
+  if (options.cells < 4 || options.cells > 1024)
+    throw InvalidArgument("singular set cells", std::to_string(options.cells),
+                          "must be between 4 and 1024");
+  const Box3 box = surface.bounds();
+  const double radius = surface.scene_radius();
+  const GridSamples grid = sample_grid(surface.field, box, options.cells);
+  const Clip& clip = surface.clip;
+
+  SingularScales s;
+  s.radius = radius;
+  s.cell = grid.cell;
+  std::vector<double> grads, hesses;
+  bool all_zero = true;
+  for (size_t i = 0; i < grid.f.size(); ++i) {
+    const double gn = grid.g[i].norm();
+    if (grid.f[i] != 0 || gn != 0) all_zero = false;
+    if (std::abs(grid.f[i]) <= gn * grid.cell && std::isfinite(gn)) {
+      grads.push_back(gn);
+      hesses.push_back(grid.h[i].norm());
+    }
+  }
+  SingularSet out;
+  if (all_zero) {  // F ≡ 0: every point is singular
+    out.has_singular_sheet = true;
+    out.singular_sheet_example = box.center();
+    return out;
+  }
+  s.grad = median(grads);
+  s.hess = median(hesses);
+  if (!(s.grad > 0)) {
+    // Near F = 0 the gradient vanishes at every grid node: F = G² or worse. Fall back to the
+    // largest finite values for the scales so the search below can still confirm it.
+    for (size_t i = 0; i < grid.f.size(); ++i)
+      if (std::isfinite(grid.g[i].norm())) {
+        s.grad = std::max(s.grad, grid.g[i].norm());
+        s.hess = std::max(s.hess, grid.h[i].norm());
+      }
+  }
+  if (!(s.grad > 0) || !(s.hess > 0) || !std::isfinite(s.grad)) return out;
+
+  const double spacing = options.spacing > 0 ? options.spacing : 0.5 * grid.cell;
+  Evaluator ev(surface.field);
+  int budget = options.max_curve_points;
+  int sheet_hits = 0;
+  std::vector<Vec3> deferred;  // singular points with a singular Hessian and no curve (yet)
+  const double same_point = 1e-6 * radius;
+
+  for (size_t i = 0; i < grid.f.size(); ++i) {
+    if (stop.stop_requested() || budget <= 0) break;
+    const Vec3 node = grid.point(i);
+    if (!clip.is_empty_spec() && !clip.contains(node, grid.cell)) continue;
+    if (!(first_step_length(grid.f[i], grid.g[i], grid.h[i], grid.cell) <= 1.5 * kSqrt3 * grid.cell))
+      continue;
+    ++out.seeds;
+    const detail::Converged c = detail::converge_to_singular(ev, node, s, 3 * grid.cell);
+    if (!c.ok || (!clip.is_empty_spec() && !clip.contains(c.p, 1e-9 * radius))) continue;
+    if (distance_to_curves(c.p, out.curves) <= spacing) continue;
+    const bool known = std::any_of(out.points.begin(), out.points.end(), [&](const auto& q) {
+      return (q.position - c.p).norm() < same_point;
+    });
+    if (known) continue;
+    const detail::HessianShape shape = detail::hessian_shape(ev.sample(c.p, true, false).hessian);
+    const int nullity = shape.nullity(s.hess);
+    if (nullity == 0) {
+      out.points.push_back({c.p, SingularPointKind::kNode});
+      continue;
+    }
+    if (nullity == 2 && on_singular_sheet(ev, c.p, shape, s)) {
+      if (++sheet_hits == 1) out.singular_sheet_example = c.p;
+      if (sheet_hits >= 8) {
+        out.has_singular_sheet = true;
+        break;
+      }
+      continue;
+    }
+    if (nullity == 3) {  // H = 0: a triple point or worse; curves through it come from others
+      deferred.push_back(c.p);
+      continue;
+    }
+    bool traced = false;
+    for (int k = 3 - nullity; k < 3 && !traced; ++k) {
+      SingularCurve curve = trace_through(ev, clip, c.p, shape.vectors.col(k), s, spacing, budget);
+      if (curve.points.size() >= 2) {
+        out.curves.push_back(std::move(curve));
+        traced = true;
+      }
+    }
+    if (!traced) deferred.push_back(c.p);
+  }
+  if (out.has_singular_sheet) {
+    out.curves.clear();
+    out.points.clear();
+    return out;
+  }
+
+  // Triple points: where curves meet. Each becomes a vertex of every curve through it.
+  std::vector<Vec3> triples;
+  for (const SingularCurve& c : out.curves)
+    for (const Vec3& q : triple_points_on(ev, c, s, spacing))
+      if (std::none_of(triples.begin(), triples.end(),
+                       [&](const Vec3& p) { return (p - q).norm() < 0.5 * spacing; }))
+        triples.push_back(q);
+  for (const Vec3& q : triples) {
+    add_point(out.points, q, SingularPointKind::kTriple, same_point);
+    for (SingularCurve& c : out.curves) insert_vertex(c, q, 0.3 * spacing);
+  }
+  for (const Vec3& q : deferred) {
+    if (distance_to_curves(q, out.curves) <= spacing) {
+      // A point with H = 0 on a curve where no second curve was found (e.g. a curve's cusp).
+      if (detail::hessian_shape(ev.sample(q, true, false).hessian).nullity(s.hess) == 3)
+        add_point(out.points, q, SingularPointKind::kTriple, 0.5 * spacing);
+      continue;
+    }
+    add_point(out.points, q, SingularPointKind::kDegenerate, 0.5 * spacing);
+  }
+
+  // Pinch points split curves by kind; curve ends on the clip are named.
+  std::vector<SingularCurve> pieces;
+  std::vector<Vec3> pinches;
+  for (const SingularCurve& c : out.curves)
+    for (SingularCurve& piece : split_by_kind(ev, c, s, pinches)) pieces.push_back(std::move(piece));
+  out.curves = std::move(pieces);
+  for (const Vec3& q : pinches) add_point(out.points, q, SingularPointKind::kPinch, 0.5 * spacing);
+  for (const SingularCurve& c : out.curves) {
+    if (c.closed || clip.is_empty_spec()) continue;
+    for (const Vec3& end : {c.points.front(), c.points.back()})
+      if (std::abs(clip.value(end)) <= 1e-9 * radius)
+        add_point(out.points, end, SingularPointKind::kClipEnd, same_point);
+  }
+  return out;
+}
+
+namespace {
+nlohmann::json json_vec(const Vec3& p) { return {p.x(), p.y(), p.z()}; }
+}  // namespace
+
+nlohmann::json singular_set_json(const SingularSet& set, bool with_polylines) {
+  nlohmann::json j;
+  j["points"] = nlohmann::json::array();
+  for (const SingularPoint& p : set.points)
+    j["points"].push_back({{"kind", to_string(p.kind)}, {"position", json_vec(p.position)}});
+  j["curves"] = nlohmann::json::array();
+  for (const SingularCurve& c : set.curves) {
+    nlohmann::json jc = {{"kind", to_string(c.kind)},
+                         {"closed", c.closed},
+                         {"length", c.length()},
+                         {"vertices", c.points.size()},
+                         {"from", json_vec(c.points.front())},
+                         {"to", json_vec(c.points.back())}};
+    if (with_polylines) {
+      jc["points"] = nlohmann::json::array();
+      for (const Vec3& p : c.points) jc["points"].push_back(json_vec(p));
+    }
+    j["curves"].push_back(std::move(jc));
+  }
+  j["singular_sheet"] = set.has_singular_sheet;
+  if (set.has_singular_sheet) j["singular_sheet_example"] = json_vec(set.singular_sheet_example);
+  return j;
+}
+
+std::string singular_set_summary(const SingularSet& set) {
+  if (set.has_singular_sheet)
+    return "grad F vanishes on a whole sheet of F = 0 (F is a square or worse)";
+  if (set.empty()) return "none found";
+  std::string curves, points;
+  for (CurveKind k : {CurveKind::kCrossing, CurveKind::kIsolated, CurveKind::kDegenerate})
+    if (const int n = set.count(k); n > 0)
+      curves += fmt::format("{}{} {} curve{}", curves.empty() ? "" : ", ", n, to_string(k),
+                            n == 1 ? "" : "s");
+  for (SingularPointKind k : {SingularPointKind::kNode, SingularPointKind::kTriple,
+                              SingularPointKind::kPinch, SingularPointKind::kDegenerate,
+                              SingularPointKind::kClipEnd})
+    if (const size_t n = set.points_of(k).size(); n > 0)
+      points += fmt::format("{}{} {}{}", points.empty() ? "" : ", ", n,
+                            k == SingularPointKind::kNode ? "node" : std::string(to_string(k)) + " point",
+                            n == 1 ? "" : "s");
+  if (curves.empty()) return points;
+  if (points.empty()) return curves;
+  return curves + "; " + points;
+}
+
+}  // namespace zeroset

@@ -1,0 +1,228 @@
+// Newton correctors onto the singular set and the predictor–corrector walk along its curves.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "singular_detail.h"
+
+namespace zeroset::detail {
+namespace {
+
+constexpr int kNewtonIterations = 60;
+
+// Steps smaller than this (relative to the scene radius) end a Newton iteration.
+constexpr double kStepTolerance = 1e-15;
+
+// The minimum-norm least-squares solution of (JᵀJ) x = b for symmetric positive semidefinite
+// A = JᵀJ: directions whose eigenvalue is below 1e-24 of the largest (singular values of J
+// below 1e-12 of its largest) are left out.
+template <int N>
+Eigen::Matrix<double, N, 1> min_norm_solve(const Eigen::Matrix<double, N, N>& a,
+                                           const Eigen::Matrix<double, N, 1>& b) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> es;
+  if constexpr (N == 3 || N == 2)
+    es.computeDirect(a);
+  else
+    es.compute(a);
+  const auto& lambda = es.eigenvalues();
+  const double top = lambda.cwiseAbs().maxCoeff();
+  Eigen::Matrix<double, N, 1> x = Eigen::Matrix<double, N, 1>::Zero();
+  if (!(top > 0) || !std::isfinite(top)) return x;
+  for (int k = 0; k < N; ++k)
+    if (lambda[k] > 1e-24 * top) x += (es.eigenvectors().col(k).dot(b) / lambda[k]) * es.eigenvectors().col(k);
+  return x;
+}
+
+bool is_singular_here(Evaluator& ev, const Vec3& p, const SingularScales& s) {
+  Vec3 g;
+  const double f = ev.value_gradient(p, g);
+  return std::isfinite(f) && g.allFinite() && std::abs(f) <= s.value_tolerance() &&
+         g.norm() <= s.grad_tolerance();
+}
+
+// One Gauss–Newton iteration on r = (F/h, ∇F) with J = [∇Fᵀ/h; H], in the coordinates given
+// by the columns of `basis` (3×N). Returns the step in space, or NaN when F is undefined.
+template <int N>
+Vec3 gauss_newton_step(Evaluator& ev, const Vec3& p, const Eigen::Matrix<double, 3, N>& basis,
+                       double h) {
+  const FieldSample fs = ev.sample(p, true, false);
+  if (!std::isfinite(fs.value) || !fs.gradient.allFinite() || !fs.hessian.allFinite())
+    return Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
+  Eigen::Matrix<double, 4, 3> j;
+  j.row(0) = fs.gradient.transpose() / h;
+  j.bottomRows<3>() = fs.hessian;
+  Eigen::Vector4d r;
+  r << fs.value / h, fs.gradient;
+  const Eigen::Matrix<double, 4, N> jb = j * basis;
+  const Eigen::Matrix<double, N, 1> x =
+      min_norm_solve<N>(jb.transpose() * jb, jb.transpose() * r);
+  return basis * x;
+}
+
+template <int N>
+Converged converge(Evaluator& ev, const Vec3& start, const Eigen::Matrix<double, 3, N>& basis,
+                   const SingularScales& s, double max_move) {
+  Converged c;
+  c.p = start;
+  const double tiny = kStepTolerance * s.radius;
+  for (int it = 0; it < kNewtonIterations; ++it) {
+    const Vec3 step = gauss_newton_step<N>(ev, c.p, basis, s.cell);
+    if (!step.allFinite()) return c;
+    c.p -= step;
+    if ((c.p - start).norm() > max_move) return c;
+    if (step.norm() <= tiny) break;
+  }
+  c.ok = is_singular_here(ev, c.p, s);
+  return c;
+}
+
+}  // namespace
+
+Converged converge_to_singular(Evaluator& ev, const Vec3& start, const SingularScales& s,
+                               double max_move) {
+  return converge<3>(ev, start, Mat3::Identity(), s, max_move);
+}
+
+Converged converge_in_plane(Evaluator& ev, const Vec3& start, const Vec3& t,
+                            const SingularScales& s, double max_move) {
+  Vec3 u, v;
+  normal_basis(t, u, v);
+  Eigen::Matrix<double, 3, 2> b;
+  b.col(0) = u;
+  b.col(1) = v;
+  return converge<2>(ev, start, b, s, max_move);
+}
+
+int HessianShape::nullity(double scale, double fraction) const {
+  const double ref = std::max(abs_eigenvalues[0], scale);
+  int n = 0;
+  for (int k = 0; k < 3; ++k) n += abs_eigenvalues[k] <= fraction * ref;
+  return n;
+}
+
+HessianShape hessian_shape(const Mat3& h) {
+  HessianShape out;
+  if (!h.allFinite()) return out;
+  Eigen::SelfAdjointEigenSolver<Mat3> es;
+  es.computeDirect(h);
+  std::array<int, 3> order{0, 1, 2};
+  const Vec3 a = es.eigenvalues().cwiseAbs();
+  std::sort(order.begin(), order.end(), [&](int i, int j) { return a[i] > a[j]; });
+  for (int k = 0; k < 3; ++k) {
+    out.abs_eigenvalues[k] = a[order[static_cast<size_t>(k)]];
+    out.vectors.col(k) = es.eigenvectors().col(order[static_cast<size_t>(k)]);
+  }
+  return out;
+}
+
+Vec3 curve_tangent(const Mat3& h, const Vec3& previous, double hess_scale) {
+  const HessianShape shape = hessian_shape(h);
+  const double ref = std::max(shape.abs_eigenvalues[0], hess_scale);
+  // Eigenvalues this small make their eigenvectors interchangeable with the null vector:
+  // near a pinch or triple point, follow the previous direction within their span.
+  const bool second_small = shape.abs_eigenvalues[1] <= 0.05 * ref;
+  Vec3 t;
+  if (!second_small) {
+    t = shape.vectors.col(2);
+  } else {
+    const bool first_small = shape.abs_eigenvalues[0] <= 0.05 * hess_scale;
+    if (first_small) return previous.normalized();  // H ≈ 0: no information, keep going
+    const Vec3 n = shape.vectors.col(0);             // the one clearly non-null direction
+    t = previous - previous.dot(n) * n;
+    if (t.norm() < 1e-3 * previous.norm()) t = shape.vectors.col(2);
+  }
+  const double len = t.norm();
+  if (!(len > 0) || !std::isfinite(len)) return Vec3::Zero();
+  t /= len;
+  return previous.dot(t) < 0 ? Vec3(-t) : t;
+}
+
+void normal_basis(const Vec3& t, Vec3& u, Vec3& v) {
+  const Vec3 a = std::abs(t.x()) < 0.6 ? Vec3::UnitX() : Vec3::UnitY();
+  u = t.cross(a).normalized();
+  v = t.cross(u).normalized();
+}
+
+double normal_form_det(const Mat3& h, const Vec3& t, double hess_scale, bool exact) {
+  Vec3 u, v;
+  normal_basis(t, u, v);
+  const double quu = u.dot(h * u), quv = u.dot(h * v), qvv = v.dot(h * v);
+  const double norm2 = quu * quu + 2 * quv * quv + qvv * qvv;
+  if (!(norm2 > 1e-16 * hess_scale * hess_scale)) return 0;
+  const double d = (quu * qvv - quv * quv) / norm2;
+  return !exact && std::abs(d) <= 1e-9 ? 0.0 : d;
+}
+
+CurveKind kind_of(double normal_det) {
+  if (normal_det < 0) return CurveKind::kCrossing;
+  if (normal_det > 0) return CurveKind::kIsolated;
+  return CurveKind::kDegenerate;
+}
+
+double segment_distance(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 d = b - a;
+  const double l2 = d.squaredNorm();
+  const double t = l2 > 0 ? std::clamp((p - a).dot(d) / l2, 0.0, 1.0) : 0.0;
+  return (p - (a + t * d)).norm();
+}
+
+std::vector<Vec3> walk_curve(Evaluator& ev, const Clip& clip, const Vec3& start, Vec3 t,
+                             const SingularScales& s, double spacing, int& budget, WalkEnd& end) {
+  std::vector<Vec3> out;
+  Vec3 p = start;
+  double step = spacing;
+  const double min_step = spacing / 512;
+  const double cos_limit = std::cos(20.0 * 3.14159265358979323846 / 180);
+  double walked = 0;
+  for (;;) {
+    if (budget <= 0) {
+      end = WalkEnd::kBudget;
+      return out;
+    }
+    const Vec3 q = p + step * t;
+    const Converged c = converge_in_plane(ev, q, t, s, 0.5 * step);
+    Vec3 next_t = Vec3::Zero();
+    if (c.ok) next_t = curve_tangent(ev.sample(c.p, true, false).hessian, t, s.hess);
+    if (!c.ok || next_t.isZero() || next_t.dot(t) < cos_limit) {
+      step *= 0.5;
+      if (step < min_step) {
+        end = WalkEnd::kStalled;
+        return out;
+      }
+      continue;
+    }
+    if (!clip.is_empty_spec() && clip.value(c.p) > 0) {
+      // Leaves the clip between p and c.p: bisect on the curve for the exit point.
+      double lo = 0, hi = step;
+      Vec3 inside = p;
+      for (int it = 0; it < 80 && hi - lo > 1e-14 * s.radius; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        const Converged m = converge_in_plane(ev, p + mid * t, t, s, 0.5 * step);
+        if (!m.ok) break;
+        if (clip.value(m.p) > 0) {
+          hi = mid;
+        } else {
+          lo = mid;
+          inside = m.p;
+        }
+      }
+      if ((inside - p).norm() > 1e-3 * spacing) out.push_back(inside);
+      --budget;
+      end = WalkEnd::kClip;
+      return out;
+    }
+    walked += (c.p - p).norm();
+    if (walked > 2.5 * spacing && (c.p - start).norm() < 0.75 * spacing) {
+      end = WalkEnd::kClosed;
+      return out;
+    }
+    out.push_back(c.p);
+    --budget;
+    p = c.p;
+    if (next_t.dot(t) > std::cos(5.0 * 3.14159265358979323846 / 180))
+      step = std::min(spacing, 1.5 * step);
+    t = next_t;
+  }
+}
+
+}  // namespace zeroset::detail
