@@ -18,6 +18,7 @@
 #include "zeroset/render/pov_export.h"
 #include "zeroset/render/render.h"
 #include "zeroset/render/settings.h"
+#include "zeroset/surface/settings.h"
 
 namespace zeroset::cli {
 namespace {
@@ -30,9 +31,10 @@ struct LookArgs {
   int aa = 2;
   std::string camera;  // az,el[,dist]
   std::string target;  // x,y,z
-  double fov = 0;      // 0: the surface's
+  double fov = 0;
   std::string background, front, back;
   CLI::Option* size_opt = nullptr;
+  CLI::Option* fov_opt = nullptr;
   CLI::Option* aa_opt = nullptr;
 
   void add_to(CLI::App* cmd, bool with_aa = true) {
@@ -50,8 +52,9 @@ struct LookArgs {
     cmd->add_option("--target", target, "Point the camera orbits and looks at (default: the "
                                         "surface's, usually the origin)")
         ->type_name("X,Y,Z");
-    cmd->add_option("--fov", fov, "Vertical field of view in degrees (default: the surface's)")
-        ->check(CLI::Range(1.0, 170.0));
+    fov_opt = cmd->add_option("--fov", fov,
+                              "Vertical field of view in degrees, 1 to 170 (default: the "
+                              "surface's)");
     cmd->add_option("--background", background,
                     "Background colour: #rrggbb or r,g,b in [0,1] (default white)")
         ->type_name("COLOR");
@@ -72,25 +75,18 @@ struct LookArgs {
     if (size_opt && size_opt->count() > 0) std::tie(o.width, o.height) = parse_size(size, "--size");
     if (aa_opt && aa_opt->count() > 0) o.samples = aa;
     o.threads = global_flags().threads;
-    Camera cam = surface.camera;
-    if (!camera.empty()) {
-      const std::vector<double> v = parse_numbers(camera, "--camera");
-      if (v.size() < 2 || v.size() > 3)
-        throw InvalidArgument("--camera", camera, "expected AZIMUTH,ELEVATION[,DISTANCE]");
-      if (v.size() == 3 && v[2] < 0)
-        throw InvalidArgument("--camera", camera, "the distance must not be negative");
-      if (std::abs(v[1]) > 90)
-        throw InvalidArgument("--camera", camera, "the elevation must lie in [-90, 90] degrees");
-      cam.azimuth_deg = v[0];
-      cam.elevation_deg = v[1];
-      if (v.size() == 3) cam.distance = v[2];
-    }
+    Camera cam = with_camera_flag(surface.camera, camera);
     if (!target.empty()) {
       const std::vector<double> v = parse_numbers(target, "--target");
       if (v.size() != 3) throw InvalidArgument("--target", target, "expected three numbers x,y,z");
       cam.target = Vec3(v[0], v[1], v[2]);
     }
-    if (fov > 0) cam.fov_deg = fov;
+    if (fov_opt && fov_opt->count() > 0) cam.fov_deg = fov;
+    validate_flags([&] { validate_camera(cam); }, {{"azimuth_deg", "--camera azimuth"},
+                                                   {"elevation_deg", "--camera elevation"},
+                                                   {"distance", "--camera distance"},
+                                                   {"fov_deg", "--fov"},
+                                                   {"target", "--target"}});
     o.camera = cam;
     if (!background.empty()) o.background = parse_display_color(background, "--background");
     if (!front.empty()) o.front.diffuse = parse_display_color(front, "--front");
@@ -101,20 +97,6 @@ struct LookArgs {
                                                    {"front/diffuse", "--front"},
                                                    {"back/diffuse", "--back"}});
     return o;
-  }
-
-  static std::vector<double> parse_numbers(const std::string& text, const std::string& flag) {
-    std::vector<double> v;
-    std::stringstream in(text);
-    std::string item;
-    while (std::getline(in, item, ',')) {
-      char* end = nullptr;
-      const double d = std::strtod(item.c_str(), &end);
-      if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(d))
-        throw InvalidArgument(flag, text, fmt::format("'{}' is not a finite number", item));
-      v.push_back(d);
-    }
-    return v;
   }
 };
 

@@ -85,36 +85,6 @@ FloaterOptions options_from(const SampleArgs& a, const Scene& scene) {
 
 nlohmann::json vec_json(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
-// The surface's camera with --camera AZ,EL[,D] applied.
-Camera camera_from(const Surface& surface, const std::string& spec) {
-  Camera c = surface.camera;
-  if (!spec.empty()) {
-    std::vector<double> v;
-    std::size_t pos = 0;
-    while (pos <= spec.size()) {
-      std::size_t comma = spec.find(',', pos);
-      if (comma == std::string::npos) comma = spec.size();
-      const std::string item = spec.substr(pos, comma - pos);
-      char* end = nullptr;
-      const double d = std::strtod(item.c_str(), &end);
-      if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(d))
-        throw InvalidArgument("--camera", spec, fmt::format("'{}' is not a finite number", item));
-      v.push_back(d);
-      pos = comma + 1;
-    }
-    if (v.size() < 2 || v.size() > 3)
-      throw InvalidArgument("--camera", spec, "expected AZIMUTH,ELEVATION[,DISTANCE]");
-    if (std::abs(v[1]) > 90)
-      throw InvalidArgument("--camera", spec, "the elevation must lie in [-90, 90] degrees");
-    if (v.size() == 3 && v[2] < 0)
-      throw InvalidArgument("--camera", spec, "the distance must not be negative");
-    c.azimuth_deg = v[0];
-    c.elevation_deg = v[1];
-    if (v.size() == 3) c.distance = v[2];
-  }
-  return c;
-}
-
 // Without a distance, the camera is aimed at the floaters: the clip volume can be much larger
 // than what lies on the surface inside it (the cone fills a third of its clip sphere).
 Camera framing(Camera c, const Surface& surface, std::span<const Vec3> points) {
@@ -206,7 +176,7 @@ void run_sample(const SampleArgs& a) {
     surface.field.set_parameter(anim_index, anim->from);
   }
   const FloaterOptions options = options_from(a, scene);
-  const Camera camera = camera_from(surface, a.camera);
+  const Camera camera = with_camera_flag(surface.camera, a.camera);
   FloaterSystem sys(surface, options);
   if (options.radius > 0 && sys.nominal_radius() != options.radius)
     warn(fmt::format("radius {:g} is outside [1e-9, 1] times the scene radius ({:g}); using "

@@ -10,6 +10,7 @@
 #include "zeroset/error.h"
 #include "zeroset/io/atomic_file.h"
 #include "zeroset/render/settings.h"
+#include "zeroset/surface/settings.h"
 
 namespace zeroset::cli {
 
@@ -128,6 +129,37 @@ void validate_flags(const std::function<void()>& validate, FlagNames flags) {
       if (key == e.key()) flag = name;
     throw InvalidArgument(flag, e.value(), e.why());
   }
+}
+
+std::vector<double> parse_numbers(const std::string& text, const std::string& flag) {
+  std::vector<double> v;
+  std::size_t pos = 0;
+  while (pos <= text.size()) {
+    std::size_t comma = text.find(',', pos);
+    if (comma == std::string::npos) comma = text.size();
+    const std::string item = text.substr(pos, comma - pos);
+    char* end = nullptr;
+    const double d = std::strtod(item.c_str(), &end);
+    if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(d))
+      throw InvalidArgument(flag, text, fmt::format("'{}' is not a finite number", item));
+    v.push_back(d);
+    pos = comma + 1;
+  }
+  return v;
+}
+
+Camera with_camera_flag(Camera camera, const std::string& spec) {
+  if (spec.empty()) return camera;
+  const std::vector<double> v = parse_numbers(spec, "--camera");
+  if (v.size() < 2 || v.size() > 3)
+    throw InvalidArgument("--camera", spec, "expected AZIMUTH,ELEVATION[,DISTANCE]");
+  camera.azimuth_deg = v[0];
+  camera.elevation_deg = v[1];
+  if (v.size() == 3) camera.distance = v[2];
+  validate_flags([&] { validate_camera(camera); }, {{"azimuth_deg", "--camera azimuth"},
+                                                     {"elevation_deg", "--camera elevation"},
+                                                     {"distance", "--camera distance"}});
+  return camera;
 }
 
 Progress::Progress(std::string label, bool quiet)

@@ -47,6 +47,13 @@ using FlagNames = std::initializer_list<std::pair<std::string_view, std::string_
 /// words, so a flag and a scene file's entry are refused alike.
 void validate_flags(const std::function<void()>& validate, FlagNames flags);
 
+/// Comma-separated finite numbers ("1,2.5,-3"); InvalidArgument naming `flag` otherwise.
+std::vector<double> parse_numbers(const std::string& text, const std::string& flag);
+
+/// `camera` with --camera AZIMUTH,ELEVATION[,DISTANCE] applied (nothing when `spec` is empty),
+/// checked by validate_camera with the flag's name in the message.
+Camera with_camera_flag(Camera camera, const std::string& spec);
+
 /// A progress bar on stderr; silent when stderr is not a terminal or --quiet was given.
 class Progress {
  public:

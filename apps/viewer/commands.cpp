@@ -11,6 +11,7 @@
 #include "viewer_state.h"
 #include "viewer_state_detail.h"
 #include "zeroset/error.h"
+#include "zeroset/surface/settings.h"
 #include "zeroset/floaters/floaters.h"
 #include "zeroset/mesh/settings.h"
 
@@ -182,10 +183,8 @@ void run_camera(ViewerState& s, const CommandLine& c) {
   Camera cam = s.camera();
   cam.azimuth_deg = parse_number(a[0], "azimuth");
   cam.elevation_deg = parse_number(a[1], "elevation");
-  if (a.size() == 3) {
-    cam.distance = parse_number(a[2], "distance");
-    if (!(cam.distance > 0)) throw InvalidArgument("distance", a[2], "must be positive");
-  }
+  if (a.size() == 3) cam.distance = parse_number(a[2], "distance");
+  validate_camera(cam);
   require(s.set_camera(cam));
 }
 

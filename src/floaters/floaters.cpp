@@ -10,60 +10,9 @@
 
 #include "floater_state_detail.h"
 #include "zeroset/error.h"
+#include "zeroset/floaters/settings.h"
 
 namespace zeroset {
-namespace {
-
-void check(bool ok, const char* name, double value, const char* why) {
-  if (!ok) throw InvalidArgument(name, fmt::format("{}", value), why);
-}
-
-void validate(const FloaterOptions& o) {
-  auto finite = [](double v) { return std::isfinite(v); };
-  check(finite(o.radius) && o.radius >= 0, "radius", o.radius,
-        "must be a positive length (or 0 to choose it from the surface's area)");
-  check(o.max_count >= 1 && o.max_count <= 100'000'000, "max_count",
-        static_cast<double>(o.max_count), "must be between 1 and 100,000,000");
-  check(o.seed_count <= 100'000'000, "seed_count", static_cast<double>(o.seed_count),
-        "must be at most 100,000,000");
-  check(finite(o.dt) && o.dt > 0, "dt", o.dt, "must be positive");
-  check(finite(o.repulsion) && o.repulsion > 0, "repulsion", o.repulsion, "must be positive");
-  check(finite(o.desired_energy_factor) && o.desired_energy_factor > 0, "desired_energy_factor",
-        o.desired_energy_factor, "must be positive");
-  check(finite(o.radius_rate) && o.radius_rate >= 0, "radius_rate", o.radius_rate,
-        "must not be negative");
-  check(finite(o.radius_damping) && o.radius_damping > 0, "radius_damping", o.radius_damping,
-        "must be positive");
-  check(finite(o.feedback) && o.feedback >= 0, "feedback", o.feedback, "must not be negative");
-  check(finite(o.max_step_fraction) && o.max_step_fraction > 0, "max_step_fraction",
-        o.max_step_fraction, "must be positive");
-  check(finite(o.equilibrium_speed) && o.equilibrium_speed >= 0, "equilibrium_speed",
-        o.equilibrium_speed, "must not be negative");
-  check(finite(o.fission_energy_factor) && o.fission_energy_factor >= 0, "fission_energy_factor",
-        o.fission_energy_factor, "must not be negative");
-  check(finite(o.death_radius_factor) && o.death_radius_factor >= 0 && o.death_radius_factor < 1,
-        "death_radius_factor", o.death_radius_factor, "must be in [0, 1)");
-  check(finite(o.max_radius_factor) && o.max_radius_factor >= 1, "max_radius_factor",
-        o.max_radius_factor, "must be at least 1");
-  check(o.estimator_interval >= 1, "estimator_interval", o.estimator_interval,
-        "must be at least 1");
-  check(o.curvature_samples >= 1 && o.curvature_samples <= 64, "curvature_samples",
-        o.curvature_samples, "must be between 1 and 64");
-  check(finite(o.singular_scale) && o.singular_scale >= 0, "singular_scale", o.singular_scale,
-        "must be a positive length (or 0 for scene_radius/3)");
-  check(finite(o.min_radius_factor) && o.min_radius_factor > 0 && o.min_radius_factor <= 1,
-        "min_radius_factor", o.min_radius_factor, "must be in (0, 1]");
-  check(finite(o.radius_grading) && o.radius_grading >= 0, "radius_grading", o.radius_grading,
-        "must not be negative");
-  check(o.converge_window >= 1, "converge_window", o.converge_window, "must be at least 1");
-  check(finite(o.converge_churn) && o.converge_churn >= 0, "converge_churn", o.converge_churn,
-        "must not be negative");
-  check(finite(o.converge_speed) && o.converge_speed >= 0, "converge_speed", o.converge_speed,
-        "must not be negative");
-  check(o.threads >= 0, "threads", o.threads, "must not be negative");
-}
-
-}  // namespace
 
 RadiusAdapt parse_radius_adapt(std::string_view text, std::string_view flag) {
   for (RadiusAdapt m : {RadiusAdapt::kWitkinHeckbert, RadiusAdapt::kCurvature,
@@ -167,7 +116,7 @@ void reset_floaters(FloaterState& sys) {
 }
 
 void set_options(FloaterState& sys, const FloaterOptions& o) {
-  validate(o);
+  validate_settings(o);
   const bool lengths = o.radius != sys.opt.radius || o.singular_scale != sys.opt.singular_scale ||
                        (o.radius == 0 && o.max_count != sys.opt.max_count);
   sys.opt = o;
@@ -195,7 +144,7 @@ const std::vector<Vec3>& drawn_normals(const FloaterState& sys) {
 // The system is its plain state; the parts of a step are free functions on it.
 struct FloaterSystem::Impl : detail::FloaterState {
   Impl(const Surface& s, const FloaterOptions& o) {
-    validate(o);
+    validate_settings(o);
     opt = o;
     detail::adopt_surface(*this, s);
     detail::insert_random(*this, detail::initial_count(*this));

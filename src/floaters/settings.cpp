@@ -34,6 +34,45 @@ void validate_settings(const FloaterOptions& o) {
         fmt::format("must lie in [0, {}]", kMaxFloaterSeed));
   check(std::isfinite(o.radius_grading) && o.radius_grading >= 0, "radius_grading",
         fmt::format("{}", o.radius_grading), "must be finite and ≥ 0 (0: off)");
+  // The dynamics' constants (library options; the command line and scene files do not set
+  // them).
+  auto finite = [](double v) { return std::isfinite(v); };
+  auto num = [](double v) { return fmt::format("{}", v); };
+  check(finite(o.dt) && o.dt > 0, "dt", num(o.dt), "must be positive");
+  check(finite(o.repulsion) && o.repulsion > 0, "repulsion", num(o.repulsion), "must be positive");
+  check(finite(o.desired_energy_factor) && o.desired_energy_factor > 0, "desired_energy_factor",
+        num(o.desired_energy_factor), "must be positive");
+  check(finite(o.radius_rate) && o.radius_rate >= 0, "radius_rate", num(o.radius_rate),
+        "must not be negative");
+  check(finite(o.radius_damping) && o.radius_damping > 0, "radius_damping",
+        num(o.radius_damping), "must be positive");
+  check(finite(o.feedback) && o.feedback >= 0, "feedback", num(o.feedback),
+        "must not be negative");
+  check(finite(o.max_step_fraction) && o.max_step_fraction > 0, "max_step_fraction",
+        num(o.max_step_fraction), "must be positive");
+  check(finite(o.equilibrium_speed) && o.equilibrium_speed >= 0, "equilibrium_speed",
+        num(o.equilibrium_speed), "must not be negative");
+  check(finite(o.fission_energy_factor) && o.fission_energy_factor >= 0, "fission_energy_factor",
+        num(o.fission_energy_factor), "must not be negative");
+  check(finite(o.death_radius_factor) && o.death_radius_factor >= 0 && o.death_radius_factor < 1,
+        "death_radius_factor", num(o.death_radius_factor), "must be in [0, 1)");
+  check(finite(o.max_radius_factor) && o.max_radius_factor >= 1, "max_radius_factor",
+        num(o.max_radius_factor), "must be at least 1");
+  check(o.estimator_interval >= 1, "estimator_interval", std::to_string(o.estimator_interval),
+        "must be at least 1");
+  check(o.curvature_samples >= 1 && o.curvature_samples <= 64, "curvature_samples",
+        std::to_string(o.curvature_samples), "must be between 1 and 64");
+  check(finite(o.singular_scale) && o.singular_scale >= 0, "singular_scale",
+        num(o.singular_scale), "must be a positive length (or 0 for scene_radius/3)");
+  check(finite(o.min_radius_factor) && o.min_radius_factor > 0 && o.min_radius_factor <= 1,
+        "min_radius_factor", num(o.min_radius_factor), "must be in (0, 1]");
+  check(o.converge_window >= 1, "converge_window", std::to_string(o.converge_window),
+        "must be at least 1");
+  check(finite(o.converge_churn) && o.converge_churn >= 0, "converge_churn",
+        num(o.converge_churn), "must not be negative");
+  check(finite(o.converge_speed) && o.converge_speed >= 0, "converge_speed",
+        num(o.converge_speed), "must not be negative");
+  check(o.threads >= 0, "threads", std::to_string(o.threads), "must not be negative");
 }
 
 void apply_floater_settings(const json& floaters, FloaterOptions& options,

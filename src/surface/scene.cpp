@@ -14,6 +14,7 @@
 #include "zeroset/io/atomic_file.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/json_read.h"
+#include "zeroset/surface/settings.h"
 
 namespace zeroset {
 namespace {
@@ -272,9 +273,12 @@ Scene scene_from_json(const json& j, const std::string& origin) {
     num("elevation_deg", s.camera.elevation_deg);
     num("distance", s.camera.distance);
     num("fov_deg", s.camera.fov_deg);
-    if (!(s.camera.fov_deg > 0 && s.camera.fov_deg < 180))
-      fail(origin, "/camera/fov_deg", "must lie between 0 and 180 degrees");
     if (c.contains("target")) s.camera.target = vec3(c["target"], origin, "/camera/target");
+    try {
+      validate_camera(s.camera);
+    } catch (const SettingError& e) {
+      fail(origin, "/camera/" + e.key(), e.why());
+    }
   }
   s.fit_ranges();
   for (const auto& [key, value] : j.items())

@@ -80,6 +80,17 @@ const BadValue kBadValues[] = {
      "width and height must lie in [1, 32768]"},
     {"render sphere --size 20000x20000", R"({"render": {"size": [20000, 20000]}})",
      "/render/size", "", "must have at most 100000000 pixels"},
+    // camera (the command line's --camera and --fov, the scene's "camera" object)
+    {"render sphere --camera 0,100", R"({"camera": {"elevation_deg": 100}})",
+     "/camera/elevation_deg", "camera 0 100", "must lie in [-90, 90] degrees"},
+    {"sample sphere --camera 0,-91", R"({"camera": {"elevation_deg": -91}})",
+     "/camera/elevation_deg", "camera 0 -91", "must lie in [-90, 90] degrees"},
+    {"render sphere --camera 0,10,-1", R"({"camera": {"distance": -1}})", "/camera/distance",
+     "camera 0 10 -1", "must be finite and ≥ 0 (0: fit the clip volume)"},
+    {"render sphere --fov 175", R"({"camera": {"fov_deg": 175}})", "/camera/fov_deg", "",
+     "must lie in [1, 170] degrees"},
+    {"render sphere --fov 0.5", R"({"camera": {"fov_deg": 0.5}})", "/camera/fov_deg", "",
+     "must lie in [1, 170] degrees"},
 };
 
 // The scene file for `settings`: the sphere with those settings objects.

@@ -26,8 +26,10 @@ inline constexpr std::uint64_t kMaxFloaterSeed = std::uint64_t{1} << 53;
 
 /// Checks the settings a user gives: radius finite and ≥ 0 (0: chosen from the surface's
 /// area), max_count in [1, kMaxFloaterCount], seed_count in [0, kMaxFloaterCount], seed in
-/// [0, kMaxFloaterSeed], radius_grading finite and ≥ 0. Throws SettingError naming the key as
-/// the scene file does.
+/// [0, kMaxFloaterSeed], radius_grading finite and ≥ 0; and the dynamics' constants that only
+/// the library sets (dt, repulsion, the estimators' and convergence settings). The one check
+/// of FloaterOptions: FloaterSystem runs it too. Throws SettingError naming the key as the
+/// scene file does.
 void validate_settings(const FloaterOptions& options);
 
 /// Applies `floaters` (the object above) to `options`, then validates them. Throws BadInput
