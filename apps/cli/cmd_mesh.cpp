@@ -225,6 +225,7 @@ void run_mesh(const MeshArgs& a) {
       {"triangles", mesh.triangle_count()}};
   if (mesh.empty())
     say(fmt::format("{}: the grid of {} cells found no surface inside the clip", surface.label(), resolution));
+  warn_if_singular_sheet(surface, singular);
   const bool want_quality = !a.stats.empty();
   QualityOptions qo;
   qo.threads = po.threads;

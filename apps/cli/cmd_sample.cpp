@@ -287,6 +287,7 @@ void run_sample(const SampleArgs& a) {
                      "{:.3g}); the run may be too short (--steps), or F = 0 may have no point "
                      "inside the clip",
                      final_surface.label(), last.median_residual, sys.nominal_radius()));
+  warn_if_singular_sheet(final_surface, singular);
   say(fmt::format("{} floaters after {} steps ({}), sigma^ = {:.4g}, {:.0f} steps/s", sys.size(),
                   sys.steps_taken(),
                   converged_at ? fmt::format("settled at step {}", *converged_at) : "not settled",

@@ -43,6 +43,17 @@ std::optional<SingularSet> singular_set_if_bounded(const Surface& surface) {
   return find_singular_set(surface);
 }
 
+void warn_if_singular_sheet(const Surface& surface, const std::optional<SingularSet>& known) {
+  if (!known && !surface.clip.is_bounded()) return;
+  const SingularSet set = known ? *known : find_singular_set(surface, {.cells = 24});
+  if (!set.has_singular_sheet) return;
+  const Vec3& p = set.singular_sheet_example;
+  warn(fmt::format("{}: grad F vanishes on a whole sheet of F = 0 (e.g. at ({:.6g}, {:.6g}, "
+                   "{:.6g})): F is a square or worse there and never changes sign; mesh or "
+                   "sample G where F = G^2",
+                   surface.label(), p.x(), p.y(), p.z()));
+}
+
 nlohmann::json singular_stats(const std::optional<SingularSet>& set) {
   return set ? singular_set_json(*set, false) : nlohmann::json();
 }

@@ -93,6 +93,11 @@ void say(const std::string& line);
 /// Prints "zeroset: warning: LINE" to stderr unless --quiet.
 void warn(const std::string& line);
 
+/// Warns when ∇F vanishes on a whole sheet of F = 0 (F = G²): marching cubes sees no sign change
+/// there and floaters settle on a surface where the normal is undefined. Uses `known` when given,
+/// else a quick search on a coarse grid (bounded clips only).
+void warn_if_singular_sheet(const Surface& surface, const std::optional<SingularSet>& known);
+
 void register_catalog_commands(CLI::App& app);  // list, info, eval
 void register_render_commands(CLI::App& app);   // render, animate, export
 void register_sample_command(CLI::App& app);    // sample

@@ -65,6 +65,34 @@ TEST(Cli, InfoListsSingularPoints) {
   EXPECT_NE(r.output.find("degree:     4"), std::string::npos) << r.output;
 }
 
+TEST(Cli, InfoListsTheSingularSetFound) {
+  const auto r = run_command(zs("info roman"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("3 crossing curves, 6 isolated curves; 1 triple point, 6 pinch points"),
+            std::string::npos)
+      << r.output;
+  const auto j = run_command(zs("info whitney --json"));
+  ASSERT_EQ(j.exit_code, 0) << j.output;
+  const auto set = nlohmann::json::parse(j.output)["singular_set"];
+  EXPECT_EQ(set["curves"].size(), 2u);
+  EXPECT_FALSE(set["singular_sheet"].get<bool>());
+}
+
+TEST(Cli, ASingularSheetIsReportedByInfoAndWarnedAboutByMeshAndSample) {
+  const std::string k = "kummer --param mu=0.3333333333333333";
+  const auto info = run_command(zs("info " + k));
+  ASSERT_EQ(info.exit_code, 0) << info.output;
+  EXPECT_NE(info.output.find("grad F vanishes on a whole sheet"), std::string::npos) << info.output;
+  const std::string dir = temp_dir();
+  for (const std::string& cmd : {"mesh " + k + " -r 32 -o " + dir + "/sheet.obj",
+                                 "sample " + k + " --steps 60 -o " + dir + "/sheet.ply"}) {
+    const auto r = run_command(zs(cmd));
+    EXPECT_EQ(r.exit_code, 0) << cmd << ": " << r.output;
+    EXPECT_NE(r.output.find("grad F vanishes on a whole sheet of F = 0"), std::string::npos)
+        << cmd << ": " << r.output;
+  }
+}
+
 TEST(Cli, MalformedEquationExitsTwoWithColumnAndCaret) {
   const auto r = run_command(zs("info \"x^2 + \""));
   EXPECT_EQ(r.exit_code, 2) << r.output;
