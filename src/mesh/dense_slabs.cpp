@@ -415,7 +415,7 @@ ExtractedMesh extract_dense(const Surface& surface, const Grid& g, const Polygon
     const auto b = static_cast<std::uint32_t>(base[static_cast<size_t>(s)]);
     std::copy(slab.positions.begin(), slab.positions.end(),
               res.positions.begin() + static_cast<long>(base[static_cast<size_t>(s)]));
-    Triangle* dst = &res.triangles[tri_base[static_cast<size_t>(s)]];
+    Triangle* dst = res.triangles.data() + tri_base[static_cast<size_t>(s)];  // may be empty
     for (const Triangle& t : slab.triangles) *dst++ = {t[0] + b, t[1] + b, t[2] + b};
     std::vector<Vec3>().swap(slab.positions);
     ScratchVector<Triangle>().swap(slab.triangles);
