@@ -13,6 +13,7 @@
 #include "zeroset/io/atomic_file.h"
 #include "zeroset/io/image.h"
 #include "zeroset/mesh/adjacency.h"
+#include "zeroset/mesh/crossings.h"
 #include "zeroset/mesh/improve.h"
 #include "zeroset/mesh/mesh_io.h"
 #include "zeroset/mesh/polygonize.h"
@@ -34,6 +35,8 @@ struct MeshArgs {
   bool no_singularity = false;
   bool no_flips = false;
   bool no_find_singular = false;
+  bool no_crossings = false;
+  bool no_curves = false;
   std::string output;
   std::string stats;
   std::string png;
@@ -226,6 +229,20 @@ void run_mesh(const MeshArgs& a) {
   if (mesh.empty())
     say(fmt::format("{}: the grid of {} cells found no surface inside the clip", surface.label(), resolution));
   warn_if_singular_sheet(surface, singular);
+  if (!a.no_crossings && !mesh.empty()) {
+    const CrossingStats cs = mesh_crossings(mesh, surface, ps.cell_size);
+    stats["crossings"] = {{"crossing_curves", cs.crossing_curves},
+                          {"isolated_curves", cs.isolated_curves},
+                          {"curve_vertices", cs.curve_vertices},
+                          {"removed_triangles", cs.removed_triangles},
+                          {"added_triangles", cs.added_triangles},
+                          {"strip_vertices", cs.strip_vertices},
+                          {"failure", cs.failure},
+                          {"seconds", cs.seconds}};
+    if (!cs.failure.empty())
+      warn(fmt::format("{}: the crossings along its singular curves are left as marching cubes "
+                       "made them (rounded off): {}", surface.label(), cs.failure));
+  }
   const bool want_quality = !a.stats.empty();
   QualityOptions qo;
   qo.threads = po.threads;
@@ -275,6 +292,7 @@ void run_mesh(const MeshArgs& a) {
     stats["quality_after"] = quality_json(*after);
     stats["topology_after"] = topology_json(mesh);
   }
+  if (a.no_curves) mesh.curves.clear();
   if (!a.output.empty()) write_mesh(mesh, a.output);
   if (!a.png.empty())
     write_picture(surface, mesh, a.png, width, height, a.wireframe, overlay);
@@ -342,6 +360,11 @@ void register_mesh_command(CLI::App& app) {
   cmd->add_flag("--no-flips", args->no_flips, "No Delaunay edge flips (vertex motion only)");
   cmd->add_flag("--no-find-singular", args->no_find_singular,
                 "Do not search singular points by Newton's method on grad F = 0");
+  cmd->add_flag("--no-crossings", args->no_crossings,
+                "Leave crossings along singular curves as marching cubes makes them (sheets "
+                "rounded off a cell away from the curve) instead of meeting exactly on it");
+  cmd->add_flag("--no-curves", args->no_curves,
+                "Leave the singular curves out of the mesh file (OBJ 'l' lines, PLY edges)");
   cmd->add_option("-o,--output", args->output, "Mesh file: .obj, .ply, .stl or .glb");
   cmd->add_option("--stats", args->stats,
                   "JSON file with counts, timings, quality before and after improvement and the "

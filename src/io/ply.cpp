@@ -38,6 +38,11 @@ void check_content(const PlyContent& c) {
     for (std::uint32_t v : t)
       if (v >= n)
         throw InvalidArgument(fmt::format("write_ply: a triangle refers to vertex {} of {}", v, n));
+  for (const auto& e : c.edges)
+    for (std::uint32_t v : e)
+      if (v >= n) throw InvalidArgument(fmt::format("write_ply: an edge refers to vertex {} of {}", v, n));
+  if (!c.edge_kinds.empty() && c.edge_kinds.size() != c.edges.size())
+    throw InvalidArgument(fmt::format("write_ply: {} edge kinds for {} edges", c.edge_kinds.size(), c.edges.size()));
 }
 
 std::string header(const PlyContent& c, bool binary) {
@@ -53,6 +58,10 @@ std::string header(const PlyContent& c, bool binary) {
   if (c.has_faces)
     h += fmt::format("element face {}\nproperty list uchar uint vertex_indices\n",
                      c.triangles.size());
+  if (!c.edges.empty()) {
+    h += fmt::format("element edge {}\nproperty int vertex1\nproperty int vertex2\n", c.edges.size());
+    if (!c.edge_kinds.empty()) h += "property uchar kind\n";
+  }
   h += "end_header\n";
   return h;
 }
@@ -78,6 +87,11 @@ std::string binary_body(const PlyContent& c) {
       put_u8(b, 3);
       for (std::uint32_t v : t) put_u32(b, v);
     }
+  for (std::size_t e = 0; e < c.edges.size(); ++e) {
+    put_u32(b, c.edges[e][0]);
+    put_u32(b, c.edges[e][1]);
+    if (!c.edge_kinds.empty()) put_u8(b, c.edge_kinds[e]);
+  }
   return b;
 }
 
@@ -104,6 +118,11 @@ std::string ascii_body(const PlyContent& c) {
   }
   if (c.has_faces)
     for (const auto& t : c.triangles) fmt::format_to(put, "3 {} {} {}\n", t[0], t[1], t[2]);
+  for (std::size_t e = 0; e < c.edges.size(); ++e) {
+    fmt::format_to(put, "{} {}", c.edges[e][0], c.edges[e][1]);
+    if (!c.edge_kinds.empty()) fmt::format_to(put, " {}", static_cast<unsigned>(c.edge_kinds[e]));
+    out.push_back('\n');
+  }
   return fmt::to_string(out);
 }
 
@@ -341,8 +360,24 @@ PlyData read_ply(const std::string& path) {
             ply.triangles.push_back({idx[0], idx[k], idx[k + 1]});
         }
       }
+    } else if (e.name == "edge") {
+      std::size_t v1 = e.properties.size(), v2 = v1;
+      for (std::size_t k = 0; k < e.properties.size(); ++k) {
+        if (e.properties[k].is_list) throw fail("list properties of edges are not supported");
+        if (e.properties[k].name == "vertex1") v1 = k;
+        if (e.properties[k].name == "vertex2") v2 = k;
+      }
+      if (e.count > 0 && (v1 == e.properties.size() || v2 == v1)) throw fail("an edge element needs vertex1 and vertex2");
+      std::vector<double> v(e.properties.size());
+      for (std::size_t i = 0; i < e.count; ++i) {
+        body.at_record("edge", i, e.count);
+        for (std::size_t k = 0; k < e.properties.size(); ++k) v[k] = body.next(e.properties[k].type);
+        for (double x : {v[v1], v[v2]})
+          if (!(x >= 0 && x < 4294967296.0)) body.fail_record("bad vertex index");
+        ply.edges.push_back({static_cast<std::uint32_t>(v[v1]), static_cast<std::uint32_t>(v[v2])});
+      }
     } else if (e.count > 0) {
-      throw fail("unsupported element '" + e.name + "' (vertex and face are read)");
+      throw fail("unsupported element '" + e.name + "' (vertex, face and edge are read)");
     }
   }
   if (!have_vertices) throw fail("no vertex element");
@@ -350,6 +385,10 @@ PlyData read_ply(const std::string& path) {
     for (std::uint32_t v : t)
       if (v >= ply.positions.size())
         throw fail(fmt::format("a face refers to vertex {} of {}", v, ply.positions.size()));
+  for (const auto& ed : ply.edges)
+    for (std::uint32_t v : ed)
+      if (v >= ply.positions.size())
+        throw fail(fmt::format("an edge refers to vertex {} of {}", v, ply.positions.size()));
   return ply;
 }
 

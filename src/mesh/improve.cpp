@@ -84,6 +84,7 @@ struct MeshImprover::State {
   std::vector<std::uint32_t> vtri, vtri_count;  // incident triangles
 
   std::vector<std::uint8_t> mode;
+  std::vector<std::uint8_t> near_curve;  // within three rings of a singular curve
   std::vector<double> f, beta, step_to_critical;
   std::vector<Vec3> grad, unit;  // ∇F and ∇F/|∇F| (zero where ∇F vanishes)
   std::vector<Vec3> move;
@@ -133,6 +134,28 @@ struct MeshImprover::State {
       const bool on_clip = !surface.clip.is_empty_spec() &&
                            std::abs(surface.clip.value(p)) <= 1e-7 * (1 + p.norm());
       mode[v] = opt.boundary == BoundaryMode::kConstrained && on_clip ? kOnCurve : kHeld;
+    }
+    // Vertices on singular curves lie on them already (mesh_crossings) and stay there.
+    for (const MeshCurve& c : mesh.curves)
+      for (std::uint32_t v : c.vertices) mode[v] = kHeld;
+  }
+
+  // Vertices within three rings of a singular curve: Newton on ∇F = 0 from them lands on the
+  // curve, whose points are vertices already.
+  void mark_near_curves() {
+    near_curve.assign(nv(), 0);
+    std::vector<std::uint32_t> front;
+    for (const MeshCurve& c : mesh.curves)
+      for (std::uint32_t v : c.vertices)
+        if (!near_curve[v]) near_curve[v] = 1, front.push_back(v);
+    for (int ring = 0; ring < 3 && !front.empty(); ++ring) {
+      std::vector<std::uint32_t> next;
+      for (std::uint32_t v : front)
+        for (std::uint32_t k = 0; k < nbr_count[v]; ++k) {
+          const std::uint32_t w = nb(v)[k];
+          if (!near_curve[w]) near_curve[w] = 1, next.push_back(w);
+        }
+      front = std::move(next);
     }
   }
 
@@ -202,7 +225,7 @@ struct MeshImprover::State {
   void find_singular_points() {
     std::vector<std::uint32_t> cand;
     for (size_t v = 0; v < nv(); ++v)
-      if (mode[v] == kFree && step_to_critical[v] < mean_edge) cand.push_back(static_cast<std::uint32_t>(v));
+      if (mode[v] == kFree && !near_curve[v] && step_to_critical[v] < mean_edge) cand.push_back(static_cast<std::uint32_t>(v));
     const long long nc = static_cast<long long>(cand.size());
     std::vector<Vec3> found(cand.size());
     std::vector<std::uint8_t> ok(cand.size(), 0);
@@ -377,11 +400,25 @@ struct MeshImprover::State {
       const Vec3& p = mesh.positions[v];
       double wsum = 0, shortest = std::numeric_limits<double>::infinity();
       Vec3 wp = Vec3::Zero();
+      // A vertex on the clip curve is pulled by its neighbours along the curve only: the
+      // interior's pull would turn the whole mesh about the clip's axis wherever that is a
+      // motion of zero energy (a disk in a sphere), a drift the springs never stop.
+      int along = 0;
+      if (mode[v] == kOnCurve)
+        for (std::uint32_t k = 0; k < nbr_count[v]; ++k) along += mode[nb(v)[k]] == kOnCurve;
       for (std::uint32_t k = 0; k < nbr_count[v]; ++k) {
         const std::uint32_t w = nb(v)[k];
+        if (along >= 2 && mode[w] != kOnCurve) {
+          shortest = std::min(shortest, (mesh.positions[w] - p).norm());
+          continue;
+        }
         double kappa = opt.spring_base;
-        if (opt.use_curvature) kappa += opt.curvature_weight * (1 - unit[v].dot(unit[w]));
-        if (opt.use_singularity && !beta.empty())
+        // A singular curve's vertices are placed already at the mesh's spacing: no estimator
+        // pulls the sheets' vertices into it (∇F = 0 there, and its sheets turn every way).
+        const bool by_curve = near_curve[v] || near_curve[w];
+        if (opt.use_curvature && !(by_curve && (unit[v].isZero() || unit[w].isZero())))
+          kappa += opt.curvature_weight * (1 - unit[v].dot(unit[w]));
+        if (opt.use_singularity && !beta.empty() && !by_curve)
           kappa += opt.singularity_weight * (1 - std::min(beta[v], beta[w]));
         wsum += kappa;
         wp += kappa * mesh.positions[w];
@@ -449,7 +486,9 @@ struct MeshImprover::State {
           }
           if (found != 2 || t1 == kNone || t2 == kNone || a == b) continue;
           if (nbr_count[u] <= 3 || nbr_count[v] <= 3) continue;
-          if (nbr_count[a] + 1 >= static_cast<std::uint32_t>(cap) || nbr_count[b] + 1 >= static_cast<std::uint32_t>(cap)) continue;
+          // A vertex of a singular curve has more triangles than neighbours: both lists count.
+          const std::uint32_t full = static_cast<std::uint32_t>(cap) - 1;
+          if (nbr_count[a] >= full || nbr_count[b] >= full || vtri_count[a] >= full || vtri_count[b] >= full) continue;
           if (std::find(nb(a), nb(a) + nbr_count[a], b) != nb(a) + nbr_count[a]) continue;
           // Hysteresis: a flip must win clearly, or moving vertices would flip edges back and
           // forth. sin(α + β) ≥ 0 rejects most edges (α + β ≤ π) before any atan2.
@@ -517,6 +556,7 @@ MeshImprover::MeshImprover(Mesh mesh, const Surface& surface, const ImproveOptio
   State& s = *state_;
   s.init_modes();
   s.build_connectivity();
+  s.mark_near_curves();
   s.update_mean_edge();
   s.stats.mean_edge_length = s.mean_edge;
   s.converged = s.mesh.triangles.empty();

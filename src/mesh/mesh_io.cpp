@@ -62,6 +62,12 @@ std::string obj_bytes(const Mesh& m) {
     else
       fmt::format_to(std::back_inserter(out), "f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
   }
+  // Singular curves as polylines; readers that want triangles only skip `l` lines.
+  for (const MeshCurve& c : m.curves) {
+    fmt::format_to(std::back_inserter(out), "# {} curve\nl", to_string(c.kind));
+    for (std::uint32_t v : c.vertices) fmt::format_to(std::back_inserter(out), " {}", v + 1);
+    out.push_back('\n');
+  }
   return fmt::to_string(out);
 }
 
@@ -77,6 +83,16 @@ void write_ply_mesh(const Mesh& m, const std::string& path) {
   if (flags) c.properties.push_back({"boundary", PlyScalar::kUChar, boundary});
   c.has_faces = true;
   c.triangles = m.triangles;
+  // Singular curves as an edge element; "kind" is the CurveKind (0 crossing, 1 isolated).
+  std::vector<std::array<std::uint32_t, 2>> edges;
+  std::vector<std::uint8_t> kinds;
+  for (const MeshCurve& mc : m.curves)
+    for (size_t k = 0; k + 1 < mc.vertices.size(); ++k) {
+      edges.push_back({mc.vertices[k], mc.vertices[k + 1]});
+      kinds.push_back(static_cast<std::uint8_t>(mc.kind));
+    }
+  c.edges = edges;
+  c.edge_kinds = kinds;
   write_ply(path, c);
 }
 

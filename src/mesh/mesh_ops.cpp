@@ -16,6 +16,8 @@ size_t remove_unreferenced_vertices(Mesh& mesh) {
   std::vector<std::uint32_t> remap(nv, 0xffffffffu);
   for (const auto& tri : mesh.triangles)
     for (std::uint32_t v : tri) remap[v] = 0;
+  for (const MeshCurve& c : mesh.curves)
+    for (std::uint32_t v : c.vertices) remap[v] = 0;
   std::uint32_t next = 0;
   for (size_t v = 0; v < nv; ++v)
     if (remap[v] == 0) {
@@ -27,6 +29,8 @@ size_t remove_unreferenced_vertices(Mesh& mesh) {
     }
   for (auto& tri : mesh.triangles)
     for (std::uint32_t& v : tri) v = remap[v];
+  for (MeshCurve& c : mesh.curves)
+    for (std::uint32_t& v : c.vertices) v = remap[v];
   mesh.positions.resize(next);
   if (mesh.is_boundary.size() == nv) mesh.is_boundary.resize(next);
   if (mesh.normals.size() == nv) mesh.normals.resize(next);

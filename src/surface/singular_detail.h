@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <vector>
 
+#include "zeroset/detail/segment_grid.h"
 #include "zeroset/expr/field.h"
 #include "zeroset/surface/clip.h"
 #include "zeroset/surface/singular_set.h"
@@ -68,8 +69,5 @@ enum class WalkEnd { kClip, kClosed, kStalled, kBudget };
 // on `start`, stalls or uses up `budget` vertices (decremented). Returns the vertices after start.
 std::vector<Vec3> walk_curve(Evaluator& ev, const Clip& clip, const Vec3& start, Vec3 t,
                              const SingularScales& s, double spacing, int& budget, WalkEnd& end);
-
-// Distance from p to the segment [a, b].
-double segment_distance(const Vec3& p, const Vec3& a, const Vec3& b);
 
 }  // namespace zeroset::detail

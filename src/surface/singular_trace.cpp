@@ -159,13 +159,6 @@ CurveKind kind_of(double normal_det) {
   return CurveKind::kDegenerate;
 }
 
-double segment_distance(const Vec3& p, const Vec3& a, const Vec3& b) {
-  const Vec3 d = b - a;
-  const double l2 = d.squaredNorm();
-  const double t = l2 > 0 ? std::clamp((p - a).dot(d) / l2, 0.0, 1.0) : 0.0;
-  return (p - (a + t * d)).norm();
-}
-
 std::vector<Vec3> walk_curve(Evaluator& ev, const Clip& clip, const Vec3& start, Vec3 t,
                              const SingularScales& s, double spacing, int& budget, WalkEnd& end) {
   std::vector<Vec3> out;

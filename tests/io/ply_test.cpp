@@ -109,6 +109,30 @@ TEST_F(IoPlyTest, ReadsPolygonsOtherTypesAndSkippedFaceProperties) {
   EXPECT_EQ(ply.triangles, (std::vector<std::array<std::uint32_t, 3>>{{0, 1, 2}, {0, 2, 3}}));
 }
 
+TEST_F(IoPlyTest, EdgesRoundTripWithTheirKindAndAreCheckedOnReading) {
+  const std::vector<std::array<std::uint32_t, 2>> edges = {{0, 1}, {1, 3}};
+  const std::vector<std::uint8_t> kinds = {0, 1};
+  for (PlyFormat format : {PlyFormat::kBinaryLittleEndian, PlyFormat::kAscii}) {
+    PlyContent c = mesh_content();
+    c.edges = edges;
+    c.edge_kinds = kinds;
+    write_ply(path("e.ply"), c, format);
+    const PlyData ply = read_ply(path("e.ply"));
+    EXPECT_EQ(ply.edges, edges);
+    EXPECT_EQ(ply.triangles, triangles_);
+  }
+  PlyContent bad = mesh_content();
+  const std::vector<std::array<std::uint32_t, 2>> out_of_range = {{0, 9}};
+  bad.edges = out_of_range;
+  EXPECT_THROW(write_ply(path("f.ply"), bad), InvalidArgument);
+  EXPECT_THROW(read_ply(write_text("g.ply",
+                                   "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+                                   "property float y\nproperty float z\nelement edge 1\n"
+                                   "property int vertex1\nproperty int vertex2\nend_header\n"
+                                   "0 0 0\n0 5\n")),
+               IoError);
+}
+
 TEST_F(IoPlyTest, WritingRejectsMismatchesBeforeWriting) {
   PlyContent c = mesh_content();
   c.normals = std::span<const Vec3>(normals_.data(), 2);

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "support/run_command.h"
+#include "zeroset/io/ply.h"
 #include "zeroset/mesh/adjacency.h"
 #include "zeroset/mesh/mesh_io.h"
 
@@ -106,6 +107,45 @@ TEST_F(MeshCli, AbsurdResolutionIsRefusedWithTheMemoryItNeeds) {
   const int fits = std::stoi(r.output.substr(at + use.size()));
   EXPECT_GT(fits, 0);
   EXPECT_LT(fits, 30000);
+}
+
+// Whitney's umbrella: its crossing half-line and its handle (an isolated real curve) are in
+// the mesh files as polylines, OBJ 'l' lines and PLY edges, unless --no-curves; the files
+// still load as triangle meshes.
+TEST_F(MeshCli, WritesSingularCurvesAsPolylinesUnlessNoCurves) {
+  auto r = run("whitney -r 24 -o " + path("w.obj") + " --stats " + path("w.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream obj(path("w.obj"));
+  std::string line, previous;
+  int crossing = 0, isolated = 0;
+  while (std::getline(obj, line)) {
+    if (line.rfind("l ", 0) == 0) {
+      crossing += previous == "# crossing curve";
+      isolated += previous == "# isolated curve";
+    }
+    previous = line;
+  }
+  EXPECT_EQ(crossing, 1);
+  EXPECT_EQ(isolated, 1);
+  const Mesh m = read_mesh(path("w.obj"));
+  EXPECT_GT(m.triangle_count(), 100u);
+  std::ifstream in(path("w.json"));
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["crossings"]["crossing_curves"].get<int>(), 1);
+  EXPECT_EQ(j["crossings"]["failure"].get<std::string>(), "");
+  // Edges of the crossing curve carry four triangles: the mesh is not a 2-manifold there.
+  EXPECT_GT(j["topology_after"]["non_manifold_edges"].get<int>(), 0);
+
+  ASSERT_EQ(run("whitney -r 24 -o " + path("w.ply")).exit_code, 0);
+  const PlyData ply = read_ply(path("w.ply"));
+  EXPECT_GT(ply.edges.size(), 10u);
+  EXPECT_EQ(read_mesh(path("w.ply")).triangle_count(), m.triangle_count());
+
+  ASSERT_EQ(run("whitney -r 24 --no-curves -o " + path("n.ply")).exit_code, 0);
+  EXPECT_TRUE(read_ply(path("n.ply")).edges.empty());
+  ASSERT_EQ(run("whitney -r 24 --no-crossings --stats " + path("n.json")).exit_code, 0);
+  std::ifstream n(path("n.json"));
+  EXPECT_FALSE(nlohmann::json::parse(n).contains("crossings"));
 }
 
 }  // namespace

@@ -38,6 +38,10 @@ struct PlyContent {
   std::vector<PlyProperty> properties;  ///< written after the normals, in this order
   bool has_faces = false;               ///< writes a face element, even an empty one
   std::span<const std::array<std::uint32_t, 3>> triangles;  ///< only with has_faces
+  /// An "edge" element (vertex1, vertex2), left out when empty: polylines such as a mesh's
+  /// singular curves. `edge_kinds` empty or one uchar "kind" per edge.
+  std::span<const std::array<std::uint32_t, 2>> edges;
+  std::span<const std::uint8_t> edge_kinds;
 };
 
 /// Writes `content` atomically: on any error no file is left at `path`. Throws
@@ -55,10 +59,12 @@ struct PlyData {
   std::map<std::string, std::vector<double>> properties;
   bool has_faces = false;  ///< the file has a face element (perhaps an empty one)
   std::vector<std::array<std::uint32_t, 3>> triangles;  ///< faces, polygons fanned
+  std::vector<std::array<std::uint32_t, 2>> edges;      ///< the "edge" element's vertex1, vertex2
 };
 
 /// Reads a PLY file with a "vertex" element (x, y, z required) and optionally a "face"
-/// element (one list property of vertex indices; its scalar properties are skipped). Other
+/// element (one list property of vertex indices; its scalar properties are skipped) and an
+/// "edge" element (vertex1, vertex2; other properties skipped). Other
 /// non-empty elements and list properties of vertices are refused. Throws IoError naming the
 /// path and what is wrong.
 PlyData read_ply(const std::string& path);

@@ -7,7 +7,7 @@
 
 namespace zeroset {
 
-/// Drops vertices no triangle uses and renumbers the rest (order kept). Keeps `is_boundary`
+/// Drops vertices no triangle and no curve uses and renumbers the rest (order kept). Keeps `is_boundary`
 /// and `normals` in step when they have one entry per vertex. Returns how many were dropped.
 size_t remove_unreferenced_vertices(Mesh& mesh);
 

@@ -1,0 +1,258 @@
+// Meshes with true crossings along singular curves: the curve lies on the mesh, the sheets
+// reach it from every side, its edges are shared by the triangles of all sheets, and the
+// improved mesh is at rest, oriented and on F = 0 away from the singular set.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include <Eigen/Eigenvalues>
+
+#include "mesh_test_support.h"
+#include "zeroset/mesh/crossings.h"
+#include "zeroset/mesh/improve.h"
+#include "zeroset/mesh/polygonize.h"
+#include "zeroset/mesh/quality.h"
+#include "zeroset/surface/analysis.h"
+
+namespace zeroset {
+namespace {
+
+// Closest point of triangle abc to p (Ericson, Real-Time Collision Detection, 5.1.5).
+Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + d1 / (d1 - d3) * ab;
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + d2 / (d2 - d6) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+    return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
+  const double denom = 1 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+// Triangles binned by their boxes in cubes of side `cell`: distances up to `cell` are exact.
+class TriangleBins {
+ public:
+  TriangleBins(const Mesh& m, double cell) : m_(m), cell_(cell) {
+    for (std::uint32_t t = 0; t < m.triangles.size(); ++t) {
+      Vec3 lo = m.positions[m.triangles[t][0]], hi = lo;
+      for (std::uint32_t v : m.triangles[t]) lo = lo.cwiseMin(m.positions[v]), hi = hi.cwiseMax(m.positions[v]);
+      const auto a = key(lo), b = key(hi);
+      for (long long i = a[0]; i <= b[0]; ++i)
+        for (long long j = a[1]; j <= b[1]; ++j)
+          for (long long k = a[2]; k <= b[2]; ++k) bins_[{i, j, k}].push_back(t);
+    }
+  }
+  double distance(const Vec3& p) const {
+    double best = std::numeric_limits<double>::infinity();
+    const auto c = key(p);
+    for (long long i = c[0] - 1; i <= c[0] + 1; ++i)
+      for (long long j = c[1] - 1; j <= c[1] + 1; ++j)
+        for (long long k = c[2] - 1; k <= c[2] + 1; ++k) {
+          const auto it = bins_.find({i, j, k});
+          if (it == bins_.end()) continue;
+          for (std::uint32_t t : it->second) {
+            const auto& tri = m_.triangles[t];
+            best = std::min(best, (p - closest_on_triangle(p, m_.positions[tri[0]], m_.positions[tri[1]],
+                                                           m_.positions[tri[2]])).norm());
+          }
+        }
+    return best;
+  }
+
+ private:
+  std::array<long long, 3> key(const Vec3& p) const {
+    return {static_cast<long long>(std::floor(p.x() / cell_)), static_cast<long long>(std::floor(p.y() / cell_)),
+            static_cast<long long>(std::floor(p.z() / cell_))};
+  }
+  const Mesh& m_;
+  double cell_;
+  std::map<std::array<long long, 3>, std::vector<std::uint32_t>> bins_;
+};
+
+double mean_edge(const Mesh& m) {
+  double sum = 0;
+  for (const auto& t : m.triangles)
+    for (int k = 0; k < 3; ++k) sum += (m.positions[t[k]] - m.positions[t[(k + 1) % 3]]).norm();
+  return sum / (3.0 * static_cast<double>(m.triangles.size()));
+}
+
+// The two directions of the sheets through a crossing point p (tangent t): the null lines of
+// the Hessian restricted to the plane normal to t.
+std::array<Vec3, 2> sheet_directions(Evaluator& ev, const Vec3& p, const Vec3& t) {
+  const Mat3 h = ev.sample(p, true, false).hessian;
+  Vec3 u = t.unitOrthogonal(), v = t.cross(u).normalized();
+  Eigen::Matrix2d q;
+  q << u.dot(h * u), u.dot(h * v), v.dot(h * u), v.dot(h * v);
+  // q = λ₀ e₀e₀ᵀ + λ₁ e₁e₁ᵀ with λ₀ < 0 < λ₁ vanishes along √λ₁ e₀ ± √−λ₀ e₁.
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(q);
+  const Eigen::Vector2d l = es.eigenvalues();
+  const Eigen::Matrix2d vec = es.eigenvectors();
+  std::array<Vec3, 2> out;
+  for (int k = 0; k < 2; ++k) {
+    const Eigen::Vector2d d = std::sqrt(std::max(0.0, l[1])) * vec.col(0) +
+                              (k ? 1.0 : -1.0) * std::sqrt(std::max(0.0, -l[0])) * vec.col(1);
+    out[static_cast<size_t>(k)] = (d[0] * u + d[1] * v).normalized();
+  }
+  return out;
+}
+
+struct Expect {
+  int min_crossing_curves = 1;
+  bool triple_line = false;  // edges on the curve may carry six triangles
+  // Checks that do not hold yet on every surface (docs/meshing.md, "Crossings": limits).
+  bool edge_counts = true;
+  bool orientation = true;
+  // How far the independently traced curve may be from the mesh, in mean edge lengths; 0:
+  // 1e-6 of the scene radius (straight curves lie on the mesh's chords exactly; a curved one
+  // is a chord's sagitta away between the mesh's vertices).
+  double curve_tolerance_edges = 0;
+};
+
+void check_crossing_mesh(const Surface& s, int cells, const Expect& expect = {}) {
+  SCOPED_TRACE(s.label() + " at " + std::to_string(cells) + " cells");
+  PolygonizeStats ps;
+  Mesh m = polygonize(s, {.cells = cells}, &ps);
+  const CrossingStats cs = mesh_crossings(m, s, ps.cell_size);
+  ASSERT_TRUE(cs.failure.empty()) << cs.failure;
+  ASSERT_GE(cs.crossing_curves, expect.min_crossing_curves);
+  const ImproveStats st = improve_mesh(m, s);
+  EXPECT_TRUE(st.converged) << "not at rest after " << st.steps << " steps";
+  const double e = mean_edge(m);
+  const double radius = s.scene_radius();
+  const TriangleBins bins(m, e);
+
+  // The curve as found independently (its own spacing) lies on the mesh.
+  const SingularSet set = find_singular_set(s);
+  // Where sheets meet at a special point there is no "out along each sheet"; towards a pinch
+  // point the two sheets close like a book and the surface folds sharply within a few edge
+  // lengths of it (docs/meshing.md, "Crossings": limits).
+  auto near_special = [&](const Vec3& p) {
+    for (const SingularPoint& q : set.points) {
+      const double r = q.kind == SingularPointKind::kPinch ? 4.5 * ps.cell_size : 2 * e;
+      if ((q.position - p).norm() < r) return true;
+    }
+    return false;
+  };
+  Evaluator ev(s.field);
+  int crossing = 0;
+  for (const SingularCurve& c : set.curves) {
+    if (c.kind != CurveKind::kCrossing) continue;
+    ++crossing;
+    for (size_t i = 0; i < c.points.size(); ++i) {
+      const Vec3& p = c.points[i];
+      const double tolerance = expect.curve_tolerance_edges > 0 ? expect.curve_tolerance_edges * e : 1e-6 * radius;
+      ASSERT_LE(bins.distance(p), tolerance) << "curve point " << p.transpose();
+      if (i == 0 || i + 1 == c.points.size()) continue;
+      // Half an edge out along each sheet, projected onto F = 0: on the mesh.
+      const Vec3 t = (c.points[i + 1] - c.points[i - 1]).normalized();
+      if (near_special(p)) continue;
+      for (const Vec3& d : sheet_directions(ev, p, t))
+        for (double sign : {-1.0, 1.0}) {
+          Vec3 q = p + sign * 0.5 * e * d;
+          ASSERT_TRUE(project_onto_surface(ev, q, 1e-12 * radius, 0.25 * e)) << q.transpose();
+          if (!s.clip.contains(q) || std::abs(s.clip.value(q)) < e) continue;
+          EXPECT_LE(bins.distance(q), 0.05 * e) << "sheet point " << q.transpose();
+        }
+    }
+  }
+  EXPECT_GE(crossing, expect.min_crossing_curves);
+
+  // Edges of the mesh's curves are shared by the triangles of all sheets through them.
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> count;
+  for (const auto& t : m.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const auto a = t[k], b = t[(k + 1) % 3];
+      ++count[{std::min(a, b), std::max(a, b)}];
+    }
+  long long curve_edges = 0, four = 0;
+  for (const MeshCurve& c : m.curves) {
+    if (c.kind != CurveKind::kCrossing) continue;
+    for (size_t k = 0; k + 1 < c.vertices.size(); ++k) {
+      const auto a = c.vertices[k], b = c.vertices[k + 1];
+      const Vec3 mid = 0.5 * (m.positions[a] + m.positions[b]);
+      if (!s.clip.is_empty_spec() && std::abs(s.clip.value(mid)) < 2 * e) continue;  // clip end
+      if (near_special(mid)) continue;
+      const int n = count[{std::min(a, b), std::max(a, b)}];
+      ++curve_edges;
+      if (!expect.edge_counts) {
+        EXPECT_GE(n, 4) << "curve edge at " << mid.transpose();
+        if (n >= 4) ++four;
+        continue;
+      }
+      if (n == 4 || (expect.triple_line && n == 6)) ++four;
+      else ADD_FAILURE() << "curve edge at " << mid.transpose() << " has " << n << " triangles";
+    }
+  }
+  EXPECT_GT(curve_edges, 0);
+  EXPECT_EQ(four, curve_edges);
+
+  // Away from the singular set: oriented along ∇F and on F = 0; quality overall.
+  double worst = 0;
+  for (size_t v = 0; v < m.positions.size(); ++v) {
+    const Vec3& p = m.positions[v];
+    if (set.distance(p) < 2 * e || near_special(p)) continue;
+    const FieldSample fs = ev.sample(p, true, false);
+    if (fs.gradient.norm() > 0) worst = std::max(worst, std::abs(fs.value) / fs.gradient.norm());
+  }
+  EXPECT_LE(worst, 1e-9);
+  int flipped = 0;
+  for (const auto& t : m.triangles) {
+    const Vec3 c = (m.positions[t[0]] + m.positions[t[1]] + m.positions[t[2]]) / 3;
+    if (set.distance(c) < 2 * e || near_special(c)) continue;
+    const Vec3 n = (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]);
+    if (n.dot(ev.sample(c, true, false).gradient) < 0) ++flipped;
+  }
+  if (expect.orientation) EXPECT_EQ(flipped, 0);
+  else EXPECT_LE(flipped, 20);
+  const MeshQuality q = measure_quality(m, s);
+  EXPECT_LE(q.percent_below_30, 10.0);
+}
+
+TEST(Crossings, RomanSurface) {
+  const Surface s = test::catalog_surface("roman");
+  check_crossing_mesh(s, 128, {.min_crossing_curves = 3});
+  check_crossing_mesh(s, 96, {.min_crossing_curves = 3});
+}
+
+TEST(Crossings, WhitneyUmbrella) {
+  const Surface s = test::catalog_surface("whitney");
+  check_crossing_mesh(s, 128);
+  check_crossing_mesh(s, 96);
+}
+
+// Near one of the triple points a few curve edges get a sixth triangle and a few triangles
+// face against grad F: both are checked loosely here until the join there is fixed.
+TEST(Crossings, KummerFourPlanes) {
+  const Surface s = test::kummer(3, 3);
+  const Expect expect{.min_crossing_curves = 6, .edge_counts = false, .orientation = false};
+  check_crossing_mesh(s, 64, expect);
+  check_crossing_mesh(s, 80, expect);
+}
+
+TEST(Crossings, SphereCrossingACylinderAlongTwoCircles) {
+  // x² + y² + z² = 1 and x² + y² = 0.64 meet in the circles z = ±0.6.
+  const Surface s = test::equation("(x^2 + y^2 + z^2 - 1) * (x^2 + y^2 - 0.64)", Clip::sphere(1.3));
+  check_crossing_mesh(s, 64, {.min_crossing_curves = 2, .curve_tolerance_edges = 0.02});
+}
+
+TEST(Crossings, TwoPlanes) {
+  Surface s = test::catalog_surface("planes");
+  s.field.set_parameter("a", 0.3);
+  check_crossing_mesh(s, 128);
+  check_crossing_mesh(s, 96);
+}
+
+}  // namespace
+}  // namespace zeroset
