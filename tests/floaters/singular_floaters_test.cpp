@@ -41,11 +41,13 @@ void expect_covered(const Settled& r, const char* name) {
   SCOPED_TRACE(name);
   EXPECT_GT(r.step, 0u) << "did not settle within 3000 steps";
   ASSERT_FALSE(r.set.curves.empty());
-  for (std::size_t k = 0; k < r.set.points.size(); ++k)
+  for (std::size_t k = 0; k < r.set.points.size(); ++k) {
     if (r.set.points[k].kind == SingularPointKind::kPinch ||
-        r.set.points[k].kind == SingularPointKind::kTriple)
+        r.set.points[k].kind == SingularPointKind::kTriple) {
       EXPECT_LE(r.coverage.point_ratio[k], 0.5)
           << to_string(r.set.points[k].kind) << " point " << k;
+    }
+  }
   for (std::size_t k = 0; k < r.set.curves.size(); ++k)
     EXPECT_LE(r.coverage.curve_gap[k], 1.0) << to_string(r.set.curves[k].kind) << " curve " << k;
 }
