@@ -275,6 +275,14 @@ void run_sample(const SampleArgs& a) {
     stats["updates_per_second"] = seconds > 0 ? static_cast<double>(updates) / seconds : 0;
     stats["metrics"] = metrics_json(m, band);
     stats["singular_set"] = singular_stats(singular);
+    if (singular) {
+      // Each special point's and curve's coverage in local spacings (docs/algorithms.md B.7).
+      const SingularSetCoverage c = measure_singular_coverage(*singular, sys.positions());
+      stats["singular_coverage"] = {{"point_ratio", c.point_ratio},
+                                    {"point_ratio_max", c.point_ratio_max},
+                                    {"curve_gap", c.curve_gap},
+                                    {"curve_gap_max", c.curve_gap_max}};
+    }
     write_json(stats, a.stats);
   }
   // Floaters that find no surface are reseeded, wander, and are removed as strays.
@@ -339,7 +347,8 @@ void register_sample_command(CLI::App& app) {
   cmd->add_flag("--no-clip-projection", a->no_clip_projection,
                 "Remove floaters that leave the clip volume instead of projecting them back");
   cmd->add_flag("--no-snap", a->no_snap,
-                "Do not move floaters onto nodes (isolated singular points) they come near");
+                "Do not hold floaters on the singular set: on nodes they come near, on pinch, triple and "
+                "other special points, and along singular curves");
   cmd->add_flag("--plain-repulsion", a->plain_repulsion,
                 "Witkin-Heckbert's desired velocity exactly, instead of pair forces scaled by "
                 "the pair's mean radius (with it a graded density never settles)");

@@ -101,7 +101,7 @@ void snap_candidates(FloaterState& sys, const std::vector<std::uint8_t>& candida
     });
     if (taken) continue;
     sys.pos[i] = *node;
-    sys.pinned[i] = 1;
+    sys.pinned[i] = kOnNode;
     held.push_back(*node);
     widen(sys.bounds, *node);
   }
@@ -143,14 +143,18 @@ void update_estimators(FloaterState& sys) {
             v[9][k], v[11][k], v[12][k];
         // Away from singular points the Hessian is regular and only |r| matters: the
         // eigenvalues are wanted for a singular Hessian or a floater that may snap.
+        // The distance to the singular set found (curves too, where the Newton step below
+        // may see no critical point ahead), when it is within the index's reach.
+        const double found = singular_set_distance(sys, sys.pos[i]);
         const auto regular = regular_critical_step(gradient, hessian);
         const bool may_snap = sys.opt.snap_to_nodes && !sys.pinned[i];
         if (regular && !(may_snap && regular->norm() < kSnapFraction * sys.sigma[i])) {
-          beta[k] = std::min(regular->norm() / sys.singular_scale, 1.0);
+          beta[k] = std::min(std::min(regular->norm(), found) / sys.singular_scale, 1.0);
           continue;
         }
         const CriticalStep c = critical_step(gradient, hessian);
-        const double r = c.reaches ? c.step.norm() : std::numeric_limits<double>::infinity();
+        const double r =
+            std::min(c.reaches ? c.step.norm() : std::numeric_limits<double>::infinity(), found);
         beta[k] = std::isfinite(r) ? std::min(r / sys.singular_scale, 1.0) : 1.0;
         candidate[i] =
             may_snap && r < kSnapFraction * sys.sigma[i] && c.smallest > kNondegenerate * c.largest;
@@ -185,7 +189,7 @@ void update_estimators(FloaterState& sys) {
 // method, and is released when the node has gone (or turned degenerate).
 void track_nodes(FloaterState& sys) {
   for (std::size_t i = 0; i < floater_count(sys); ++i) {
-    if (!sys.pinned[i]) continue;
+    if (sys.pinned[i] != kOnNode) continue;
     const auto node = find_node(sys, sys.evaluators[0], sys.pos[i], sys.sigma[i]);
     if (node && sys.surface.clip.contains(*node))
       sys.pos[i] = *node;

@@ -23,6 +23,8 @@
 #include "zeroset/detail/parallel.h"
 #include "zeroset/floaters/floaters.h"
 #include "zeroset/surface/analysis.h"
+#include "zeroset/surface/singular_index.h"
+#include "zeroset/surface/singular_set.h"
 
 namespace zeroset::detail {
 
@@ -54,6 +56,10 @@ constexpr std::uint32_t kStrayAge = 200;
 constexpr double kSnapFraction = 0.5;
 constexpr double kNondegenerate = 1e-3;
 constexpr int kNodeIterations = 12;
+// What holds a floater (FloaterState::pinned): nothing, a node it snapped onto (it follows the
+// node while parameters move), a special point of the singular set, or a curve of it (it moves
+// along the curve only). Held floaters have no normal: they repel every sheet through them.
+enum Hold : std::uint8_t { kFree = 0, kOnNode = 1, kOnPoint = 2, kOnCurve = 3 };
 // Settled: the population changed by at most this fraction over the convergence window.
 constexpr double kStationary = 0.01;
 // σ never leaves [kMinRadius·σ̂, kMaxRadius·σ_max]; reaching the floor marks it degenerate.
@@ -94,6 +100,40 @@ inline void tangent_basis(const Vec3& n, Vec3& t1, Vec3& t2) {
   t1 = n.cross(a).normalized();
   t2 = n.cross(t1);
 }
+
+// A curve of the singular set as floaters ride it: the polyline with the arc length at each
+// vertex.
+struct RailCurve {
+  std::vector<Vec3> points;
+  std::vector<double> arc;  // arc[0] = 0, arc.back() = length
+  bool closed = false;
+  CurveKind kind = CurveKind::kCrossing;
+  std::vector<double> fixed;  // sorted arc lengths of the held points on it (its ends, ...)
+  double length() const { return arc.back(); }
+  // Arc length kept on the curve: wrapped when closed, clamped to [0, length] when open.
+  double keep(double s) const {
+    const double l = length();
+    if (closed && l > 0) return s - l * std::floor(s / l);
+    return std::clamp(s, 0.0, l);
+  }
+  // The segment holding arc length s (kept on the curve).
+  std::size_t segment(double s) const {
+    const auto it = std::upper_bound(arc.begin() + 1, arc.end() - 1, s);
+    return static_cast<std::size_t>(it - arc.begin()) - 1;
+  }
+  Vec3 at(double s) const {
+    const std::size_t k = segment(s);
+    const double l = arc[k + 1] - arc[k];
+    const double t = l > 0 ? std::clamp((s - arc[k]) / l, 0.0, 1.0) : 0.0;
+    return points[k] + t * (points[k + 1] - points[k]);
+  }
+  Vec3 tangent(double s) const {
+    const std::size_t k = segment(s);
+    const Vec3 d = points[k + 1] - points[k];
+    const double l = d.norm();
+    return l > 0 ? Vec3(d / l) : Vec3(Vec3::Zero());
+  }
+};
 
 // What the gather pass reads of a floater, in hash slot order: one cache line each, as
 // neighbours are visited in an order the slots only roughly follow.
@@ -162,7 +202,9 @@ struct FloaterState {
   std::vector<double> mu;    // μ_i from the estimators
   std::vector<double> smax;  // σ_max^i = μ_i σ_max, graded (see repulsion_and_move())
   std::vector<std::uint32_t> age;
-  std::vector<std::uint8_t> pinned;  // sits on a node (snap_candidates) and does not move
+  std::vector<std::uint8_t> pinned;  // a Hold: kOnNode and kOnPoint do not move
+  std::vector<std::int32_t> rail;    // kOnCurve: the index of its curve in `rails`, else -1
+  std::vector<double> arc;           // kOnCurve: its arc length along that curve
   std::vector<double> value;
   std::vector<double> gnorm;
   std::vector<Vec3> unit;  // ∇F/|∇F|, or 0 where that is undefined
@@ -170,8 +212,23 @@ struct FloaterState {
   // permute_state()'s output, one array per array of state_arrays(), kept from call to call.
   std::tuple<std::vector<Vec3>, std::vector<double>, std::vector<std::uint64_t>,
              std::vector<double>, std::vector<double>, std::vector<std::uint32_t>,
-             std::vector<std::uint8_t>, std::vector<double>, std::vector<double>, std::vector<Vec3>>
+             std::vector<std::uint8_t>, std::vector<std::int32_t>, std::vector<double>,
+             std::vector<double>, std::vector<double>, std::vector<Vec3>>
       permuted;
+
+  // The singular set (docs/algorithms.md B.7), found for the current surface and parameters
+  // when `singular_current`; `singular_placed` once floaters are held on its points and curves.
+  // While parameters move it is dropped, and found again once they have been still for
+  // estimator_interval steps.
+  SingularSet singular;
+  SingularSetIndex singular_index;
+  std::vector<RailCurve> rails;  // its curves with their arc lengths
+  bool singular_current = false;
+  bool singular_placed = false;
+  std::size_t still_steps = 0;  // steps since the parameters last changed
+  double rail_sigma = 0;        // σ of the floaters held on the set
+  double rail_spacing = 0;      // their spacing along the curves
+  std::vector<double> rail_push;  // per floater on a curve: its desired velocity along it
 
   // Per-step scratch.
   std::vector<double> graded, fq, new_sigma;
@@ -257,6 +314,34 @@ void update_estimators(FloaterState& sys);
 // Pinned floaters follow their nodes after a parameter change.
 void track_nodes(FloaterState& sys);
 
+// ---- the singular set (singular_floaters.cpp) ----------------------------------------------
+
+// What the singular set's upkeep did to the population in one step.
+struct SingularEvents {
+  std::size_t inserted = 0, removed = 0;
+};
+// Finds the singular set of the current surface and parameters (when the options use it) and
+// indexes it; floaters held on it are not placed yet.
+void find_singular(FloaterState& sys);
+// Every estimator_interval steps: finds the set again once the parameters have been still for
+// that long, places floaters on its points and curves where none are, and removes free
+// floaters that have strayed onto an isolated curve (no sheet carries them there).
+SingularEvents keep_singular_floaters(FloaterState& sys);
+// The parameters or the surface change: floaters held on the old set's points and curves go,
+// and the set is stale until found again. Returns how many floaters were removed.
+std::size_t drop_singular_set(FloaterState& sys);
+// The options change: the held floaters go (their spacing follows σ̂) and come back at the next
+// upkeep; the index follows the new reach. Returns how many floaters were removed.
+std::size_t replace_singular_floaters(FloaterState& sys);
+// The desired velocity along its curve of every floater on one (rail_push): 1-D repulsion from
+// its neighbours on the curve, the held points on it fixed.
+void chain_velocities(FloaterState& sys);
+// Distance from p to the singular set when within the index's reach, else infinity.
+inline double singular_set_distance(const FloaterState& sys, const Vec3& p) {
+  return sys.singular_current ? sys.singular_index.distance(p)
+                              : std::numeric_limits<double>::infinity();
+}
+
 // ---- neighbours and motion (motion.cpp) ----------------------------------------------------
 
 void build_neighbours(FloaterState& sys);
@@ -279,7 +364,8 @@ inline std::uint8_t judge_fate(const FloaterState& sys, std::size_t i, double e,
       (!sys.pinned[i] && (s <= kMinRadius * sys.sigma_hat || outside ||
                           (r > sys.sigma_hat && (near_eq || sys.age[i] > kStrayAge))));
   if (stray) return kStray;
-  if (!near_eq) return 0;
+  // Floaters held on the singular set's points and curves keep their radius and number.
+  if (!near_eq || sys.pinned[i] >= kOnPoint) return 0;
   const double local_nominal = std::min(sys.sigma_hat, local_max);
   std::uint8_t f = 0;
   if (s > local_max ||
@@ -293,6 +379,8 @@ inline std::uint8_t judge_fate(const FloaterState& sys, std::size_t i, double e,
   return f;
 }
 FateCounts decide_fates(FloaterState& sys);
+// Removes the floaters at the increasing indices `holes`.
+void remove_floaters(FloaterState& sys, std::span<const std::uint32_t> holes);
 
 // ---- convergence (convergence.cpp) ---------------------------------------------------------
 

@@ -49,8 +49,14 @@ StepStats advance(FloaterState& sys, std::span<const double> next_q) {
   }
   if (sys.opt.radius_adapt == RadiusAdapt::kWitkinHeckbert)
     std::fill(sys.mu.begin(), sys.mu.end(), 1.0);
-  if (sys.step_count % static_cast<std::size_t>(sys.opt.estimator_interval) == 0)
+  std::size_t held_removed = 0;
+  if (sys.step_count % static_cast<std::size_t>(sys.opt.estimator_interval) == 0) {
+    const SingularEvents held = keep_singular_floaters(sys);
+    st.inserted += held.inserted;
+    held_removed = held.removed;
+    if (held.inserted + held.removed > 0) evaluate_all(sys);  // F and ∇F of the new floaters
     update_estimators(sys);
+  }
 
   std::vector<double> qdot;
   if (!next_q.empty()) {
@@ -58,6 +64,7 @@ StepStats advance(FloaterState& sys, std::span<const double> next_q) {
     for (std::size_t k = 0; k < q.size(); ++k) qdot.push_back((next_q[k] - q[k]) / sys.opt.dt);
   }
   build_neighbours(sys);
+  chain_velocities(sys);
   parameter_terms(sys, qdot);
   repulsion_and_move(sys);
 
@@ -74,8 +81,11 @@ StepStats advance(FloaterState& sys, std::span<const double> next_q) {
   sys.sigma.swap(sys.new_sigma);
   const FateCounts fates = decide_fates(sys);
   if (!next_q.empty()) {
+    held_removed += drop_singular_set(sys);
     apply_parameters(sys, next_q);
     track_nodes(sys);
+  } else {
+    ++sys.still_steps;
   }
   evaluate_all(sys);
 
@@ -83,7 +93,7 @@ StepStats advance(FloaterState& sys, std::span<const double> next_q) {
   st.step = sys.step_count;
   st.births = fates.births;
   st.deaths = fates.deaths;
-  st.removed = fates.removed;
+  st.removed = fates.removed + held_removed;
   st.count = floater_count(sys);
   st.converged = judge_convergence(sys, st);
   residual_stats(sys, st);
@@ -94,6 +104,7 @@ StepStats advance(FloaterState& sys, std::span<const double> next_q) {
 // The floaters stay where they are, but nothing else of the old surface carries over: ages
 // (for stray detection), fission radii, nodes held, and the convergence history.
 void restart_on_new_surface(FloaterState& sys) {
+  sys.still_steps = 0;
   for (std::size_t i = 0; i < floater_count(sys); ++i) {
     sys.pos[i] = sys.surface.clip.project(sys.pos[i]);
     sys.sigma[i] = sys.sigma_hat;
@@ -108,6 +119,7 @@ void restart_on_new_surface(FloaterState& sys) {
 
 void reset_floaters(FloaterState& sys) {
   resize_state(sys, 0);
+  sys.singular_placed = false;
   sys.next_id = 0;
   sys.step_count = 0;
   sys.recent.clear();
@@ -121,6 +133,8 @@ void set_options(FloaterState& sys, const FloaterOptions& o) {
                        (o.radius == 0 && o.max_count != sys.opt.max_count);
   sys.opt = o;
   if (lengths) resolve_lengths(sys);
+  // The held floaters' radius and spacing follow σ̂, the cap and the radius rule.
+  replace_singular_floaters(sys);
   if (floater_count(sys) > sys.opt.max_count) resize_state(sys, sys.opt.max_count);
   if (sys.opt.radius_adapt == RadiusAdapt::kWitkinHeckbert)
     std::fill(sys.mu.begin(), sys.mu.end(), 1.0);
@@ -167,6 +181,7 @@ StepStats FloaterSystem::step(std::span<const double> next_parameters) {
 
 void FloaterSystem::set_parameters(std::span<const double> values) {
   detail::check_parameters(*impl_, values);
+  detail::drop_singular_set(*impl_);
   detail::apply_parameters(*impl_, values);
   detail::track_nodes(*impl_);
   detail::evaluate_all(*impl_);
@@ -187,6 +202,7 @@ std::span<const double> FloaterSystem::parameters() const {
 }
 
 void FloaterSystem::set_surface(const Surface& surface) {
+  detail::drop_singular_set(*impl_);
   detail::adopt_surface(*impl_, surface);
   detail::restart_on_new_surface(*impl_);
 }

@@ -7,6 +7,7 @@
 
 #include "rng_detail.h"
 #include "spatial_hash_detail.h"
+#include "zeroset/surface/singular_index.h"
 #include "zeroset/detail/parallel.h"
 #include "zeroset/surface/analysis.h"
 
@@ -192,6 +193,72 @@ SampleMetrics measure_samples(const Surface& surface, std::span<const Vec3> samp
                              (static_cast<double>(sample_out) / static_cast<double>(ref_out));
   }
   return m;
+}
+
+}  // namespace zeroset
+
+namespace zeroset {
+
+SingularSetCoverage measure_singular_coverage(const SingularSet& set,
+                                              std::span<const Vec3> samples, int local_neighbours,
+                                              double on_set) {
+  SingularSetCoverage c;
+  c.point_ratio.assign(set.points.size(), 0.0);
+  c.curve_gap.assign(set.curves.size(), 0.0);
+  if (samples.empty()) return c;
+  Box3 box{samples[0], samples[0]};
+  for (const Vec3& p : samples) {
+    box.lo = box.lo.cwiseMin(p);
+    box.hi = box.hi.cwiseMax(p);
+  }
+  const double extent = std::max(box.size().maxCoeff(), 1e-12);
+  if (!(on_set > 0)) on_set = 1e-9 * extent;
+  const SingularSetIndex index = set.empty() ? SingularSetIndex() : SingularSetIndex(set, on_set);
+  std::vector<Vec3> off;
+  for (const Vec3& p : samples)
+    if (!(index.distance(p) <= on_set)) off.push_back(p);
+  if (off.size() < 2) return c;
+  auto grid_over = [&](std::span<const Vec3> points) {
+    detail::SpatialHash grid;
+    grid.build(points, box, 1.5 * extent / std::sqrt(static_cast<double>(points.size())));
+    return grid;
+  };
+  const detail::SpatialHash all = grid_over(samples), sheets = grid_over(off);
+  std::vector<double> nn(off.size());
+  double mean = 0;
+  for (std::size_t i = 0; i < off.size(); ++i) {
+    nn[i] = sheets.nearest(off[i], off, static_cast<std::int64_t>(i)).second;
+    mean += nn[i] / static_cast<double>(off.size());
+  }
+  const auto k = static_cast<std::size_t>(std::max(1, local_neighbours));
+  auto spacing = [&](const Vec3& q) {
+    double sum = 0;
+    const auto near = sheets.k_nearest(q, off, k);
+    for (std::uint32_t j : near) sum += nn[j];
+    return sum / static_cast<double>(near.size());
+  };
+  auto ratio = [&](const Vec3& q) {
+    const double s = spacing(q);
+    return s > 0 ? all.nearest(q, samples, -1).second / s : 0.0;
+  };
+  for (std::size_t k2 = 0; k2 < set.points.size(); ++k2) {
+    c.point_ratio[k2] = ratio(set.points[k2].position);
+    c.point_ratio_max = std::max(c.point_ratio_max, c.point_ratio[k2]);
+  }
+  const double probe = 0.1 * mean;
+  for (std::size_t k2 = 0; k2 < set.curves.size(); ++k2) {
+    const auto& pts = set.curves[k2].points;
+    double worst = pts.empty() ? 0.0 : ratio(pts[0]);
+    for (std::size_t i = 0; i + 1 < pts.size(); ++i) {
+      const double len = (pts[i + 1] - pts[i]).norm();
+      const int pieces = std::max(1, static_cast<int>(std::ceil(len / std::max(probe, 1e-300))));
+      for (int j = 1; j <= pieces; ++j)
+        worst = std::max(worst, ratio(pts[i] + (pts[i + 1] - pts[i]) * (double(j) / pieces)));
+    }
+    c.curve_gap[k2] = 2 * worst;
+    c.curve_gap_max = std::max(c.curve_gap_max, c.curve_gap[k2]);
+  }
+  return c;
 }
 
 }  // namespace zeroset

@@ -129,7 +129,17 @@ void move_one(FloaterState& sys, std::size_t i, const PairSums& sum, Evaluator& 
   sys.new_sigma[i] = std::clamp(std::clamp(s + dt * rate, 0.5 * s, 2 * s), k.lo, k.hi);
   Vec3 p = sys.pos[i];
   bool outside = false;
-  if (!sys.pinned[i]) {
+  if (sys.pinned[i] >= kOnPoint) sys.new_sigma[i] = s;  // held on the singular set (B.7)
+  if (sys.pinned[i] == kOnCurve) {
+    // On a curve of the singular set: 1-D repulsion along it (chain_velocities()), bounded
+    // like a tangential move; the floater stays on the polyline.
+    const RailCurve& c = sys.rails[static_cast<std::size_t>(sys.rail[i])];
+    const double along = sys.rail_push[i];
+    const double limit = std::min(sys.opt.max_step_fraction * s, max_scene_step);
+    const double move = std::clamp(dt * along, -limit, limit);
+    sys.arc[i] = c.keep(sys.arc[i] + (std::isfinite(move) ? move : 0.0));
+    p = c.at(sys.arc[i]);
+  } else if (!sys.pinned[i]) {
     // Constrained velocity ṗ = P − [(F_x·P + F_q·q̇ + φF)/(F_x·F_x)] F_x, split into the
     // tangential part of P and the pull along the unit normal. Where ∇F vanishes (or F is
     // not finite) there is no normal: the floater moves by repulsion alone, and the pull

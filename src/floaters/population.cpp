@@ -5,8 +5,6 @@
 
 namespace zeroset::detail {
 
-namespace {
-
 // Removes the floaters at the increasing indices `holes`, filling each with the last floater
 // that stays: O(removed) instead of moving everything behind the first hole.
 void remove_floaters(FloaterState& sys, std::span<const std::uint32_t> holes) {
@@ -23,6 +21,8 @@ void remove_floaters(FloaterState& sys, std::span<const std::uint32_t> holes) {
   }
   resize_state(sys, last);
 }
+
+namespace {
 
 // Fission: both halves get σ/√2; the child starts at a random tangential offset of a quarter
 // to half the old radius (never zero: coincident twins would feel no force). Without clip

@@ -21,6 +21,7 @@ void adopt_surface(FloaterState& sys, const Surface& s) {
   resolve_lengths(sys);
   sys.evaluators.clear();
   ensure_evaluators(sys);
+  find_singular(sys);
 }
 
 void resolve_lengths(FloaterState& sys) {

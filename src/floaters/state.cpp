@@ -10,7 +10,9 @@ void push_floater(FloaterState& sys, const Vec3& p, double s, double m) {
   sys.mu.push_back(m);
   sys.smax.push_back(m * sigma_max(sys));
   sys.age.push_back(0);
-  sys.pinned.push_back(0);
+  sys.pinned.push_back(kFree);
+  sys.rail.push_back(-1);
+  sys.arc.push_back(0);
   sys.value.push_back(0);
   sys.gnorm.push_back(0);
   sys.unit.push_back(Vec3::Zero());
@@ -24,6 +26,8 @@ void move_floater(FloaterState& sys, std::size_t from, std::size_t to) {
   sys.smax[to] = sys.smax[from];
   sys.age[to] = sys.age[from];
   sys.pinned[to] = sys.pinned[from];
+  sys.rail[to] = sys.rail[from];
+  sys.arc[to] = sys.arc[from];
   sys.value[to] = sys.value[from];
   sys.gnorm[to] = sys.gnorm[from];
   sys.unit[to] = sys.unit[from];
@@ -31,12 +35,12 @@ void move_floater(FloaterState& sys, std::size_t from, std::size_t to) {
 
 namespace {
 
-constexpr std::size_t kStateArrays = 10;
+constexpr std::size_t kStateArrays = 12;
 
 // Every per-floater array, in one order: what moves, is resized and is permuted together.
 auto state_arrays(FloaterState& sys) {
-  return std::tie(sys.pos, sys.sigma, sys.id, sys.mu, sys.smax, sys.age, sys.pinned, sys.value,
-                  sys.gnorm, sys.unit);
+  return std::tie(sys.pos, sys.sigma, sys.id, sys.mu, sys.smax, sys.age, sys.pinned, sys.rail,
+                  sys.arc, sys.value, sys.gnorm, sys.unit);
 }
 
 // out[s] = v[order[s]]: a worksharing loop inside the caller's parallel region (nowait: each

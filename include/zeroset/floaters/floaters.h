@@ -99,7 +99,9 @@ struct FloaterOptions {
   /// A floater that comes within half its radius of a node (a nondegenerate singular point,
   /// found by the β estimator's Newton step and Newton's method on ∇F = 0) is moved onto it and
   /// stays there, following it while the parameters move: every node carries a floater, drawn
-  /// as the cone tip it is. Singular curves are left to the dynamics.
+  /// as the cone tip it is. The same switch holds floaters on the rest of the singular set
+  /// (docs/algorithms.md B.7): one on each pinch, triple, clip-end or degenerate point, and
+  /// chains spaced along its curves, once the parameters are still.
   bool snap_to_nodes = true;
   /// μ_i is kept at least this large, so σ_max^i never collapses to zero at a singular point.
   double min_radius_factor = 0.2;

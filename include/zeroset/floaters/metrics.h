@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "zeroset/surface/analysis.h"
+#include "zeroset/surface/singular_set.h"
 #include "zeroset/surface/surface.h"
 #include "zeroset/types.h"
 
@@ -93,5 +94,32 @@ struct SampleMetrics {
 /// Throws BadInput when the clip is unbounded and a reference sampling is needed.
 SampleMetrics measure_samples(const Surface& surface, std::span<const Vec3> samples,
                               const MetricsOptions& options = {});
+
+}  // namespace zeroset
+
+namespace zeroset {
+
+/// How a point set covers a singular set found by find_singular_set: each special point and
+/// each curve, measured against the local spacing of the samples off the set (the mean
+/// nearest-neighbour distance, among the samples farther than `on_set` from the set, of the
+/// `local_neighbours` of them nearest to the place). Samples on the set are left out of the
+/// spacing because along a chain of samples on a curve the gaps and the nearest-neighbour
+/// distances are the same numbers: the spacing of the sheets around is the measure.
+struct SingularSetCoverage {
+  /// Per special point (set.points): distance to the nearest sample / local spacing.
+  std::vector<double> point_ratio;
+  /// Per curve (set.curves): the largest gap along it, twice the largest distance from a
+  /// point of the curve to its nearest sample, / the local spacing there.
+  std::vector<double> curve_gap;
+  double point_ratio_max = 0;
+  double curve_gap_max = 0;
+};
+
+/// Measures the coverage. `on_set` 0: 1e-9 times the extent of the samples. Curves are probed
+/// every tenth of the mean off-set spacing. All zero when there are fewer than two samples
+/// off the set.
+SingularSetCoverage measure_singular_coverage(const SingularSet& set,
+                                              std::span<const Vec3> samples,
+                                              int local_neighbours = 8, double on_set = 0);
 
 }  // namespace zeroset
