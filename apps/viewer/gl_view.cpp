@@ -138,11 +138,14 @@ void main() {
 }
 )";
 
+// u_depth_bias moves a point's depth (not its place on screen) that far towards the eye: the
+// singular set's tubes are tested against an approximation of the surface (see draw_singular).
 constexpr const char* kMeshVertex = R"(
 layout(location = 0) in vec3 a_pos;
 layout(location = 1) in vec3 a_normal;
 uniform mat4 u_view;
 uniform mat4 u_proj;
+uniform float u_depth_bias;
 out vec3 v_pos;
 out vec3 v_normal;
 void main() {
@@ -150,6 +153,10 @@ void main() {
   v_pos = pe.xyz;
   v_normal = mat3(u_view) * a_normal;
   gl_Position = u_proj * pe;
+  if (u_depth_bias > 0.0) {
+    vec4 nearer = u_proj * vec4(pe.xy, pe.z + u_depth_bias, 1.0);
+    gl_Position.z = nearer.z / nearer.w * gl_Position.w;
+  }
 }
 )";
 
@@ -242,6 +249,7 @@ void locate(GLuint id, auto& p) {
   p.back_diffuse = glGetUniformLocation(id, "u_back_diffuse");
   p.back_params = glGetUniformLocation(id, "u_back_params");
   p.image = glGetUniformLocation(id, "u_image");
+  p.depth_bias = glGetUniformLocation(id, "u_depth_bias");
 }
 
 void set_material(GLint diffuse, GLint params, const Material& m) {
@@ -424,6 +432,7 @@ void GlView::set_shading(const Program& p, const ViewerState& state, const Eigen
   glUniformMatrix4fv(p.view, 1, GL_FALSE, view.data());
   glUniformMatrix4fv(p.proj, 1, GL_FALSE, proj.data());
   glUniform4f(p.flat_color, 0, 0, 0, 0);
+  glUniform1f(p.depth_bias, 0);
   const RenderOptions& look = state.look();
   // Lights in eye space, turned by the view matrix's rotation.
   std::vector<float> dirs, colors;
@@ -562,6 +571,17 @@ void GlView::draw_singular(const ViewerState& state, const Eigen::Matrix4f& view
   }
   if (singular_batches_.empty()) return;
   set_shading(mesh_, state, view, proj);
+  // The set lies on F = 0, but the mesh and the disks only approximate it: near a singular
+  // curve marching cubes is off by up to about a cell, and a disk leaves the surface by up to
+  // its radius. The overlay is depth tested with that much tolerance, so such errors do not
+  // hide it while sheets farther in front still do.
+  double tolerance = 0;
+  if (state.mode() == Mode::kMesh) {
+    tolerance = state.surface().bounds().size().maxCoeff() / state.mesh_settings().cells;
+  } else if (const auto floaters = state.floaters()) {
+    tolerance = floaters->nominal_radius * state.display().disk_scale;
+  }
+  glUniform1f(mesh_.depth_bias, static_cast<float>(tolerance));
   for (const OverlayGeometry::Batch& b : singular_batches_) {
     const Material m{.diffuse = b.color,
                      .ambient = style.ambient,

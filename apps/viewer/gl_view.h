@@ -36,7 +36,7 @@ class GlView {
     GLint view = -1, proj = -1, scale = -1, point_size = -1, viewport = -1, flat_color = -1;
     GLint light_count = -1, light_dir = -1, light_color = -1;
     GLint front_diffuse = -1, front_params = -1, back_diffuse = -1, back_params = -1;
-    GLint image = -1;
+    GLint image = -1, depth_bias = -1;
   };
 
   std::vector<double> scene_key(const ViewerState& state, int width, int height) const;
