@@ -252,6 +252,21 @@ void locate(GLuint id, auto& p) {
   p.depth_bias = glGetUniformLocation(id, "u_depth_bias");
 }
 
+// A vertex array of indexed triangles whose vertices are a position and a normal (attributes
+// 0 and 1, six floats), as the mesh program reads them.
+void make_triangle_arrays(GLuint& vao, GLuint& vbo, GLuint& ebo) {
+  glGenVertexArrays(1, &vao);
+  glBindVertexArray(vao);
+  glGenBuffers(1, &vbo);
+  glGenBuffers(1, &ebo);
+  glBindBuffer(GL_ARRAY_BUFFER, vbo);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<void*>(3 * sizeof(float)));
+}
+
 void set_material(GLint diffuse, GLint params, const Material& m) {
   glUniform3f(diffuse, static_cast<float>(m.diffuse.x()), static_cast<float>(m.diffuse.y()),
               static_cast<float>(m.diffuse.z()));
@@ -284,28 +299,9 @@ GlView::GlView() {
   glEnableVertexAttribArray(3);
   glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(6 * sizeof(float)));
 
-  glGenVertexArrays(1, &mesh_vao_);
-  glBindVertexArray(mesh_vao_);
-  glGenBuffers(1, &mesh_vbo_);
-  glGenBuffers(1, &mesh_ebo_);
-  glBindBuffer(GL_ARRAY_BUFFER, mesh_vbo_);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, mesh_ebo_);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
-  glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<void*>(3 * sizeof(float)));
-
-  // The singular set's tubes and spheres: positions and normals as the mesh's.
-  glGenVertexArrays(1, &singular_vao_);
-  glBindVertexArray(singular_vao_);
-  glGenBuffers(1, &singular_vbo_);
-  glGenBuffers(1, &singular_ebo_);
-  glBindBuffer(GL_ARRAY_BUFFER, singular_vbo_);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, singular_ebo_);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
-  glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<void*>(3 * sizeof(float)));
+  make_triangle_arrays(mesh_vao_, mesh_vbo_, mesh_ebo_);
+  // The singular set's tubes and spheres, drawn with the mesh's program.
+  make_triangle_arrays(singular_vao_, singular_vbo_, singular_ebo_);
 
   glGenVertexArrays(1, &image_vao_);
   glGenTextures(1, &image_texture_);

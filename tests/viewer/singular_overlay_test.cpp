@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "singular_geometry.h"
+#include "run_frames.h"
 #include "viewer_state.h"
 #include "zeroset/error.h"
 #include "zeroset/expr/parse.h"
@@ -19,22 +20,8 @@
 namespace zeroset::viewer {
 namespace {
 
-double seconds_now() {
-  using clock = std::chrono::steady_clock;
-  return std::chrono::duration<double>(clock::now().time_since_epoch()).count();
-}
-
-// Runs frames (without drawing) until `done` or the timeout; returns whether `done` held.
-template <class Done>
-bool run_until(ViewerState& state, Done done, double timeout_s = 20) {
-  const double end = seconds_now() + timeout_s;
-  while (seconds_now() < end) {
-    state.update(seconds_now());
-    if (done()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  return false;
-}
+using test::run_until;
+using test::seconds_now;
 
 bool has_current_set(const ViewerState& s) { return s.singular() && s.singular_is_current(); }
 
