@@ -155,6 +155,12 @@ void run_wireframe(ViewerState& s, const CommandLine& c) {
   require(s.set_display(d));
 }
 
+void run_singular(ViewerState& s, const CommandLine& c) {
+  DisplaySettings d = s.display();
+  d.show_singular = parse_on_off(c.args[0], "singular");
+  require(s.set_display(d));
+}
+
 void run_lights(ViewerState& s, const CommandLine& c) {
   const std::string& how = c.args[0];
   if (how != "follow" && how != "fixed")
@@ -242,6 +248,8 @@ const std::vector<CommandInfo>& command_table() {
       {"disk-scale", 1, 1, "disk-scale S", "disk radius as a multiple of the floater radius", run_disk_scale},
       {"point-size", 1, 1, "point-size PIXELS", "size of floaters drawn as points", run_point_size},
       {"wireframe", 1, 1, "wireframe on|off", "overlay the mesh edges", run_wireframe},
+      {"singular", 1, 1, "singular on|off",
+       "overlay the singular set: curves as tubes, special points as spheres", run_singular},
       {"lights", 1, 1, "lights follow|fixed", "lights follow the camera, or stay in the world", run_lights},
       {"color", 4, 4, "color front|back|background R G B", "a colour (components in [0, 1])", run_color},
       // camera
@@ -259,7 +267,8 @@ const std::vector<CommandInfo>& command_table() {
       {"frames", 1, 1, "frames N", "run N frames"},
       {"wait", 0, 1, "wait [SECONDS]",
        "run frames until the mode's work is done (default: at most 60 s)"},
-      {"steps", 1, 2, "steps N [SECONDS]", "run frames until the floaters took N more steps"},
+      {"steps", 1, 2, "steps N [SECONDS]",
+       "run frames until the floaters took N more steps (and the singular set, if shown, is found)"},
       {"sleep", 1, 1, "sleep SECONDS", "run frames for this long"},
       {"screenshot", 1, 1, "screenshot FILE.png", "save the next frame"},
       {"ui", 1, 1, "ui on|off", "show or hide the panel"},

@@ -138,11 +138,14 @@ void main() {
 }
 )";
 
+// u_depth_bias moves a point's depth (not its place on screen) that far towards the eye: the
+// singular set's tubes are tested against an approximation of the surface (see draw_singular).
 constexpr const char* kMeshVertex = R"(
 layout(location = 0) in vec3 a_pos;
 layout(location = 1) in vec3 a_normal;
 uniform mat4 u_view;
 uniform mat4 u_proj;
+uniform float u_depth_bias;
 out vec3 v_pos;
 out vec3 v_normal;
 void main() {
@@ -150,6 +153,10 @@ void main() {
   v_pos = pe.xyz;
   v_normal = mat3(u_view) * a_normal;
   gl_Position = u_proj * pe;
+  if (u_depth_bias > 0.0) {
+    vec4 nearer = u_proj * vec4(pe.xy, pe.z + u_depth_bias, 1.0);
+    gl_Position.z = nearer.z / nearer.w * gl_Position.w;
+  }
 }
 )";
 
@@ -242,6 +249,29 @@ void locate(GLuint id, auto& p) {
   p.back_diffuse = glGetUniformLocation(id, "u_back_diffuse");
   p.back_params = glGetUniformLocation(id, "u_back_params");
   p.image = glGetUniformLocation(id, "u_image");
+  p.depth_bias = glGetUniformLocation(id, "u_depth_bias");
+}
+
+// A vertex array of indexed triangles whose vertices are a position and a normal (attributes
+// 0 and 1, six floats), as the mesh program reads them.
+void make_triangle_arrays(GLuint& vao, GLuint& vbo, GLuint& ebo) {
+  glGenVertexArrays(1, &vao);
+  glBindVertexArray(vao);
+  glGenBuffers(1, &vbo);
+  glGenBuffers(1, &ebo);
+  glBindBuffer(GL_ARRAY_BUFFER, vbo);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<void*>(3 * sizeof(float)));
+}
+
+void set_material(GLint diffuse, GLint params, const Material& m) {
+  glUniform3f(diffuse, static_cast<float>(m.diffuse.x()), static_cast<float>(m.diffuse.y()),
+              static_cast<float>(m.diffuse.z()));
+  glUniform3f(params, static_cast<float>(m.ambient), static_cast<float>(m.specular),
+              static_cast<float>(m.shininess));
 }
 
 float encode_gamma(double linear) {
@@ -269,16 +299,9 @@ GlView::GlView() {
   glEnableVertexAttribArray(3);
   glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(6 * sizeof(float)));
 
-  glGenVertexArrays(1, &mesh_vao_);
-  glBindVertexArray(mesh_vao_);
-  glGenBuffers(1, &mesh_vbo_);
-  glGenBuffers(1, &mesh_ebo_);
-  glBindBuffer(GL_ARRAY_BUFFER, mesh_vbo_);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, mesh_ebo_);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
-  glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<void*>(3 * sizeof(float)));
+  make_triangle_arrays(mesh_vao_, mesh_vbo_, mesh_ebo_);
+  // The singular set's tubes and spheres, drawn with the mesh's program.
+  make_triangle_arrays(singular_vao_, singular_vbo_, singular_ebo_);
 
   glGenVertexArrays(1, &image_vao_);
   glGenTextures(1, &image_texture_);
@@ -295,10 +318,10 @@ GlView::~GlView() {
   const GLuint renderbuffers[] = {scene_color_, scene_depth_};
   glDeleteRenderbuffers(2, renderbuffers);
   glDeleteTextures(1, &image_texture_);
-  const GLuint arrays[] = {floater_vao_, mesh_vao_, image_vao_};
-  glDeleteVertexArrays(3, arrays);
-  const GLuint buffers[] = {floater_vbo_, mesh_vbo_, mesh_ebo_};
-  glDeleteBuffers(3, buffers);
+  const GLuint arrays[] = {floater_vao_, mesh_vao_, singular_vao_, image_vao_};
+  glDeleteVertexArrays(4, arrays);
+  const GLuint buffers[] = {floater_vbo_, mesh_vbo_, mesh_ebo_, singular_vbo_, singular_ebo_};
+  glDeleteBuffers(5, buffers);
   for (const Program* p : {&disks_, &points_, &mesh_, &image_}) glDeleteProgram(p->id);
 }
 
@@ -311,6 +334,8 @@ std::vector<double> GlView::scene_key(const ViewerState& state, int width, int h
                       : state.mode() == Mode::kFloaters ? static_cast<const void*>(state.floaters().get())
                                                         : static_cast<const void*>(state.mesh().get());
   key.push_back(static_cast<double>(reinterpret_cast<std::uintptr_t>(frame)));
+  // The ray tracer draws the singular set into its picture; the GL modes draw it here.
+  key.push_back(static_cast<double>(reinterpret_cast<std::uintptr_t>(state.singular().get())));
   const Camera& c = state.camera();
   key.insert(key.end(), {c.azimuth_deg, c.elevation_deg, c.distance, c.fov_deg, c.target.x(),
                          c.target.y(), c.target.z(), state.surface().scene_radius()});
@@ -392,6 +417,7 @@ void GlView::draw_scene(const ViewerState& state, int width, int height) {
     draw_floaters(state, view_m, proj_m, Eigen::Vector4f(0, 0, width, height));
   else
     draw_mesh(state, view_m, proj_m);
+  draw_singular(state, view_m, proj_m);
   glDisable(GL_DEPTH_TEST);
   glBindVertexArray(0);
 }
@@ -402,6 +428,7 @@ void GlView::set_shading(const Program& p, const ViewerState& state, const Eigen
   glUniformMatrix4fv(p.view, 1, GL_FALSE, view.data());
   glUniformMatrix4fv(p.proj, 1, GL_FALSE, proj.data());
   glUniform4f(p.flat_color, 0, 0, 0, 0);
+  glUniform1f(p.depth_bias, 0);
   const RenderOptions& look = state.look();
   // Lights in eye space, turned by the view matrix's rotation.
   std::vector<float> dirs, colors;
@@ -419,14 +446,8 @@ void GlView::set_shading(const Program& p, const ViewerState& state, const Eigen
     glUniform3fv(p.light_dir, count, dirs.data());
     glUniform3fv(p.light_color, count, colors.data());
   }
-  auto material = [](GLint diffuse, GLint params, const Material& m) {
-    glUniform3f(diffuse, static_cast<float>(m.diffuse.x()), static_cast<float>(m.diffuse.y()),
-                static_cast<float>(m.diffuse.z()));
-    glUniform3f(params, static_cast<float>(m.ambient), static_cast<float>(m.specular),
-                static_cast<float>(m.shininess));
-  };
-  material(p.front_diffuse, p.front_params, look.front);
-  material(p.back_diffuse, p.back_params, look.back);
+  set_material(p.front_diffuse, p.front_params, look.front);
+  set_material(p.back_diffuse, p.back_params, look.back);
 }
 
 void GlView::draw_preview(const ViewerState& state) {
@@ -521,6 +542,51 @@ void GlView::draw_mesh(const ViewerState& state, const Eigen::Matrix4f& view,
     glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
     glDrawElements(GL_TRIANGLES, mesh_index_count_, GL_UNSIGNED_INT, nullptr);
     glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+  }
+}
+
+void GlView::draw_singular(const ViewerState& state, const Eigen::Matrix4f& view,
+                           const Eigen::Matrix4f& proj) {
+  const auto frame = state.singular();
+  if (!frame) return;
+  // The tubes' and spheres' sizes and colours are the CPU overlay's.
+  const SingularOverlay style;
+  const double radius = state.surface().scene_radius();
+  glBindVertexArray(singular_vao_);
+  if (frame != uploaded_singular_ || radius != uploaded_singular_radius_) {
+    const OverlayGeometry g = singular_overlay_geometry(frame->set, style, radius);
+    glBindBuffer(GL_ARRAY_BUFFER, singular_vbo_);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(g.vertices.size() * sizeof(float)),
+                 g.vertices.data(), GL_STATIC_DRAW);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+                 static_cast<GLsizeiptr>(g.indices.size() * sizeof(std::uint32_t)),
+                 g.indices.data(), GL_STATIC_DRAW);
+    singular_batches_ = g.batches;
+    uploaded_singular_ = frame;
+    uploaded_singular_radius_ = radius;
+  }
+  if (singular_batches_.empty()) return;
+  set_shading(mesh_, state, view, proj);
+  // The set lies on F = 0, but the mesh and the disks only approximate it: near a singular
+  // curve marching cubes is off by up to about a cell, and a disk leaves the surface by up to
+  // its radius. The overlay is depth tested with that much tolerance, so such errors do not
+  // hide it while sheets farther in front still do.
+  double tolerance = 0;
+  if (state.mode() == Mode::kMesh) {
+    tolerance = state.surface().bounds().size().maxCoeff() / state.mesh_settings().cells;
+  } else if (const auto floaters = state.floaters()) {
+    tolerance = floaters->nominal_radius * state.display().disk_scale;
+  }
+  glUniform1f(mesh_.depth_bias, static_cast<float>(tolerance));
+  for (const OverlayGeometry::Batch& b : singular_batches_) {
+    const Material m{.diffuse = b.color,
+                     .ambient = style.ambient,
+                     .specular = style.specular,
+                     .shininess = style.shininess};
+    set_material(mesh_.front_diffuse, mesh_.front_params, m);
+    set_material(mesh_.back_diffuse, mesh_.back_params, m);
+    glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(b.count), GL_UNSIGNED_INT,
+                   reinterpret_cast<void*>(static_cast<std::uintptr_t>(b.first) * sizeof(std::uint32_t)));
   }
 }
 

@@ -1,13 +1,15 @@
 #pragma once
 // The OpenGL 3.3 core drawing of the viewer's 3D view: the ray-traced preview as a texture,
 // floaters as disks oriented by their normals (or round points), and the mesh with
-// smooth shading and an optional wireframe. Front and back sides are shaded with the two
-// materials of the look (the back darker), exactly as the CPU renderer shades them.
+// smooth shading and an optional wireframe, with the singular set over them as tubes and
+// spheres. Front and back sides are shaded with the two materials of the look (the back
+// darker), exactly as the CPU renderer shades them.
 #include <epoxy/gl.h>
 
 #include <memory>
 #include <vector>
 
+#include "singular_geometry.h"
 #include "viewer_state.h"
 
 namespace zeroset::viewer {
@@ -34,7 +36,7 @@ class GlView {
     GLint view = -1, proj = -1, scale = -1, point_size = -1, viewport = -1, flat_color = -1;
     GLint light_count = -1, light_dir = -1, light_color = -1;
     GLint front_diffuse = -1, front_params = -1, back_diffuse = -1, back_params = -1;
-    GLint image = -1;
+    GLint image = -1, depth_bias = -1;
   };
 
   std::vector<double> scene_key(const ViewerState& state, int width, int height) const;
@@ -45,6 +47,8 @@ class GlView {
                      const Eigen::Matrix4f& proj, const Eigen::Vector4f& viewport);
   void draw_mesh(const ViewerState& state, const Eigen::Matrix4f& view,
                  const Eigen::Matrix4f& proj);
+  void draw_singular(const ViewerState& state, const Eigen::Matrix4f& view,
+                     const Eigen::Matrix4f& proj);
   void set_shading(const Program& p, const ViewerState& state, const Eigen::Matrix4f& view,
                    const Eigen::Matrix4f& proj);
 
@@ -60,6 +64,11 @@ class GlView {
   GLuint mesh_vao_ = 0, mesh_vbo_ = 0, mesh_ebo_ = 0;
   GLsizei mesh_index_count_ = 0;
   std::shared_ptr<const MeshFrame> uploaded_mesh_;
+
+  GLuint singular_vao_ = 0, singular_vbo_ = 0, singular_ebo_ = 0;
+  std::vector<OverlayGeometry::Batch> singular_batches_;
+  std::shared_ptr<const SingularFrame> uploaded_singular_;
+  double uploaded_singular_radius_ = 0;  // the scene radius its tubes were sized for
 
   GLuint image_vao_ = 0, image_texture_ = 0;
   std::shared_ptr<const PreviewFrame> uploaded_preview_;

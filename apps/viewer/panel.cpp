@@ -16,6 +16,7 @@ namespace {
 
 const ImVec4 kErrorColor(0.95f, 0.35f, 0.3f, 1.0f);
 const ImVec4 kDimColor(0.65f, 0.67f, 0.72f, 1.0f);
+const ImVec4 kNoteColor(0.95f, 0.75f, 0.3f, 1.0f);
 
 constexpr std::array<RadiusAdapt, 4> kAdaptModes = {RadiusAdapt::kWitkinHeckbert,
                                                     RadiusAdapt::kCurvature,
@@ -251,6 +252,51 @@ void raytrace_info(ViewerState& state) {
     ImGui::Text("1/%d resolution, %.2f s, refining...", st.preview_divisor, st.preview_seconds);
 }
 
+// A small square of an overlay colour (linear RGB) and a label after it.
+void swatch(const Color& c, const std::string& label) {
+  auto encode = [](double v) { return static_cast<float>(std::pow(std::clamp(v, 0.0, 1.0), 1 / 2.2)); };
+  const float h = ImGui::GetTextLineHeight();
+  ImGui::ColorButton(label.c_str(), ImVec4(encode(c.x()), encode(c.y()), encode(c.z()), 1),
+                     ImGuiColorEditFlags_NoTooltip | ImGuiColorEditFlags_NoDragDrop,
+                     ImVec2(h, h));
+  ImGui::SameLine();
+  ImGui::TextUnformatted(label.c_str());
+}
+
+void singular_section(ViewerState& state) {
+  DisplaySettings d = state.display();
+  if (ImGui::Checkbox("Singular set (S)", &d.show_singular)) state.set_display(d);
+  help_marker("Where grad F = 0 on the surface: curves as thin tubes, special points as small "
+              "spheres, in the colours listed below, hidden where the surface lies in front. "
+              "Found again whenever the equation, a parameter or the clip changes.");
+  if (!d.show_singular) return;
+  const auto frame = state.singular();
+  if (!frame) {
+    ImGui::TextColored(kDimColor, "searching...");
+    return;
+  }
+  if (!frame->summary.empty()) ImGui::TextWrapped("%s", frame->summary.c_str());
+  if (!frame->note.empty()) {
+    ImGui::PushStyleColor(ImGuiCol_Text, kNoteColor);
+    ImGui::TextWrapped("%s", frame->note.c_str());
+    ImGui::PopStyleColor();
+  }
+  // A legend of the kinds present, in the overlay's colours.
+  const SingularOverlay style;
+  for (const CurveKind k : {CurveKind::kCrossing, CurveKind::kIsolated, CurveKind::kDegenerate})
+    if (frame->set.count(k) > 0) swatch(style.color(k), std::string(to_string(k)) + " curves");
+  for (const SingularPointKind k :
+       {SingularPointKind::kNode, SingularPointKind::kTriple, SingularPointKind::kPinch,
+        SingularPointKind::kDegenerate, SingularPointKind::kClipEnd})
+    if (!frame->set.points_of(k).empty())
+      swatch(style.color(k), k == SingularPointKind::kNode ? std::string("nodes")
+                                                             : std::string(to_string(k)) + " points");
+  if (!state.singular_is_current())
+    ImGui::TextColored(kDimColor, "updating...");
+  else
+    ImGui::TextColored(kDimColor, "found in %.0f ms", 1000 * frame->seconds);
+}
+
 void mode_section(ViewerState& state) {
   if (!ImGui::CollapsingHeader("Mode", ImGuiTreeNodeFlags_DefaultOpen)) return;
   int mode = static_cast<int>(state.mode());
@@ -265,6 +311,8 @@ void mode_section(ViewerState& state) {
     case Mode::kMesh: mesh_settings(state); break;
     case Mode::kRaytrace: raytrace_info(state); break;
   }
+  ImGui::Separator();
+  singular_section(state);
   ImGui::TextColored(kDimColor, "drawing takes %.0f ms a frame", 1000 * state.stats().draw_seconds);
 }
 
@@ -408,6 +456,7 @@ void help_section() {
       "space           play / pause the animation\n"
       "1 / 2 / 3       floaters / mesh / ray traced\n"
       "W               wireframe (mesh)\n"
+      "S               singular set on / off\n"
       "P               disks / points (floaters)\n"
       "H               hide / show this panel\n"
       "F12             screenshot\n"

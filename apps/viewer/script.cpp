@@ -102,11 +102,14 @@ bool Script::waiting(ViewerState& state, ScriptHost& host, double now_s) {
       fail(*wait_line_, host, "the view did not settle in time");
       return false;
     case Wait::kSteps:
-      if (state.stats().floater_steps >= steps_target_) return false;
+      // The singular set, when shown, is part of the picture the steps lead to.
+      if (state.stats().floater_steps >= steps_target_ && state.singular_is_current()) return false;
       if (now_s < deadline_s_) return true;
       fail(*wait_line_, host,
-           fmt::format("the floaters reached {} of {} steps in time", state.stats().floater_steps,
-                       steps_target_));
+           state.stats().floater_steps >= steps_target_
+               ? std::string("the singular set was not found in time")
+               : fmt::format("the floaters reached {} of {} steps in time",
+                             state.stats().floater_steps, steps_target_));
       return false;
   }
   return false;

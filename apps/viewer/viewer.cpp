@@ -244,6 +244,10 @@ class Input {
       d.draw_points = !d.draw_points;
       state.set_display(d);
     }
+    if (pressed(GLFW_KEY_S)) {
+      d.show_singular = !d.show_singular;
+      state.set_display(d);
+    }
     if (pressed(GLFW_KEY_H)) show_ui = !show_ui;
     if (pressed(GLFW_KEY_F12)) panel.wants_screenshot = true;
     if (pressed(GLFW_KEY_Q) && io.KeyCtrl) glfwSetWindowShouldClose(window, GLFW_TRUE);

@@ -71,6 +71,7 @@ json ViewerStats::to_json() const {
       j["raytrace"] = {{"divisor", preview_divisor}, {"seconds", preview_seconds}};
       break;
   }
+  if (show_singular) j["singular"] = detail::singular_json(singular.get(), singular_is_current);
   return j;
 }
 
@@ -90,6 +91,7 @@ bool ViewerState::update(double now_s) {
     set_status(*error, true);
     is_new = true;
   }
+  is_new |= update_singular();
   restart_if_needed();
   return is_new;
 }
@@ -167,6 +169,9 @@ void ViewerState::start_preview_job() {
   const Surface surface = surface_;
   const int width = viewport_w_, height = viewport_h_;
   const std::uint64_t generation = generation_;
+  // The overlay is traced with the surface, so the surface hides it exactly.
+  std::shared_ptr<const SingularFrame> singular = this->singular();
+  if (singular) options.singular_overlay = SingularOverlay{.set = singular->set};
   Mailbox<PreviewFrame>* box = &preview_box_;
   worker_.submit([=](std::stop_token stop) mutable {
     // Coarse first so something appears at once, then refine while nothing changes.
@@ -176,6 +181,7 @@ void ViewerState::start_preview_job() {
       auto frame = std::make_shared<PreviewFrame>();
       frame->divisor = divisor;
       frame->generation = generation;
+      frame->singular = singular;
       frame->image = render_surface(surface, options, &frame->stats, stop);
       if (stop.stop_requested()) return;
       box->post(std::move(frame));
@@ -335,10 +341,11 @@ void ViewerState::start_mesh_job() {
 }
 
 bool ViewerState::is_settled() const {
-  if (needs_restart_) return false;
+  if (needs_restart_ || !singular_is_current()) return false;
   switch (mode_) {
     case Mode::kRaytrace:
-      return preview_ && preview_->generation == generation_ && preview_->divisor == 1;
+      return preview_ && preview_->generation == generation_ && preview_->divisor == 1 &&
+             preview_->singular == singular();
     case Mode::kMesh:
       return mesh_ && mesh_->generation == generation_ && mesh_->is_final;
     case Mode::kFloaters: {
@@ -358,6 +365,9 @@ ViewerStats ViewerState::stats() const {
   s.fps = fps_;
   s.draw_seconds = draw_seconds_;
   s.is_busy = !is_settled();
+  s.show_singular = display_.show_singular;
+  s.singular = singular();
+  s.singular_is_current = singular_is_current();
   if (floaters_) {
     s.floater_count = floaters_->positions.size();
     s.floater_steps = floaters_->last.step;

@@ -265,6 +265,8 @@ void ViewerState::apply_settings(const json& settings, const std::string& origin
     }
     if (v.contains("wireframe"))
       display_.wireframe = boolean(v["wireframe"], origin, "/viewer/wireframe");
+    if (v.contains("show_singular"))
+      display_.show_singular = boolean(v["show_singular"], origin, "/viewer/show_singular");
     if (v.contains("lights_follow_camera"))
       set_lights_follow_camera(
           boolean(v["lights_follow_camera"], origin, "/viewer/lights_follow_camera"));
@@ -308,6 +310,7 @@ json ViewerState::settings() const {
   v["draw"] = display_.draw_points ? "points" : "disks";
   v["disk_scale"] = display_.disk_scale;
   v["wireframe"] = display_.wireframe;
+  v["show_singular"] = display_.show_singular;
   v["lights_follow_camera"] = lights_follow_camera();
   v["front"] = color_json(look_.front.diffuse);
   v["back"] = color_json(look_.back.diffuse);

@@ -96,6 +96,7 @@ void ViewerState::open_scene(Scene scene, const std::string& origin) {
   extra_settings_ = scene.settings.is_object() ? scene.settings : json::object();
   surface_ = std::move(scene.surface);
   match_ranges_to_field(surface_);
+  clip_is_substitute_ = false;
   ensure_bounded_clip();
   surface_.camera = with_explicit_distance(surface_.camera, surface_.scene_radius());
   home_camera_ = surface_.camera;
@@ -114,6 +115,7 @@ void ViewerState::ensure_bounded_clip() {
   if (surface_.clip.is_bounded()) return;
   // Every mode needs a finite volume; a unit-scale ball suits most equations people type.
   surface_.clip = Clip::sphere(2.0);
+  clip_is_substitute_ = true;
   set_status("the surface had no bounded clip: using sphere:2 (change it under Clip)");
 }
 
@@ -250,6 +252,7 @@ bool ViewerState::set_clip(const Clip& clip) {
     s.clip = clip;
     s.bounds();  // throws for an empty box
     surface_ = std::move(s);
+    clip_is_substitute_ = false;
     surface_changed(true);
   });
 }
@@ -265,6 +268,13 @@ bool ViewerState::set_clip_specs(const std::vector<std::string>& specs) {
 
 void ViewerState::surface_changed(bool structure) {
   needs_restart_ = true;
+  ++surface_version_;
+  if (structure) {
+    // The set of another equation or clip must not be drawn on this one.
+    singular_floor_ = surface_version_;
+    singular_ = nullptr;
+    singular_cancel_now_ = true;
+  }
   std::lock_guard lock(floater_control_->mutex);
   floater_control_->surface = surface_;
   if (structure)

@@ -8,6 +8,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <stop_token>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -25,10 +26,30 @@
 #include "zeroset/render/render.h"
 #include "zeroset/render/view.h"
 #include "zeroset/surface/scene.h"
+#include "zeroset/surface/singular_set.h"
 
 namespace zeroset::viewer {
 
 struct CommandLine;
+
+/// The singular set of the surface as one job found it, for the overlay and the panel.
+struct SingularFrame {
+  SingularSet set;
+  std::string summary;  ///< singular_set_summary(set); empty when the search could not run
+  /// What the user should know beyond the summary: a singular sheet (F = G²) that is not
+  /// drawn, a clip the search cannot use, a failure. Empty when there is nothing to say.
+  std::string note;
+  double seconds = 0;
+  std::uint64_t surface_version = 0;  ///< the surface edit (equation, parameter, clip) it reflects
+};
+
+/// The singular set of `surface` for the viewer: find_singular_set, timed and summarised. Never
+/// throws: a clip that is not bounded (the search needs one) or a failure of the search becomes
+/// the note. `substitute_clip` says the clip is the viewer's stand-in for a surface that came
+/// without a bounded one (the note says the set was searched inside it only). When `stop` is
+/// requested the result is incomplete.
+SingularFrame find_singular_frame(const Surface& surface, bool substitute_clip,
+                                  std::stop_token stop = {});
 
 /// One ray-traced preview: the picture at 1/divisor of the viewport's resolution.
 struct PreviewFrame {
@@ -36,6 +57,7 @@ struct PreviewFrame {
   int divisor = 1;            ///< 8, 4, 2, then 1 (full resolution)
   RenderStats stats;
   std::uint64_t generation = 0;  ///< the job it came from
+  std::shared_ptr<const SingularFrame> singular;  ///< the singular set drawn into it, if any
 };
 
 /// A copy of the floaters after one step, for drawing and saving.
@@ -77,6 +99,7 @@ struct DisplaySettings {
   double disk_scale = 0.75;  ///< disk radius = disk_scale·σ_i (as `zeroset sample --png`)
   double point_size_px = 3;  ///< size of a point in pixels
   bool wireframe = false;    ///< mesh: overlay the edges
+  bool show_singular = false;  ///< overlay the singular set (every mode)
 };
 
 /// Checks disk_scale in (0, 10] and point_size_px in [1, 64]; throws SettingError naming the
@@ -133,6 +156,10 @@ struct ViewerStats {
   int preview_divisor = 0;  ///< 0: nothing yet
   double preview_seconds = 0;
   bool is_busy = false;     ///< the mode's job has not finished yet
+  // the singular set (while the overlay is on)
+  bool show_singular = false;
+  std::shared_ptr<const SingularFrame> singular;  ///< the latest found, nullptr before the first
+  bool singular_is_current = false;               ///< it reflects the surface as it is now
 
   nlohmann::json to_json() const;
 };
@@ -269,6 +296,12 @@ class ViewerState {
   std::shared_ptr<const PreviewFrame> preview() const { return preview_; }
   std::shared_ptr<const FloaterFrame> floaters() const { return floaters_; }
   std::shared_ptr<const MeshFrame> mesh() const { return mesh_; }
+  /// The singular set to overlay: nullptr while the overlay is off or before the first search
+  /// finished. While parameters move it may lag the surface by one search; after a new
+  /// equation or clip it is nullptr until the new search finishes.
+  std::shared_ptr<const SingularFrame> singular() const;
+  /// The overlay is off, or singular() reflects the surface as it is now.
+  bool singular_is_current() const;
   ViewerStats stats() const;
 
  private:
@@ -288,6 +321,10 @@ class ViewerState {
   void start_mesh_job();
   bool collect_results(double now_s);
   void restart_if_needed();
+  /// The singular set's job: collects its result and starts it again when the surface changed
+  /// (viewer_singular.cpp). Returns true when there is something new to draw.
+  bool update_singular();
+  void start_singular_job();
   int floater_threads() const;
 
   // what is shown
@@ -305,6 +342,8 @@ class ViewerState {
   int threads_ = 0;
   int viewport_w_ = 800;
   int viewport_h_ = 800;
+  bool clip_is_substitute_ = false;  // ensure_bounded_clip chose the clip, the surface had none
+  std::uint64_t surface_version_ = 0;  // counts surface edits (equation, parameter, clip)
 
   // status
   StatusLine status_;
@@ -335,7 +374,16 @@ class ViewerState {
   std::shared_ptr<const PreviewFrame> preview_;
   std::shared_ptr<const FloaterFrame> floaters_;
   std::shared_ptr<const MeshFrame> mesh_;
+  // The singular set runs on its own worker beside the mode's job (the floater job never
+  // ends). Parameter edits let a running search finish (its result lags by one edit) and
+  // start the next with the newest values; a new equation or clip cancels it at once.
+  Mailbox<SingularFrame> singular_box_;
+  std::shared_ptr<const SingularFrame> singular_;
+  std::uint64_t singular_started_ = 0;  // surface version of the last search started, 0: none
+  std::uint64_t singular_floor_ = 0;    // results of older versions belong to another surface
+  bool singular_cancel_now_ = false;
   JobWorker worker_;  // last: its thread stops before the mailboxes it writes go away
+  JobWorker singular_worker_;
 };
 
 }  // namespace zeroset::viewer

@@ -30,6 +30,11 @@ struct ViewerState::FloaterControl {
 
 namespace detail {
 
+/// The singular set for `stats`: singular_set_json (ends of curves only) with the summary, the
+/// note, the search's time and whether it reflects the surface as it is now; {} entries empty
+/// before the first search.
+nlohmann::json singular_json(const SingularFrame* frame, bool is_current);
+
 /// Thrown by a command whose action failed (and already set the error status); guard() lets
 /// it pass without a second message.
 struct ActionFailed {};

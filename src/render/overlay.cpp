@@ -37,7 +37,6 @@ const Color& SingularOverlay::color(SingularPointKind kind) const {
   return node;
 }
 
-namespace detail {
 namespace {
 
 /// A radius as given, or `fraction` of the scene radius for 0.
@@ -49,22 +48,32 @@ double resolve_radius(double given, double fraction, double scene_radius, const 
 
 }  // namespace
 
+double SingularOverlay::tube_radius_for(double scene_radius) const {
+  return resolve_radius(tube_radius, 0.006, scene_radius, "singular overlay tube radius");
+}
+
+double SingularOverlay::point_radius_for(double scene_radius) const {
+  return resolve_radius(point_radius, 0.015, scene_radius, "singular overlay point radius");
+}
+
+namespace detail {
+
 OverlayScene::OverlayScene(const SingularOverlay& overlay, double scene_radius, const View& view,
                            const RenderOptions& options)
     : eye_(view.eye), bins_(view.width, view.height, 0) {
-  const double tube =
-      resolve_radius(overlay.tube_radius, 0.006, scene_radius, "singular overlay tube radius");
-  const double point =
-      resolve_radius(overlay.point_radius, 0.015, scene_radius, "singular overlay point radius");
+  const double tube = overlay.tube_radius_for(scene_radius);
+  const double point = overlay.point_radius_for(scene_radius);
 
-  // One shader per colour, lit like the surface. More ambient light than the surface gets
-  // keeps a thin tube's colour recognisable on its shadowed side.
+  // One shader per colour, lit like the surface with the overlay's Phong terms.
   std::vector<Color> colors;
   auto shader_of = [&](const Color& c) {
     for (size_t i = 0; i < colors.size(); ++i)
       if (colors[i] == c) return static_cast<int>(i);
     RenderOptions lit = options;
-    lit.front = lit.back = Material{.diffuse = c, .ambient = 0.3, .specular = 0.3, .shininess = 30};
+    lit.front = lit.back = Material{.diffuse = c,
+                                    .ambient = overlay.ambient,
+                                    .specular = overlay.specular,
+                                    .shininess = overlay.shininess};
     colors.push_back(c);
     shaders_.emplace_back(lit, view);
     return static_cast<int>(colors.size() - 1);

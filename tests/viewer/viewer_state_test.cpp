@@ -9,6 +9,7 @@
 #include <random>
 #include <thread>
 
+#include "run_frames.h"
 #include "viewer_state.h"
 #include "zeroset/error.h"
 #include "zeroset/expr/field.h"
@@ -20,22 +21,7 @@ namespace {
 
 Scene kummer_scene() { return Scene{make_surface(*find_catalog_entry("kummer")), {}}; }
 
-double seconds_now() {
-  using clock = std::chrono::steady_clock;
-  return std::chrono::duration<double>(clock::now().time_since_epoch()).count();
-}
-
-// Runs frames (without drawing) until `done` or the timeout; returns whether `done` held.
-template <class Done>
-bool run_until(ViewerState& state, Done done, double timeout_s = 20) {
-  const double end = seconds_now() + timeout_s;
-  while (seconds_now() < end) {
-    state.update(seconds_now());
-    if (done()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  return false;
-}
+using test::run_until;
 
 std::string temp_path(const std::string& name) {
   const auto dir = std::filesystem::temp_directory_path() / "zeroset_viewer_state_test";

@@ -5,11 +5,17 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 
 #include "render/image_masks.h"
 #include "support/run_command.h"
 #include "zeroset/io/image.h"
+#include "zeroset/render/overlay.h"
+#include "zeroset/render/view.h"
+#include "zeroset/surface/catalog.h"
+#include "zeroset/surface/singular_set.h"
 
 namespace zeroset {
 namespace {
@@ -143,6 +149,134 @@ TEST(ViewerWindow, MalformedEquationShowsTheErrorAndTheViewerKeepsRunning) {
   EXPECT_GT(census(ib, 360).surface, 0.15) << "the last good surface stays on screen";
   EXPECT_GT(census(ig, 360).surface, 0.05) << "the cone is drawn";
   EXPECT_GT(changed_fraction(ib, ig, 360), 0.1) << "the cone replaced Kummer's surface";
+}
+
+// The `stats` line a script printed (the last one).
+nlohmann::json stats_line(const std::string& output) {
+  std::istringstream lines(output);
+  std::string line, last;
+  while (std::getline(lines, line))
+    if (line.starts_with("{\"")) last = line;
+  return last.empty() ? nlohmann::json() : nlohmann::json::parse(last);
+}
+
+// A pixel of the singular overlay's colours as drawn (gamma encoded, lit): the crossing curves'
+// green, the triple point's yellow. The surface's orange and blue and the background are
+// neither.
+bool is_green(const std::uint8_t* p) { return p[1] > p[0] + 60 && p[1] > p[2] + 60; }
+bool is_yellow(const std::uint8_t* p) {
+  return p[0] > 120 && p[1] > 0.85 * p[0] && p[2] < 0.5 * p[1];
+}
+
+long count_pixels(const Image& img, bool (*is)(const std::uint8_t*), double cx = 0, double cy = 0,
+                  double radius = -1) {
+  long n = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x)
+      if ((radius < 0 || std::hypot(x + 0.5 - cx, y + 0.5 - cy) <= radius) && is(img.pixel(x, y)))
+        ++n;
+  return n;
+}
+
+// Roman's surface cut open (docs/singular.md) in `mode` with the overlay off, then on: the
+// panel's figures are the library's, the triple point shows where it projects, and the
+// crossing curves show in their colour.
+void check_singular_overlay(const std::string& mode, const std::string& settle) {
+  if (!has_xvfb()) GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb)";
+  const std::string dir = temp_dir();
+  const std::string off = dir + "/singular-" + mode + "-off.png";
+  const std::string on = dir + "/singular-" + mode + "-on.png";
+  const int size = 500;
+  const std::string script = write_script(
+      "singular-" + mode + ".txt",
+      "clip sphere:0.6 plane:1,1,1,0.12\ncamera 35 25 2.4\nmode " + mode + "\n" + settle +
+          "screenshot " + off + "\nsingular on\n" + settle + "stats\nscreenshot " + on + "\n");
+  const auto r = view("roman --no-ui --size " + std::to_string(size) + "x" +
+                      std::to_string(size) + " --script " + script);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+
+  Surface roman = make_surface(*find_catalog_entry("roman"));
+  roman.clip = Clip();
+  for (const char* spec : {"sphere:0.6", "plane:1,1,1,0.12"}) roman.clip.add(spec);
+  const SingularSet expected = find_singular_set(roman);
+  const nlohmann::json stats = stats_line(r.output);
+  ASSERT_TRUE(stats.contains("singular")) << r.output;
+  EXPECT_EQ(stats["singular"]["summary"], singular_set_summary(expected));
+  EXPECT_EQ(stats["singular"]["curves"].size(), expected.curves.size());
+  EXPECT_EQ(stats["singular"]["points"].size(), expected.points.size());
+
+  const std::vector<Vec3> triples = expected.points_of(SingularPointKind::kTriple);
+  ASSERT_EQ(triples.size(), 1u);
+  Camera camera = roman.camera;
+  camera.azimuth_deg = 35;
+  camera.elevation_deg = 25;
+  camera.distance = 2.4;
+  const View v = View::from_camera(camera, roman.scene_radius(), size, size);
+  double tx = 0, ty = 0, depth = 0;
+  ASSERT_TRUE(v.project(triples[0], tx, ty, depth));
+  // The sphere's radius on screen, and a pixel or two more.
+  const double reach =
+      SingularOverlay().point_radius_for(roman.scene_radius()) / (depth * v.pixel_angle()) + 2;
+  const Image image_off = read_image(off), image_on = read_image(on);
+  EXPECT_EQ(count_pixels(image_off, is_yellow, tx, ty, reach), 0) << mode;
+  EXPECT_GE(count_pixels(image_on, is_yellow, tx, ty, reach), 3)
+      << mode << ": the triple point at (" << tx << ", " << ty << ")";
+  EXPECT_LT(count_pixels(image_off, is_green), 5) << mode;
+  EXPECT_GT(count_pixels(image_on, is_green), 100) << mode << ": the crossing curves";
+  const double changed = changed_fraction(image_off, image_on);
+  EXPECT_GT(changed, 0.002) << mode;
+  // Floaters go on moving between the two pictures; the other modes do not.
+  if (mode != "floaters") {
+    EXPECT_LT(changed, 0.1) << mode << ": only the overlay changed";
+  }
+}
+
+TEST(ViewerWindow, SingularSetOverRayTracedRoman) { check_singular_overlay("raytrace", "wait\n"); }
+
+TEST(ViewerWindow, SingularSetOverTheMeshOfRoman) {
+  check_singular_overlay("mesh", "mesh cells=48 max_steps=20\nwait\n");
+}
+
+TEST(ViewerWindow, SingularSetOverTheFloatersOnRoman) {
+  check_singular_overlay("floaters", "floaters max_count=3000 seed=2\nsteps 150\n");
+}
+
+TEST(ViewerWindow, SingularSetNotesForASquareAndAnUnboundedSurface) {
+  if (!has_xvfb()) GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb)";
+  // The note is drawn in the panel in its own colour (ImGui colours are not gamma encoded).
+  auto note_pixels = [](const Image& img) {
+    long n = 0;
+    for (int y = 0; y < img.height; ++y)
+      for (int x = 0; x < 360; ++x) {
+        const std::uint8_t* p = img.pixel(x, y);
+        n += std::abs(p[0] - 242) < 20 && std::abs(p[1] - 191) < 20 && p[2] < 120;
+      }
+    return n;
+  };
+  const std::string dir = temp_dir();
+  struct Case {
+    std::string surface, words, shot;
+  };
+  const Case cases[] = {
+      {"'(x^2 + y^2 + z^2 - 1)^2' --clip sphere:2", "F = G^2", dir + "/singular-sheet.png"},
+      {"'x*y'", "no bounded clip of its own", dir + "/singular-unbounded.png"},
+      {"roman", "", dir + "/singular-no-note.png"}};
+  for (const Case& c : cases) {
+    const std::string script = write_script(
+        "singular-note.txt", "singular on\nwait\nstats\nscreenshot " + c.shot + "\n");
+    const auto r = view(c.surface + " --size 800x500 --script " + script);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const nlohmann::json stats = stats_line(r.output);
+    ASSERT_TRUE(stats.contains("singular")) << r.output;
+    const std::string note = stats["singular"]["note"];
+    if (c.words.empty()) {
+      EXPECT_TRUE(note.empty()) << note;
+      EXPECT_LT(note_pixels(read_image(c.shot)), 10) << c.surface;
+    } else {
+      EXPECT_NE(note.find(c.words), std::string::npos) << note;
+      EXPECT_GT(note_pixels(read_image(c.shot)), 100) << c.surface << ": the note is shown";
+    }
+  }
 }
 
 TEST(ViewerWindow, MalformedScriptIsBadInputBeforeAWindowOpens) {

@@ -28,9 +28,21 @@ struct SingularOverlay {
   Color clip_end = Color(0.35, 0.35, 0.35);
   Color degenerate_point = Color(0.0, 0.55, 0.85);
 
+  /// The Phong terms the parts are lit with (their diffuse colour is the kind's). More ambient
+  /// light than the surface gets keeps a thin tube's colour recognisable on its shadowed side.
+  double ambient = 0.3;
+  double specular = 0.3;
+  double shininess = 30;
+
   /// The colour of a curve, or of a point, of this kind.
   const Color& color(CurveKind kind) const;
   const Color& color(SingularPointKind kind) const;
+  /// The tubes' radius: tube_radius, or 0.006 × `scene_radius` when that is 0. Throws
+  /// InvalidArgument for a negative or non-finite radius.
+  double tube_radius_for(double scene_radius) const;
+  /// The spheres' radius: point_radius, or 0.015 × `scene_radius` when that is 0. Throws
+  /// InvalidArgument for a negative or non-finite radius.
+  double point_radius_for(double scene_radius) const;
 };
 
 }  // namespace zeroset
