@@ -4,6 +4,7 @@
 // Peers run beside it in bench/mesh_peers.py.
 #include <benchmark/benchmark.h>
 
+#include "zeroset/mesh/crossings.h"
 #include "zeroset/mesh/improve.h"
 #include "zeroset/mesh/polygonize.h"
 #include "zeroset/mesh/quality.h"
@@ -11,9 +12,9 @@
 
 namespace {
 
-zeroset::Surface kummer() {
+zeroset::Surface kummer(double mu = 1.5) {
   zeroset::Surface s = zeroset::make_surface(*zeroset::find_catalog_entry("kummer"));
-  s.field.set_parameter("mu", 1.5);
+  s.field.set_parameter("mu", mu);
   s.clip = zeroset::Clip::sphere(3);
   return s;
 }
@@ -81,6 +82,38 @@ void BM_Improve(benchmark::State& state) {
   state.counters["max_residual"] = q.max_residual;
 }
 BENCHMARK(BM_Improve)->Arg(128)->Unit(benchmark::kMillisecond)->Iterations(1)->UseRealTime();
+
+// The whole mesh command's work (marching cubes, crossings, improver to rest or its limit) on
+// Kummer's surface with 16 nodes (mu = 1.5) and as four planes crossing in six lines and four
+// triple points (mu = 3): what a surface with singular curves costs next to one with nodes.
+// bench/crossings_report.py runs both side by side. arg: 10 × mu.
+void BM_MeshPipeline(benchmark::State& state) {
+  const zeroset::Surface s = kummer(static_cast<double>(state.range(0)) / 10);
+  zeroset::PolygonizeOptions o;
+  o.cells = 128;
+  zeroset::ImproveStats st;
+  zeroset::CrossingStats cs;
+  size_t vertices = 0;
+  for (auto _ : state) {
+    zeroset::PolygonizeStats ps;
+    zeroset::Mesh m = zeroset::polygonize(s, o, &ps);
+    cs = zeroset::mesh_crossings(m, s, ps.cell_size);
+    st = zeroset::improve_mesh(m, s);
+    vertices = m.vertex_count();
+  }
+  state.counters["steps"] = st.steps;
+  state.counters["converged"] = st.converged;
+  state.counters["vertices"] = static_cast<double>(vertices);
+  state.counters["crossing_curves"] = cs.crossing_curves;
+  state.counters["crossings_ms"] = 1e3 * cs.seconds;
+}
+BENCHMARK(BM_MeshPipeline)
+    ->ArgName("mu10")
+    ->Arg(15)
+    ->Arg(30)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->UseRealTime();
 
 }  // namespace
 

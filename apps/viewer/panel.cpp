@@ -216,6 +216,12 @@ void mesh_settings(ViewerState& state) {
   ImGui::Text("%zu vertices, %zu triangles", st.mesh_vertices, st.mesh_triangles);
   if (frame) {
     ImGui::Text("marching cubes %.0f ms", 1000 * frame->polygonize.seconds_total);
+    const CrossingStats& c = frame->crossings;
+    if (c.crossing_curves > 0 && c.failure.empty())
+      ImGui::Text("%d crossing curve%s joined exactly", c.crossing_curves,
+                  c.crossing_curves == 1 ? "" : "s");
+    if (!c.failure.empty())
+      ImGui::TextWrapped("Crossings left rounded: %s", c.failure.c_str());
     if (frame->improver_steps > 0) {
       ImGui::Text("improver step %d%s", frame->improver_steps,
                   frame->is_final ? (frame->improve.converged ? ", converged" : ", done") : "");

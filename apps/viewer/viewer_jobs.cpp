@@ -310,9 +310,14 @@ void ViewerState::start_mesh_job() {
     PolygonizeStats polygonize_stats;
     Mesh mesh = polygonize(surface, options, &polygonize_stats, stop);
     if (stop.stop_requested()) return;
+    const CrossingStats crossings =
+        mesh.empty() ? CrossingStats{}
+                     : mesh_crossings(mesh, surface, polygonize_stats.cell_size, {}, nullptr, stop);
+    if (stop.stop_requested()) return;
     auto frame = std::make_shared<MeshFrame>();
     frame->mesh = mesh;
     frame->polygonize = polygonize_stats;
+    frame->crossings = crossings;
     frame->is_final = !is_improving;
     frame->generation = generation;
     box->post(std::move(frame));
@@ -329,6 +334,7 @@ void ViewerState::start_mesh_job() {
         next->mesh = improver.mesh();
         compute_field_normals(next->mesh, surface, threads);
         next->polygonize = polygonize_stats;
+        next->crossings = crossings;
         next->improve = stats;
         next->improver_steps = step;
         next->is_final = is_done;

@@ -22,6 +22,7 @@
 #include "zeroset/mesh/improve.h"
 #include "zeroset/mesh/settings.h"
 #include "zeroset/mesh/mesh.h"
+#include "zeroset/mesh/crossings.h"
 #include "zeroset/mesh/polygonize.h"
 #include "zeroset/render/render.h"
 #include "zeroset/render/view.h"
@@ -77,6 +78,7 @@ struct FloaterFrame {
 struct MeshFrame {
   Mesh mesh;                    ///< with unit normals (∇F, face normals where ∇F vanishes)
   PolygonizeStats polygonize;
+  CrossingStats crossings;      ///< the sheets joined along singular curves (docs/meshing.md)
   ImproveStats improve;         ///< after the last step (default before the first)
   int improver_steps = 0;       ///< steps applied to `mesh` so far
   bool is_final = false;        ///< no more steps will follow for this generation

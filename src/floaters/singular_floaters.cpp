@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "floater_state_detail.h"
+#include "zeroset/detail/segment.h"
 
 namespace zeroset::detail {
 
@@ -47,8 +48,7 @@ std::pair<double, double> project_on(const RailCurve& c, const Vec3& p) {
   double best = std::numeric_limits<double>::infinity(), at = 0;
   for (std::size_t k = 0; k + 1 < c.points.size(); ++k) {
     const Vec3 d = c.points[k + 1] - c.points[k];
-    const double l2 = d.squaredNorm();
-    const double t = l2 > 0 ? std::clamp((p - c.points[k]).dot(d) / l2, 0.0, 1.0) : 0.0;
+    const double t = detail::segment_parameter(p, c.points[k], c.points[k + 1]);
     const double dist = (p - (c.points[k] + t * d)).norm();
     if (dist < best) best = dist, at = c.arc[k] + t * (c.arc[k + 1] - c.arc[k]);
   }

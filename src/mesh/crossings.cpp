@@ -10,9 +10,9 @@
 #include <unordered_map>
 #include <unordered_set>
 
-#include "zeroset/detail/segment_grid.h"
 #include "zeroset/mesh/mesh_ops.h"
 #include "zeroset/surface/analysis.h"
+#include "zeroset/surface/singular_index.h"
 
 namespace zeroset {
 namespace {
@@ -44,7 +44,6 @@ struct Network {
   std::vector<std::uint8_t> free_end;  // the end of one crossing curve, inside the clip
   std::vector<std::uint8_t> clip_end;  // the end of one crossing curve, on the clip
   std::vector<Curve> curves;
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> segments;  // (curve, index) per grid id
 
   // Points closer than `merge` are one vertex (curves share their triple and pinch points).
   std::uint32_t vertex_at(const Vec3& p, double merge) {
@@ -112,10 +111,12 @@ struct Anchor {
   bool ok() const { return special != kNone || curve != kNone; }
 };
 
-Anchor anchor_of(const Network& net, const detail::SegmentGrid& grid, const Vec3& p, double reach) {
-  const detail::SegmentGrid::Hit hit = grid.nearest(p, 3);
-  if (!hit.found()) return {};
-  const auto [c, i] = net.segments[hit.segment];
+Anchor anchor_of(const Network& net, const SingularSetIndex& index,
+                 const std::vector<std::uint32_t>& curve_of, const Vec3& p, double reach) {
+  const SingularSetIndex::Nearest hit = index.nearest(p);
+  if (hit.curve < 0) return {};
+  const std::uint32_t c = curve_of[static_cast<size_t>(hit.curve)];
+  const std::uint32_t i = hit.segment;
   const Network::Curve& curve = net.curves[c];
   const double arc = curve.arc[i] + hit.t * (curve.arc[i + 1] - curve.arc[i]);
   // The nearest special vertex along the curve within `reach` wins: the rim turns around it.
@@ -406,19 +407,22 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
 
   if (stats.crossing_curves > 0) {
     const double tube = options.tube_cells * cell_size;
-    detail::SegmentGrid grid(tube);
+    // The crossing curves alone, for nearest-segment queries; curve_of maps them back.
+    SingularSet crossing;
+    std::vector<std::uint32_t> curve_of;
     for (std::uint32_t c = 0; c < net.curves.size(); ++c) {
-      const auto& curve = net.curves[c];
-      if (curve.kind != CurveKind::kCrossing) continue;
-      for (std::uint32_t i = 0; i + 1 < curve.verts.size(); ++i) {
-        grid.add(net.pos[curve.verts[i]], net.pos[curve.verts[i + 1]]);
-        net.segments.emplace_back(c, i);
-      }
+      if (net.curves[c].kind != CurveKind::kCrossing) continue;
+      SingularCurve sc;
+      for (std::uint32_t v : net.curves[c].verts) sc.points.push_back(net.pos[v]);
+      crossing.curves.push_back(std::move(sc));
+      curve_of.push_back(c);
     }
+    // A rim vertex is within a tube's radius plus an edge of the curve, well inside the reach.
+    const SingularSetIndex index(crossing, 3 * tube);
     // The tube: triangles with a corner closer than `tube` to a crossing curve.
     const size_t nv = mesh.positions.size();
     std::vector<std::uint8_t> near(nv, 0);
-    for (size_t v = 0; v < nv; ++v) near[v] = grid.nearest(mesh.positions[v], 1).distance < tube;
+    for (size_t v = 0; v < nv; ++v) near[v] = index.distance(mesh.positions[v]) < tube;
     std::vector<std::array<std::uint32_t, 3>> kept;
     std::unordered_set<std::uint64_t> removed_edges;
     for (const auto& t : mesh.triangles) {
@@ -444,7 +448,7 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
     for (const Chain& ch : rim_chains(rim)) {
       std::vector<Anchor> anchors;
       for (std::uint32_t v : ch.verts) {
-        anchors.push_back(anchor_of(net, grid, mesh.positions[v], reach));
+        anchors.push_back(anchor_of(net, index, curve_of, mesh.positions[v], reach));
         if (!anchors.back().ok()) {
           stats.failure = fmt::format("a vertex of the cut at ({:.4g}, {:.4g}, {:.4g}) is far from every crossing curve",
                                       mesh.positions[v].x(), mesh.positions[v].y(), mesh.positions[v].z());

@@ -4,7 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <vector>
 
-#include "zeroset/detail/segment_grid.h"
+#include "zeroset/detail/segment.h"
 #include "zeroset/expr/field.h"
 #include "zeroset/surface/clip.h"
 #include "zeroset/surface/singular_set.h"

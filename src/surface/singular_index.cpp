@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "zeroset/detail/segment.h"
 #include "zeroset/error.h"
 
 namespace zeroset {
@@ -14,13 +15,6 @@ namespace {
 // that can be nearest in it.
 constexpr double kMaxCellsPerSide = 96;
 constexpr double kCellsPerReach = 4;
-
-// Nearest point of [a, b] to p: its parameter.
-double segment_parameter(const Vec3& p, const Vec3& a, const Vec3& b) {
-  const Vec3 d = b - a;
-  const double l2 = d.squaredNorm();
-  return l2 > 0 ? std::clamp((p - a).dot(d) / l2, 0.0, 1.0) : 0.0;
-}
 
 }  // namespace
 
@@ -76,7 +70,7 @@ SingularSetIndex::SingularSetIndex(const SingularSet& set, double reach) : reach
       for (int j = r[1]; j <= r[4]; ++j)
         for (int i = r[0]; i <= r[3]; ++i) {
           const Vec3 c = centre(i, j, k);
-          const double d = (c - (f.a + segment_parameter(c, f.a, f.b) * (f.b - f.a))).norm();
+          const double d = (c - (f.a + detail::segment_parameter(c, f.a, f.b) * (f.b - f.a))).norm();
           if (d <= near)
             visit(static_cast<std::size_t>(i) +
                       static_cast<std::size_t>(cells_[0]) *
@@ -113,7 +107,7 @@ SingularSetIndex::Nearest SingularSetIndex::nearest(const Vec3& p) const {
   }
   for (std::uint32_t k = start_[c]; k < start_[c + 1]; ++k) {
     const Feature& f = features_[items_[k]];
-    const double t = segment_parameter(p, f.a, f.b);
+    const double t = detail::segment_parameter(p, f.a, f.b);
     const double d = (p - (f.a + t * (f.b - f.a))).norm();
     if (d < best.distance) best = {d, f.curve, f.point, f.segment, t};
   }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "zeroset/error.h"
+#include "floater_test_support.h"
 #include "zeroset/floaters/metrics.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/scene.h"
@@ -20,11 +21,7 @@
 namespace zeroset {
 namespace {
 
-Surface catalog_surface(const char* name, std::map<std::string, double> params = {}) {
-  SurfaceOverrides o;
-  o.params = std::move(params);
-  return resolve_surface(name, o);
-}
+using test::catalog_surface;
 
 Surface with_clip(const char* spec, const char* clip) {
   SurfaceOverrides o;

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "zeroset/floaters/floaters.h"
+#include "floater_test_support.h"
 #include "zeroset/floaters/metrics.h"
 #include "zeroset/surface/scene.h"
 #include "zeroset/surface/singular_set.h"
@@ -15,11 +16,7 @@
 namespace zeroset {
 namespace {
 
-Surface catalog_surface(const char* name, std::map<std::string, double> params = {}) {
-  SurfaceOverrides o;
-  o.params = std::move(params);
-  return resolve_surface(name, o);
-}
+using test::catalog_surface;
 
 struct Settled {
   std::size_t step = 0;  // 0: not settled within the limit
