@@ -397,7 +397,6 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
   for (const auto& c : net.curves) (c.kind == CurveKind::kCrossing ? stats.crossing_curves : stats.isolated_curves)++;
   if (net.curves.empty()) return finish();
 
-  const Mesh original = mesh;
   auto on_clip = [&](const Vec3& p) -> std::uint8_t {
     return !surface.clip.is_empty_spec() &&
            std::abs(surface.clip.value(p)) <= 1e-9 * surface.scene_radius();
@@ -479,7 +478,6 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
       mesh.triangles = std::move(kept);
       const size_t first_added = mesh.triangles.size();
       mesh.triangles.insert(mesh.triangles.end(), added.begin(), added.end());
-      stats.added_triangles = static_cast<long long>(added.size());
       // The curves' vertices join the mesh now (their indices are base + graph vertex).
       mesh.positions.insert(mesh.positions.end(), net.pos.begin(), net.pos.end());
       if (mesh.is_boundary.size() != base) mesh.is_boundary.assign(base, 0);
@@ -494,10 +492,7 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
       stats.added_triangles = static_cast<long long>(mesh.triangles.size() - first_added);
     } else {
       stats.removed_triangles = 0;
-      if (stats.isolated_curves == 0) {
-        mesh = original;
-        return finish();
-      }
+      if (stats.isolated_curves == 0) return finish();  // the mesh is untouched so far
     }
   }
 
