@@ -46,9 +46,10 @@ struct LookArgs {
                                "Anti-aliasing: N×N rays per pixel, 1 = none (default 2, or the "
                                "scene file's)");
     cmd->add_option("--camera", camera,
-                    "Orbit camera AZIMUTH,ELEVATION[,DISTANCE] in degrees (z up); distance 0 or "
-                    "omitted fits the clip volume")
-        ->type_name("AZ,EL[,D]");
+                    "Orbit camera AZIMUTH,ELEVATION[,DISTANCE[,ROLL]] in degrees (z up unless "
+                    "ROLL turns the camera about its view direction); distance 0 or omitted "
+                    "fits the clip volume")
+        ->type_name("AZ,EL[,D[,R]]");
     cmd->add_option("--target", target, "Point the camera orbits and looks at (default: the "
                                         "surface's, usually the origin)")
         ->type_name("X,Y,Z");

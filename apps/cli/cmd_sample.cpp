@@ -377,9 +377,9 @@ void register_sample_command(CLI::App& app) {
       ->type_name("FILE.png");
   add_show_singular_flag(cmd, a->show_singular, "the --png picture");
   cmd->add_option("--camera", a->camera,
-                  "Orbit camera AZIMUTH,ELEVATION[,DISTANCE] in degrees (z up) for --png; "
+                  "Orbit camera AZIMUTH,ELEVATION[,DISTANCE[,ROLL]] in degrees (z up) for --png; "
                   "without a distance the picture is framed on the floaters")
-      ->type_name("AZ,EL[,D]");
+      ->type_name("AZ,EL[,D[,R]]");
   cmd->add_option("--size", a->size, "Picture size")->capture_default_str()->type_name("WxH");
   cmd->add_option("--disk-scale", a->disk_scale, "Disk radius in the picture per floater radius")
       ->capture_default_str();

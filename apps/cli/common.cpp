@@ -162,14 +162,17 @@ std::vector<double> parse_numbers(const std::string& text, const std::string& fl
 Camera with_camera_flag(Camera camera, const std::string& spec) {
   if (spec.empty()) return camera;
   const std::vector<double> v = parse_numbers(spec, "--camera");
-  if (v.size() < 2 || v.size() > 3)
-    throw InvalidArgument("--camera", spec, "expected AZIMUTH,ELEVATION[,DISTANCE]");
+  if (v.size() < 2 || v.size() > 4)
+    throw InvalidArgument("--camera", spec, "expected AZIMUTH,ELEVATION[,DISTANCE[,ROLL]]");
   camera.azimuth_deg = v[0];
   camera.elevation_deg = v[1];
-  if (v.size() == 3) camera.distance = v[2];
+  if (v.size() >= 3) camera.distance = v[2];
+  // The flag gives the whole orientation: a scene file's roll does not stay behind.
+  camera.roll_deg = v.size() == 4 ? v[3] : 0.0;
   validate_flags([&] { validate_camera(camera); }, {{"azimuth_deg", "--camera azimuth"},
                                                      {"elevation_deg", "--camera elevation"},
-                                                     {"distance", "--camera distance"}});
+                                                     {"distance", "--camera distance"},
+                                                     {"roll_deg", "--camera roll"}});
   return camera;
 }
 

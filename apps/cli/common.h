@@ -50,8 +50,8 @@ void validate_flags(const std::function<void()>& validate, FlagNames flags);
 /// Comma-separated finite numbers ("1,2.5,-3"); InvalidArgument naming `flag` otherwise.
 std::vector<double> parse_numbers(const std::string& text, const std::string& flag);
 
-/// `camera` with --camera AZIMUTH,ELEVATION[,DISTANCE] applied (nothing when `spec` is empty),
-/// checked by validate_camera with the flag's name in the message.
+/// `camera` with --camera AZIMUTH,ELEVATION[,DISTANCE[,ROLL]] applied (nothing when `spec` is
+/// empty; a missing ROLL is 0), checked by validate_camera with the flag's name in the message.
 Camera with_camera_flag(Camera camera, const std::string& spec);
 
 /// A progress bar on stderr; silent when stderr is not a terminal or --quiet was given.

@@ -27,15 +27,10 @@ View View::from_camera(const Camera& camera, double scene_radius, int width, int
                                         std::to_string(v.eye.y()) + "," +
                                         std::to_string(v.eye.z()),
                           "the eye must be finite and differ from the target");
-  v.forward = to_target.normalized();
-  // z is up; looking straight up or down, the image's up is the azimuth's direction instead.
-  Vec3 r = v.forward.cross(Vec3::UnitZ());
-  if (r.norm() < 1e-9) {
-    const double az = camera.azimuth_deg * std::numbers::pi / 180.0;
-    r = v.forward.cross(Vec3(-std::cos(az), -std::sin(az), 0));
-  }
-  v.right = r.normalized();
-  v.up = v.right.cross(v.forward).normalized();
+  const CameraFrame f = camera.frame(scene_radius);
+  v.forward = f.forward;
+  v.right = f.right;
+  v.up = f.up;
   return v;
 }
 

@@ -195,6 +195,7 @@ json scene_to_json(const Scene& scene) {
                  {"distance", c.distance},
                  {"fov_deg", c.fov_deg},
                  {"target", {c.target.x(), c.target.y(), c.target.z()}}};
+  if (c.roll_deg != 0) j["camera"]["roll_deg"] = c.roll_deg;  // older files have none
   return j;
 }
 
@@ -264,8 +265,8 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   if (j.contains("camera")) {
     const json& c = j["camera"];
     if (!c.is_object()) fail(origin, "/camera", "expected an object");
-    known_keys(c, {"azimuth_deg", "elevation_deg", "distance", "fov_deg", "target"}, origin,
-               "/camera");
+    known_keys(c, {"azimuth_deg", "elevation_deg", "distance", "fov_deg", "target", "roll_deg"},
+               origin, "/camera");
     auto num = [&](const char* key, double& out) {
       if (c.contains(key)) out = number(c[key], origin, std::string("/camera/") + key);
     };
@@ -273,6 +274,7 @@ Scene scene_from_json(const json& j, const std::string& origin) {
     num("elevation_deg", s.camera.elevation_deg);
     num("distance", s.camera.distance);
     num("fov_deg", s.camera.fov_deg);
+    num("roll_deg", s.camera.roll_deg);
     if (c.contains("target")) s.camera.target = vec3(c["target"], origin, "/camera/target");
     try {
       validate_camera(s.camera);

@@ -20,6 +20,7 @@ void validate_camera(const Camera& c) {
         "must be finite and ≥ 0 (0: fit the clip volume)");
   check(c.fov_deg >= kMinFovDeg && c.fov_deg <= kMaxFovDeg, "fov_deg", c.fov_deg,
         fmt::format("must lie in [{}, {}] degrees", kMinFovDeg, kMaxFovDeg));
+  check(std::isfinite(c.roll_deg), "roll_deg", c.roll_deg, "must be finite");
   for (int a = 0; a < 3; ++a)
     check(std::isfinite(c.target[a]), "target", c.target[a], "must be finite");
 }

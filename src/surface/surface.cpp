@@ -19,6 +19,27 @@ Vec3 Camera::eye(double scene_radius) const {
   return target + dist * dir;
 }
 
+CameraFrame Camera::frame(double scene_radius) const {
+  CameraFrame f;
+  f.eye = eye(scene_radius);
+  f.forward = (target - f.eye).normalized();
+  // z is up; looking straight up or down, the image's up is the azimuth's direction instead.
+  Vec3 r = f.forward.cross(Vec3::UnitZ());
+  if (r.norm() < 1e-9) {
+    const double az = azimuth_deg * M_PI / 180.0;
+    r = f.forward.cross(Vec3(-std::cos(az), -std::sin(az), 0));
+  }
+  f.right = r.normalized();
+  f.up = f.right.cross(f.forward).normalized();
+  if (roll_deg != 0) {  // exactly the unrolled frame when there is no roll
+    const double a = roll_deg * M_PI / 180.0, c = std::cos(a), s = std::sin(a);
+    const Vec3 right = c * f.right + s * f.up;
+    f.up = -s * f.right + c * f.up;
+    f.right = right;
+  }
+  return f;
+}
+
 std::vector<Vec3> Surface::singular_points() const {
   if (!singular_points_fn) return {};
   std::vector<Vec3> out;

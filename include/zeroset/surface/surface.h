@@ -20,17 +20,37 @@ struct ParamSpec {
   double max = 1;
 };
 
+/// Where a camera is and which way it looks: the eye, the unit direction towards the target,
+/// and the unit image directions right (x) and up (y). right, up, -forward is a right-handed
+/// orthonormal frame.
+struct CameraFrame {
+  Vec3 eye;
+  Vec3 forward;
+  Vec3 right;
+  Vec3 up;
+};
+
 /// An orbit camera: looks at `target` from `distance` along the direction given by azimuth
-/// (around +z, from +x) and elevation (above the xy plane). z is up.
+/// (around +z, from +x) and elevation (above the xy plane). z is up, unless `roll_deg` turns
+/// the camera about its view direction.
 struct Camera {
   double azimuth_deg = 30;
   double elevation_deg = 20;
   double distance = 0;  ///< 0: chosen from the clip's size so the whole volume is in view
   double fov_deg = 30;  ///< vertical field of view
   Vec3 target = Vec3::Zero();
+  /// Turns the camera counterclockwise about its view direction (as its user sees it), so the
+  /// picture turns clockwise; 0 keeps z up. With it every orientation can be given, such as a
+  /// SURFER file's rotation (docs/scenes.md).
+  double roll_deg = 0;
 
   /// The eye position; `scene_radius` is used when distance == 0.
   Vec3 eye(double scene_radius) const;
+  /// The eye and the view's directions (the one home of the orbit camera's orientation: the
+  /// renderers, the viewer and the exports all go through it). Looking straight up or down,
+  /// the unrolled image's up is the azimuth's direction. Meaningful only when the eye differs
+  /// from the target.
+  CameraFrame frame(double scene_radius) const;
 };
 
 /// Known singular points of a surface for given parameter values (may be empty).
