@@ -18,6 +18,7 @@
 #include "zeroset/render/pov_export.h"
 #include "zeroset/render/render.h"
 #include "zeroset/render/settings.h"
+#include "zeroset/surface/jsurf.h"
 #include "zeroset/surface/settings.h"
 
 namespace zeroset::cli {
@@ -258,11 +259,27 @@ void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArg
 }
 
 // ---------------------------------------------------------------------------------- export
-void run_export(const SurfaceArgs& args, const LookArgs& look, const std::string& output) {
-  require_extension(output, "pov", "--output");
+void run_export(const SurfaceArgs& args, const LookArgs& look, std::string format,
+                const std::string& output) {
+  if (format.empty()) format = file_extension(output) == "jsurf" ? "jsurf" : "pov";
+  if (format != "pov" && format != "jsurf")
+    throw InvalidArgument("--format", format, "expected pov or jsurf");
+  require_extension(output, format, "--output");
   check_writable(output);
   const Scene scene = args.resolve();
-  const RenderOptions o = look.options(scene, args.spec);
+  RenderOptions o = look.options(scene, args.spec);
+  if (format == "jsurf") {
+    // The picture as zeroset draws it: the camera and look the flags chose, and the default
+    // light rig spelled out, since SURFER has no rig of its own.
+    Scene out = scene;
+    out.surface.camera = *o.camera;
+    if (o.lights.empty()) o.lights = default_lights();
+    out.settings = nlohmann::json::object();
+    out.settings["render"] = render_settings_to_json(o);
+    write_jsurf(out, output);
+    say(fmt::format("wrote {}; open it in SURFER, or with zeroset view {}", output, output));
+    return;
+  }
   write_pov_scene(scene.surface, o, output);
   say(fmt::format("wrote {}; render it with: povray +W{} +H{} +A0.1 +I{} +O{}.png", output,
                   o.width, o.height, output, fs::path(output).stem().string()));
@@ -339,19 +356,31 @@ void register_render_commands(CLI::App& app) {
   {
     auto* cmd = app.add_subcommand(
         "export",
-        "Export the view as a POV-Ray 3.7 scene: the surface as a `polynomial` with `sturm`,\n"
-        "`clipped_by` the clip volume, and the same camera, lights and colours (the back\n"
-        "side as interior_texture). Needs a polynomial surface.\n\n"
+        "Export the view as a POV-Ray 3.7 scene (--format pov, the default): the surface as a\n"
+        "`polynomial` with `sturm`, `clipped_by` the clip volume, and the same camera, lights\n"
+        "and colours (the back side as interior_texture). Needs a polynomial surface.\n\n"
+        "Or as a SURFER file (--format jsurf, or an output name ending in .jsurf): the\n"
+        "equation with its parameters renamed to a..d, scale_factor from the clip sphere,\n"
+        "rotation_matrix and camera_transform from the camera, colours and lights. Needs a\n"
+        "polynomial with at most 4 parameters, clipped to one sphere about the origin.\n\n"
         "Examples:\n"
         "  zeroset export kummer --param mu=2.44 -o kummer.pov\n"
-        "  povray +W800 +H800 +A0.1 +Ikummer.pov +Okummer.png");
+        "  povray +W800 +H800 +A0.1 +Ikummer.pov +Okummer.png\n"
+        "  zeroset export kummer --camera 40,25 --front '#3060c0' -o kummer.jsurf");
     auto args = std::make_shared<SurfaceArgs>();
     auto look = std::make_shared<LookArgs>();
     auto output = std::make_shared<std::string>();
+    auto format = std::make_shared<std::string>();
     args->add_to(cmd);
     look->add_to(cmd, false);
-    cmd->add_option("-o,--output", *output, "Output .pov file")->required()->type_name("FILE");
-    cmd->callback([=] { run_export(*args, *look, *output); });
+    cmd->add_option("-o,--output", *output, "Output .pov or .jsurf file")
+        ->required()
+        ->type_name("FILE");
+    cmd->add_option("--format", *format,
+                    "pov (POV-Ray) or jsurf (SURFER); default: from the output's extension, "
+                    "else pov")
+        ->type_name("FORMAT");
+    cmd->callback([=] { run_export(*args, *look, *format, *output); });
   }
 }
 

@@ -60,8 +60,8 @@ nlohmann::json singular_stats(const std::optional<SingularSet>& set) {
 
 void SurfaceArgs::add_to(CLI::App* cmd, bool optional) {
   auto* opt = cmd->add_option("SURFACE", spec,
-                              "Catalog name (zeroset list), equation in quotes, or scene file "
-                              "(.json)");
+                              "Catalog name (zeroset list), equation in quotes, scene file "
+                              "(.json) or SURFER file (.jsurf)");
   if (!optional) opt->required();
   cmd->add_option("-p,--param", params,
                   "Parameter value name=value (repeatable), e.g. --param mu=1.5")

@@ -14,6 +14,7 @@
 #include "zeroset/io/atomic_file.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/json_read.h"
+#include "zeroset/surface/jsurf.h"
 #include "zeroset/surface/settings.h"
 
 namespace zeroset {
@@ -151,7 +152,8 @@ Scene resolve_scene(const std::string& spec, const SurfaceOverrides& overrides) 
   Scene scene;
   if (const CatalogEntry* e = find_catalog_entry(spec)) {
     scene.surface = make_surface(*e);
-  } else if (file_extension(spec) == "json" && spec.find('\n') == std::string::npos) {
+  } else if ((file_extension(spec) == "json" || file_extension(spec) == "jsurf") &&
+             spec.find('\n') == std::string::npos) {
     scene = read_scene(spec);
   } else {
     if (is_bare_name(spec)) {
@@ -291,6 +293,7 @@ Scene scene_from_json(const json& j, const std::string& origin) {
 }
 
 Scene read_scene(const std::string& path) {
+  if (file_extension(path) == "jsurf") return read_jsurf(path);
   const std::string text = read_text_file(path);
   json j;
   try {

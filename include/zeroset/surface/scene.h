@@ -23,11 +23,12 @@ struct SurfaceOverrides {
   std::vector<std::string> clip_specs;   ///< --clip specs; non-empty replaces the default clip
 };
 
-/// Resolves a SURFACE argument: a catalog name, a scene file (an existing path ending in
-/// .json) or an equation in the surface language. Applies overrides, then checks that every
-/// parameter has a value. An equation given without --clip gets a default clip sphere when
-/// it is a polynomial whose surface is provably bounded (its top-degree part is definite);
-/// otherwise it stays unclipped, and stages that need a volume ask for --clip. Throws ParseError, InvalidArgument or IoError (all BadInput).
+/// Resolves a SURFACE argument: a catalog name, a scene file (a path ending in .json, or a
+/// SURFER file ending in .jsurf, read by read_jsurf) or an equation in the surface language.
+/// Applies overrides, then checks that every parameter has a value. An equation given without
+/// --clip gets a default clip sphere when it is a polynomial whose surface is provably bounded
+/// (its top-degree part is definite); otherwise it stays unclipped, and stages that need a
+/// volume ask for --clip. Throws ParseError, InvalidArgument or IoError (all BadInput).
 Scene resolve_scene(const std::string& spec, const SurfaceOverrides& overrides = {});
 inline Surface resolve_surface(const std::string& spec, const SurfaceOverrides& o = {}) {
   return resolve_scene(spec, o).surface;
@@ -39,6 +40,7 @@ Surface surface_from_equation(const std::string& equation);
 nlohmann::json scene_to_json(const Scene& scene);
 /// Throws BadInput with the JSON path of the offending entry.
 Scene scene_from_json(const nlohmann::json& j, const std::string& origin);
+/// Reads a scene file: JSON, or a SURFER .jsurf file (by its extension; zeroset/surface/jsurf.h).
 Scene read_scene(const std::string& path);
 /// Written atomically (temporary file + rename).
 void write_scene(const Scene& scene, const std::string& path);
