@@ -2,6 +2,8 @@
 
 #include <fmt/core.h>
 
+#include <Eigen/Geometry>
+#include <Eigen/LU>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <array>
@@ -204,7 +206,9 @@ Scene jsurf_to_scene(std::string_view text, const std::string& origin) {
   if (!clip)
     r.fail(r.has("surface_transform_matrix") ? "surface_transform_matrix" : "scale_factor",
            "the clip sphere's transform is not a rotation with a uniform scale");
-  s.clip = Clip::sphere(clip->scale, clip->translation);
+  // Without a surface transform the radius is 10^scale_factor itself, not its cube root's cube.
+  const double radius = r.has("surface_transform_matrix") ? clip->scale : scale;
+  s.clip = Clip::sphere(radius, clip->translation);
 
   const bool has_camera = r.has("camera_transform");
   Mat4 C = r.matrix_or_identity("camera_transform");

@@ -1,5 +1,6 @@
 #include "zeroset/surface/surface.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 
