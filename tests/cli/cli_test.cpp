@@ -372,7 +372,11 @@ TEST(CliJsurf, EveryCommandTakesAJsurfSurface) {
     const auto r = run_command(zs(cmd));
     EXPECT_EQ(r.exit_code, 0) << cmd << "\n" << r.output;
   }
-  // The viewer, where it is built and has a display.
+}
+
+TEST(CliJsurf, TheViewerOpensAJsurfSurface) {
+  const std::string dir = temp_dir();
+  const std::string f = write_text("view.jsurf", surfer_file(10));
   const auto help = run_command(zs("view --help"));
   if (help.output.find("--screenshot") == std::string::npos || !std::getenv("DISPLAY"))
     GTEST_SKIP() << "no viewer or no display: view not run";
