@@ -110,6 +110,8 @@ nlohmann::json quality_json(const MeshQuality& q) {
   j["percent_min_angle_below_30"] = q.percent_below_30;
   j["mean_min_angle_deg"] = q.mean_min_angle_deg;
   j["smallest_angle_deg"] = q.smallest_angle_deg;
+  j["zero_area_triangles"] = q.zero_area_triangles;
+  j["coincident_vertices"] = q.coincident_vertices;
   j["radius_ratio"] = {{"mean", q.mean_radius_ratio}, {"min", q.min_radius_ratio}};
   j["residual"] = {{"max", q.max_residual},
                    {"rms", q.rms_residual},
@@ -216,6 +218,7 @@ void run_mesh(const MeshArgs& a) {
       {"active_cells", ps.active_cells},
       {"ambiguous_faces", ps.ambiguous_faces},
       {"edge_vertices", ps.edge_vertices},
+      {"welded_vertices", ps.welded_vertices},
       {"collapsed_edges", ps.collapsed_edges},
       {"clip_cut_edges", ps.clip_cut_edges},
       {"clip_snapped_vertices", ps.clip_snapped},

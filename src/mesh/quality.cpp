@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <tuple>
 
 #include "mesh_detail.h"
 #include "zeroset/detail/parallel.h"
@@ -46,11 +47,12 @@ MeshQuality measure_quality(const Mesh& mesh, const Surface& surface, const Qual
 
   double edge_sum = 0, angle_sum = 0, ratio_sum = 0;
   double smallest = 180, min_ratio = 1;
+  long long zero_area = 0;
   std::array<long long, 12> hist{};
 #pragma omp parallel num_threads(workers)
   {
     std::array<long long, 12> local{};
-#pragma omp for schedule(static) reduction(+ : edge_sum, angle_sum, ratio_sum) \
+#pragma omp for schedule(static) reduction(+ : edge_sum, angle_sum, ratio_sum, zero_area) \
     reduction(min : smallest, min_ratio)
     for (long long t = 0; t < nt; ++t) {
       const auto& tri = mesh.triangles[static_cast<size_t>(t)];
@@ -61,6 +63,7 @@ MeshQuality measure_quality(const Mesh& mesh, const Surface& surface, const Qual
       angle_sum += ang;
       ratio_sum += ratio;
       smallest = std::min(smallest, ang);
+      zero_area += (b - a).cross(c - a).squaredNorm() == 0 ? 1 : 0;
       min_ratio = std::min(min_ratio, ratio);
       ++local[static_cast<size_t>(std::clamp(static_cast<int>(ang / 5), 0, 11))];
     }
@@ -68,6 +71,14 @@ MeshQuality measure_quality(const Mesh& mesh, const Surface& surface, const Qual
     for (size_t k = 0; k < 12; ++k) hist[k] += local[k];
   }
   q.min_angle_histogram = hist;
+  q.zero_area_triangles = static_cast<size_t>(zero_area);
+  {  // Vertices at the place of another: sorted, equal neighbours.
+    std::vector<Vec3> sorted = P;
+    std::sort(sorted.begin(), sorted.end(), [](const Vec3& a, const Vec3& b) {
+      return std::tie(a.x(), a.y(), a.z()) < std::tie(b.x(), b.y(), b.z());
+    });
+    for (size_t v = 1; v < sorted.size(); ++v) q.coincident_vertices += sorted[v] == sorted[v - 1];
+  }
   if (nt > 0) {
     const double n = static_cast<double>(nt);
     q.mean_edge_length = edge_sum / (3 * n);
