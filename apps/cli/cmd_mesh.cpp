@@ -296,6 +296,11 @@ void run_mesh(const MeshArgs& a) {
     stats["topology_after"] = topology_json(mesh);
   }
   if (a.no_curves) mesh.curves.clear();
+  // The mesher never makes degenerate output (a test sweeps for it); if it ever did, say so.
+  if (const DegenerateCount d = count_degenerate(mesh); d.zero_area_triangles + d.coincident_vertices > 0)
+    warn(fmt::format("{}: the mesh has {} triangles of zero area and {} vertices on top of "
+                     "others; please report this surface and these options",
+                     surface.label(), d.zero_area_triangles, d.coincident_vertices));
   if (!a.output.empty()) write_mesh(mesh, a.output);
   if (!a.png.empty())
     write_picture(surface, mesh, a.png, width, height, a.wireframe, overlay);

@@ -24,6 +24,19 @@ void evaluate(const Surface& surface, const std::vector<Vec3>& pts, int workers,
 
 }  // namespace
 
+DegenerateCount count_degenerate(const Mesh& mesh) {
+  DegenerateCount d;
+  const auto& P = mesh.positions;
+  for (const auto& t : mesh.triangles)
+    d.zero_area_triangles += (P[t[1]] - P[t[0]]).cross(P[t[2]] - P[t[0]]).squaredNorm() == 0;
+  std::vector<Vec3> sorted = P;  // equal points end up side by side
+  std::sort(sorted.begin(), sorted.end(), [](const Vec3& a, const Vec3& b) {
+    return std::tie(a.x(), a.y(), a.z()) < std::tie(b.x(), b.y(), b.z());
+  });
+  for (size_t v = 1; v < sorted.size(); ++v) d.coincident_vertices += sorted[v] == sorted[v - 1];
+  return d;
+}
+
 double triangle_min_angle_deg(const Vec3& a, const Vec3& b, const Vec3& c) {
   if ((b - a).cross(c - a).squaredNorm() == 0) return 0;
   return kDeg * std::min({detail::corner_angle(a, b, c), detail::corner_angle(b, c, a),
@@ -47,12 +60,11 @@ MeshQuality measure_quality(const Mesh& mesh, const Surface& surface, const Qual
 
   double edge_sum = 0, angle_sum = 0, ratio_sum = 0;
   double smallest = 180, min_ratio = 1;
-  long long zero_area = 0;
   std::array<long long, 12> hist{};
 #pragma omp parallel num_threads(workers)
   {
     std::array<long long, 12> local{};
-#pragma omp for schedule(static) reduction(+ : edge_sum, angle_sum, ratio_sum, zero_area) \
+#pragma omp for schedule(static) reduction(+ : edge_sum, angle_sum, ratio_sum) \
     reduction(min : smallest, min_ratio)
     for (long long t = 0; t < nt; ++t) {
       const auto& tri = mesh.triangles[static_cast<size_t>(t)];
@@ -63,7 +75,6 @@ MeshQuality measure_quality(const Mesh& mesh, const Surface& surface, const Qual
       angle_sum += ang;
       ratio_sum += ratio;
       smallest = std::min(smallest, ang);
-      zero_area += (b - a).cross(c - a).squaredNorm() == 0 ? 1 : 0;
       min_ratio = std::min(min_ratio, ratio);
       ++local[static_cast<size_t>(std::clamp(static_cast<int>(ang / 5), 0, 11))];
     }
@@ -71,14 +82,9 @@ MeshQuality measure_quality(const Mesh& mesh, const Surface& surface, const Qual
     for (size_t k = 0; k < 12; ++k) hist[k] += local[k];
   }
   q.min_angle_histogram = hist;
-  q.zero_area_triangles = static_cast<size_t>(zero_area);
-  {  // Vertices at the place of another: sorted, equal neighbours.
-    std::vector<Vec3> sorted = P;
-    std::sort(sorted.begin(), sorted.end(), [](const Vec3& a, const Vec3& b) {
-      return std::tie(a.x(), a.y(), a.z()) < std::tie(b.x(), b.y(), b.z());
-    });
-    for (size_t v = 1; v < sorted.size(); ++v) q.coincident_vertices += sorted[v] == sorted[v - 1];
-  }
+  const DegenerateCount degenerate = count_degenerate(mesh);
+  q.zero_area_triangles = degenerate.zero_area_triangles;
+  q.coincident_vertices = degenerate.coincident_vertices;
   if (nt > 0) {
     const double n = static_cast<double>(nt);
     q.mean_edge_length = edge_sum / (3 * n);

@@ -54,6 +54,13 @@ struct MeshQuality {
 MeshQuality measure_quality(const Mesh& mesh, const Surface& surface,
                             const QualityOptions& options = {});
 
+struct DegenerateCount {
+  size_t zero_area_triangles = 0;
+  size_t coincident_vertices = 0;  ///< vertices at exactly the point of an earlier one
+};
+/// Counts degenerate output (no field evaluations): O(T + V log V).
+DegenerateCount count_degenerate(const Mesh& mesh);
+
 /// Minimum angle (degrees) and radius ratio of one triangle; 0 for a degenerate one.
 double triangle_min_angle_deg(const Vec3& a, const Vec3& b, const Vec3& c);
 double triangle_radius_ratio(const Vec3& a, const Vec3& b, const Vec3& c);
