@@ -110,6 +110,8 @@ nlohmann::json quality_json(const MeshQuality& q) {
   j["percent_min_angle_below_30"] = q.percent_below_30;
   j["mean_min_angle_deg"] = q.mean_min_angle_deg;
   j["smallest_angle_deg"] = q.smallest_angle_deg;
+  j["zero_area_triangles"] = q.zero_area_triangles;
+  j["coincident_vertices"] = q.coincident_vertices;
   j["radius_ratio"] = {{"mean", q.mean_radius_ratio}, {"min", q.min_radius_ratio}};
   j["residual"] = {{"max", q.max_residual},
                    {"rms", q.rms_residual},
@@ -216,6 +218,7 @@ void run_mesh(const MeshArgs& a) {
       {"active_cells", ps.active_cells},
       {"ambiguous_faces", ps.ambiguous_faces},
       {"edge_vertices", ps.edge_vertices},
+      {"welded_vertices", ps.welded_vertices},
       {"collapsed_edges", ps.collapsed_edges},
       {"clip_cut_edges", ps.clip_cut_edges},
       {"clip_snapped_vertices", ps.clip_snapped},
@@ -293,6 +296,11 @@ void run_mesh(const MeshArgs& a) {
     stats["topology_after"] = topology_json(mesh);
   }
   if (a.no_curves) mesh.curves.clear();
+  // The mesher never makes degenerate output (a test sweeps for it); if it ever did, say so.
+  if (const DegenerateCount d = count_degenerate(mesh); d.zero_area_triangles + d.coincident_vertices > 0)
+    warn(fmt::format("{}: the mesh has {} triangles of zero area and {} vertices on top of "
+                     "others; please report this surface and these options",
+                     surface.label(), d.zero_area_triangles, d.coincident_vertices));
   if (!a.output.empty()) write_mesh(mesh, a.output);
   if (!a.png.empty())
     write_picture(surface, mesh, a.png, width, height, a.wireframe, overlay);

@@ -339,6 +339,22 @@ long long refine_strips(Mesh& mesh, size_t first_added, double limit, const Surf
       if (project_onto_surface(ev, q, 1e-13 * surface.scene_radius(), 0.3 * longest_len)) m = q;
     }
     if (!((m - P[a]).norm() > 0.25 * longest_len && (m - P[b]).norm() > 0.25 * longest_len)) continue;
+    // Both halves of every triangle on the edge must keep its side: near a singular curve the
+    // projection can slide onto the curve, in line with the curve's own vertices, and a split
+    // there would only make triangles without area.
+    const bool halves_ok = std::all_of(sharing.begin(), sharing.end(), [&](std::uint32_t s) {
+      const auto& old = mesh.triangles[s];
+      const Vec3 n = (P[old[1]] - P[old[0]]).cross(P[old[2]] - P[old[0]]);
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t v = old[static_cast<size_t>(k)];
+        if (v != a && v != b) continue;
+        Vec3 c[3] = {P[old[0]], P[old[1]], P[old[2]]};
+        c[k] = m;  // the half that keeps the other end of the edge
+        if (!(n.dot((c[1] - c[0]).cross(c[2] - c[0])) > 1e-3 * n.squaredNorm())) return false;
+      }
+      return true;
+    });
+    if (!halves_ok) continue;
     const std::uint32_t mid = static_cast<std::uint32_t>(mesh.positions.size());
     mesh.positions.push_back(m);
     mesh.is_boundary.push_back(border);

@@ -26,6 +26,8 @@ constexpr std::uint32_t kNone = 0xffffffffu;
 constexpr double kFlipMargin = 0.05;
 
 enum Mode : std::uint8_t { kFree = 0, kHeld = 1, kOnCurve = 2 };
+// |∇F|² below this × grad_ref² marks a vertex that has reached a singular curve.
+constexpr double kOnSingularCurve = 1e-4;
 
 void check_options(const ImproveOptions& o) {
   auto bad = [](const char* name, double v, const char* why) {
@@ -428,6 +430,10 @@ struct MeshImprover::State {
       const Vec3& g = grad[v];
       Vec3 vel;
       if (!std::isfinite(f[v]) || !g.allFinite()) continue;
+      // A sheet's vertex that has come onto a singular curve (∇F all but zero, as at a pinch
+      // point, where the sheets close up on the curve) has no tangent plane to slide in: the
+      // springs alone would push it to and fro along the curve. It stays where it is.
+      if (near_curve[v] && g.squaredNorm() < kOnSingularCurve * grad_ref * grad_ref) continue;
       if (mode[v] == kFree) {
         vel = P - ((g.dot(P) + phi * f[v]) / (g.dot(g) + eps2)) * g;
       } else {  // on the clip curve: both constraints (paper §4.2)

@@ -52,7 +52,7 @@ std::string obj_bytes(const Mesh& m) {
   fmt::memory_buffer out;
   fmt::format_to(std::back_inserter(out), "# zeroset mesh: {} vertices, {} triangles\n",
                  m.positions.size(), m.triangles.size());
-  for (const Vec3& p : m.positions) fmt::format_to(std::back_inserter(out), "v {:.9g} {:.9g} {:.9g}\n", p.x(), p.y(), p.z());
+  for (const Vec3& p : m.positions) fmt::format_to(std::back_inserter(out), "v {} {} {}\n", p.x(), p.y(), p.z());
   const bool normals = has_normals(m);
   if (normals)
     for (const Vec3& n : m.normals) fmt::format_to(std::back_inserter(out), "vn {:.6g} {:.6g} {:.6g}\n", n.x(), n.y(), n.z());

@@ -125,9 +125,14 @@ size_t collapse_short_edges(Mesh& mesh, double min_length) {
     if (hold_u && hold_v && !border_edge) continue;  // would pinch the mesh
     const std::uint32_t keep = hold_v && !hold_u ? v : u;
     const std::uint32_t gone = keep == u ? v : u;
-    // No remaining triangle of the removed vertex may turn over or collapse.
+    // No remaining triangle of the removed vertex may turn over or collapse. Merging two
+    // vertices at one point up to rounding (several cell edges that end in an exact zero of F
+    // at a grid node) changes no triangle's shape, so it needs no check; the zero-area
+    // triangles around such a point, whose orientation no check could judge, would refuse it.
+    const bool same_point = (P[u] - P[v]).norm() <= 1e-9 * min_length;
     bool geometry_ok = true;
     for (std::uint32_t t : (gone == u ? ring_u : ring_v)) {
+      if (same_point) break;
       if (std::find(shared.begin(), shared.end(), t) != shared.end()) continue;
       Vec3 before[3], after[3];
       for (int k = 0; k < 3; ++k) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <tuple>
 
 #include "mesh_detail.h"
 #include "zeroset/detail/parallel.h"
@@ -22,6 +23,19 @@ void evaluate(const Surface& surface, const std::vector<Vec3>& pts, int workers,
 }
 
 }  // namespace
+
+DegenerateCount count_degenerate(const Mesh& mesh) {
+  DegenerateCount d;
+  const auto& P = mesh.positions;
+  for (const auto& t : mesh.triangles)
+    d.zero_area_triangles += (P[t[1]] - P[t[0]]).cross(P[t[2]] - P[t[0]]).squaredNorm() == 0;
+  std::vector<Vec3> sorted = P;  // equal points end up side by side
+  std::sort(sorted.begin(), sorted.end(), [](const Vec3& a, const Vec3& b) {
+    return std::tie(a.x(), a.y(), a.z()) < std::tie(b.x(), b.y(), b.z());
+  });
+  for (size_t v = 1; v < sorted.size(); ++v) d.coincident_vertices += sorted[v] == sorted[v - 1];
+  return d;
+}
 
 double triangle_min_angle_deg(const Vec3& a, const Vec3& b, const Vec3& c) {
   if ((b - a).cross(c - a).squaredNorm() == 0) return 0;
@@ -68,6 +82,9 @@ MeshQuality measure_quality(const Mesh& mesh, const Surface& surface, const Qual
     for (size_t k = 0; k < 12; ++k) hist[k] += local[k];
   }
   q.min_angle_histogram = hist;
+  const DegenerateCount degenerate = count_degenerate(mesh);
+  q.zero_area_triangles = degenerate.zero_area_triangles;
+  q.coincident_vertices = degenerate.coincident_vertices;
   if (nt > 0) {
     const double n = static_cast<double>(nt);
     q.mean_edge_length = edge_sum / (3 * n);

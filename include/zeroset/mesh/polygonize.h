@@ -72,6 +72,7 @@ struct PolygonizeStats {
   long long active_cells = 0;          ///< cells the surface passes through
   long long ambiguous_faces = 0;       ///< face decisions made by the asymptotic decider
   long long edge_vertices = 0;         ///< vertices before clean-up and clipping
+  long long welded_vertices = 0;       ///< vertices merged into one on a grid node where F = 0
   long long collapsed_edges = 0;       ///< degenerate triangles removed by edge collapse
   long long clip_cut_edges = 0;        ///< new vertices where mesh edges cross the clip
   long long clip_snapped = 0;          ///< vertices moved onto the clip curve

@@ -26,6 +26,10 @@ struct MeshQuality {
   double percent_below_30 = 0;
   double mean_min_angle_deg = 0;
   double smallest_angle_deg = 0;
+  /// Degenerate output, which the mesher never writes (a test sweeps for it): triangles of zero
+  /// area, and vertices at the same point as another vertex.
+  size_t zero_area_triangles = 0;
+  size_t coincident_vertices = 0;
   double mean_radius_ratio = 0;  ///< 2 r_in / R_circ, 1 for an equilateral triangle
   double min_radius_ratio = 0;
   /// |F|/|∇F| at vertices outside the singular balls (first-order distance, Taubin 1991).
@@ -49,6 +53,13 @@ struct MeshQuality {
 /// Surface::singular_points(). Cost: O(V + T) field evaluations, parallel.
 MeshQuality measure_quality(const Mesh& mesh, const Surface& surface,
                             const QualityOptions& options = {});
+
+struct DegenerateCount {
+  size_t zero_area_triangles = 0;
+  size_t coincident_vertices = 0;  ///< vertices at exactly the point of an earlier one
+};
+/// Counts degenerate output (no field evaluations): O(T + V log V).
+DegenerateCount count_degenerate(const Mesh& mesh);
 
 /// Minimum angle (degrees) and radius ratio of one triangle; 0 for a degenerate one.
 double triangle_min_angle_deg(const Vec3& a, const Vec3& b, const Vec3& c);
