@@ -157,8 +157,14 @@ void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string
 }
 
 // --------------------------------------------------------------------------------- animate
+/// Frame f of an animation (0-based: the global number, whatever part a run renders).
+std::string frame_file_name(int f) { return fmt::format("frame_{:04d}.png", f); }
+/// The same names as an ffmpeg (printf) pattern.
+std::string frame_file_name_pattern() { return "frame_%04d.png"; }
+
 struct AnimateArgs {
   int frames = 60;
+  std::string frame_range;  // A-B: only these frames of the animation
   double fps = 30;
   double orbit_deg = 0;
   std::string dir;
@@ -185,14 +191,21 @@ void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArg
   if (ranges.empty() && a.orbit_deg == 0)
     throw InvalidArgument("--param", "(none)",
                           "give at least one range name=from:to (or --orbit) to animate");
-  if (a.frames < 1) throw InvalidArgument("--frames", std::to_string(a.frames), "must be ≥ 1");
+  const FrameRange range = parse_frame_range(a.frame_range, a.frames, "--frame-range");
+  // A part of the animation makes no video; the frames are joined once all parts are done.
+  const bool whole = range.count() == a.frames;
+  if (!whole && !a.video.empty())
+    throw InvalidArgument("--video", a.video,
+                          "a --frame-range that is not the whole animation makes no video; "
+                          "join the frames with ffmpeg when every part is rendered");
   const fs::path dir(a.dir);
   std::error_code ec;
   if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
     throw IoError(a.dir, "exists and is not a directory");
   // Before any work: frames can be written into DIR, or DIR can be created.
-  check_writable(fs::is_directory(dir, ec) ? (dir / "frame_0000.png").string() : a.dir);
-  const bool want_video = !a.no_video;
+  check_writable(fs::is_directory(dir, ec) ? (dir / frame_file_name(range.first)).string()
+                                           : a.dir);
+  const bool want_video = !a.no_video && whole;
   const bool have_ffmpeg = want_video && on_path("ffmpeg");
   std::string video = a.video.empty() ? (dir / "animation.mp4").string() : a.video;
   if (want_video && !a.video.empty()) require_extension(video, "mp4", "--video");
@@ -209,21 +222,25 @@ void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArg
   if (want_video && !a.video.empty()) check_writable(video);
 
   Progress progress("animate", global_flags().quiet);
-  for (int f = 0; f < a.frames; ++f) {
+  for (int f = range.first; f <= range.last; ++f) {
+    // The frame's place in the whole animation, whichever part of it this run renders.
     const double s = a.frames == 1 ? 0.0 : static_cast<double>(f) / (a.frames - 1);
     for (const ParamRange& r : ranges)
       surface.field.set_parameter(r.name, r.from + s * (r.to - r.from));
     Camera cam = base_camera;
     cam.azimuth_deg += s * a.orbit_deg;
     o.camera = cam;
-    o.progress = [&](double x) { progress.update((f + x) / a.frames); };
+    o.progress = [&](double x) { progress.update((f - range.first + x) / range.count()); };
     // The set of this frame's parameters: it moves with them.
     if (a.show_singular) o.singular_overlay = SingularOverlay{.set = find_singular_set(surface)};
     const Image image = render_surface(surface, o);
-    write_png(image, (dir / fmt::format("frame_{:04d}.png", f)).string());
+    write_png(image, (dir / frame_file_name(f)).string());
   }
   progress.finish();
-  say(fmt::format("wrote {} frames to {}", a.frames, a.dir));
+  if (whole)
+    say(fmt::format("wrote {} frames to {}", a.frames, a.dir));
+  else
+    say(fmt::format("wrote frames {} to {} of {} to {}", range.first, range.last, a.frames, a.dir));
   if (!want_video) return;
   if (!have_ffmpeg) {
     say("ffmpeg not found on PATH: no video (frames are in " + a.dir + ")");
@@ -238,7 +255,7 @@ void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArg
   const std::string cmd = fmt::format(
       "ffmpeg -nostdin -y -loglevel error -framerate {} -i {} -c:v libx264 -pix_fmt yuv420p "
       "-vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' {} 2>&1",
-      a.fps, shell_quote((dir / "frame_%04d.png").string()), shell_quote(tmp.string()));
+      a.fps, shell_quote((dir / frame_file_name_pattern()).string()), shell_quote(tmp.string()));
   std::string log;
   FILE* pipe = ::popen(cmd.c_str(), "r");
   if (!pipe) throw Error("cannot run ffmpeg");
@@ -329,7 +346,9 @@ void register_render_commands(CLI::App& app) {
         "Examples:\n"
         "  zeroset animate kummer --param mu=0.34:3.0 --frames 60 -o kummer-frames\n"
         "  zeroset animate torus --param r=0.2:0.9 --orbit 90 --size 480x480 -o torus\n"
-        "  zeroset animate planes --param a=-0.5:0.5 --no-video -o planes");
+        "  zeroset animate planes --param a=-0.5:0.5 --no-video -o planes\n"
+        "  zeroset animate kummer --param mu=0.34:3.0 --frames 600 --frame-range 100-199 -o k\n"
+        "                          (frames 100 to 199 of 600: frame_0100.png ... frame_0199.png)");
     auto args = std::make_shared<SurfaceArgs>();
     auto look = std::make_shared<LookArgs>();
     auto a = std::make_shared<AnimateArgs>();
@@ -341,7 +360,13 @@ void register_render_commands(CLI::App& app) {
     cmd->add_option("-o,--output", a->dir, "Output directory for frame_0000.png, ...")
         ->required()
         ->type_name("DIR");
-    cmd->add_option("--frames", a->frames, "Number of frames")->capture_default_str();
+    cmd->add_option("--frames", a->frames, "Number of frames of the whole animation")
+        ->capture_default_str();
+    cmd->add_option("--frame-range", a->frame_range,
+                    "Render only frames FIRST to LAST (both included, counted from 0 as the file "
+                    "names) of the --frames animation, e.g. to share it out over the nodes of a "
+                    "cluster; no video unless it is the whole animation")
+        ->type_name("FIRST-LAST");
     cmd->add_option("--fps", a->fps, "Frames per second of the video")
         ->check(CLI::Range(1.0, 240.0))
         ->capture_default_str();
