@@ -165,6 +165,7 @@ std::string frame_file_name_pattern() { return "frame_%04d.png"; }
 struct AnimateArgs {
   int frames = 60;
   std::string frame_range;  // A-B: only these frames of the animation
+  CLI::Option* frame_range_opt = nullptr;
   double fps = 30;
   double orbit_deg = 0;
   std::string dir;
@@ -191,6 +192,8 @@ void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArg
   if (ranges.empty() && a.orbit_deg == 0)
     throw InvalidArgument("--param", "(none)",
                           "give at least one range name=from:to (or --orbit) to animate");
+  if (a.frame_range_opt->count() > 0 && a.frame_range.empty())
+    throw InvalidArgument("--frame-range", "''", "expected FIRST-LAST, e.g. 0-9");
   const FrameRange range = parse_frame_range(a.frame_range, a.frames, "--frame-range");
   // A part of the animation makes no video; the frames are joined once all parts are done.
   const bool whole = range.count() == a.frames;
@@ -362,7 +365,7 @@ void register_render_commands(CLI::App& app) {
         ->type_name("DIR");
     cmd->add_option("--frames", a->frames, "Number of frames of the whole animation")
         ->capture_default_str();
-    cmd->add_option("--frame-range", a->frame_range,
+    a->frame_range_opt = cmd->add_option("--frame-range", a->frame_range,
                     "Render only frames FIRST to LAST (both included, counted from 0 as the file "
                     "names) of the --frames animation, e.g. to share it out over the nodes of a "
                     "cluster; no video unless it is the whole animation")
