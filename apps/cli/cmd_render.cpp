@@ -19,6 +19,7 @@
 #include "zeroset/render/render.h"
 #include "zeroset/render/settings.h"
 #include "zeroset/surface/jsurf.h"
+#include "zeroset/surface/keyframes.h"
 #include "zeroset/surface/settings.h"
 
 namespace zeroset::cli {
@@ -157,8 +158,15 @@ void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string
 }
 
 // --------------------------------------------------------------------------------- animate
+/// Frame f of an animation (0-based: the global number, whatever part a run renders).
+std::string frame_file_name(int f) { return fmt::format("frame_{:04d}.png", f); }
+/// The same names as an ffmpeg (printf) pattern.
+std::string frame_file_name_pattern() { return "frame_%04d.png"; }
+
 struct AnimateArgs {
   int frames = 60;
+  std::string frame_range;  // A-B: only these frames of the animation
+  CLI::Option* frame_range_opt = nullptr;
   double fps = 30;
   double orbit_deg = 0;
   std::string dir;
@@ -167,8 +175,19 @@ struct AnimateArgs {
   bool show_singular = false;
 };
 
-void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArgs& a) {
-  // --param takes both fixed values (k=v) and the animated ranges (k=from:to).
+/// What an animation run or an animated export draws: the scene, the render options (flags
+/// applied; the camera is the base the tracks move) and the tracks.
+struct Animation {
+  Surface surface;
+  RenderOptions options;
+  Keyframes keys;
+};
+
+/// The scene file's keyframes, or else --param ranges (name=from:to) and --orbit as linear
+/// tracks from time 0 to 1. --param also takes fixed values (name=value). Throws
+/// InvalidArgument for a flag that the keyframes make meaningless, or nothing to animate.
+Animation resolve_animation(const SurfaceArgs& args, const LookArgs& look, double orbit_deg,
+                            int frames) {
   SurfaceOverrides overrides;
   overrides.clip_specs = args.clips;
   std::vector<ParamRange> ranges;
@@ -182,48 +201,84 @@ void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArg
       overrides.params[name] = value;
     }
   }
-  if (ranges.empty() && a.orbit_deg == 0)
+  const Scene scene = resolve_scene(args.spec, overrides);
+  Animation an{.surface = scene.surface, .options = look.options(scene, args.spec), .keys = {}};
+  an.surface.camera = *an.options.camera;
+  an.keys = read_keyframes(scene.settings, an.surface, frames, args.spec);
+  if (!an.keys.empty()) {
+    const std::string why = "the scene's keyframes animate it; change the keyframes instead";
+    if (!ranges.empty()) throw InvalidArgument("--param", ranges.front().name + "=...", why);
+    if (orbit_deg != 0) throw InvalidArgument("--orbit", std::to_string(orbit_deg), why);
+    for (const auto& [name, value] : overrides.params)
+      if (an.keys.param(name)) throw InvalidArgument("--param", name, why);
+    if (!look.camera.empty() && !an.keys.camera.empty())
+      throw InvalidArgument("--camera", look.camera, why);
+    return an;
+  }
+  if (ranges.empty() && orbit_deg == 0)
     throw InvalidArgument("--param", "(none)",
-                          "give at least one range name=from:to (or --orbit) to animate");
-  if (a.frames < 1) throw InvalidArgument("--frames", std::to_string(a.frames), "must be ≥ 1");
+                          "give at least one range name=from:to (or --orbit, or keyframes in a "
+                          "scene file) to animate");
+  for (const ParamRange& r : ranges) {
+    if (an.surface.field.parameter_index(r.name) < 0)
+      throw InvalidArgument("--param", r.name, "the surface has no parameter of that name");
+    an.keys.params.push_back(
+        {.name = r.name, .times = {0, 1}, .values = {r.from, r.to}, .eases = {Ease::kLinear}});
+  }
+  if (orbit_deg != 0) {
+    const double az = an.surface.camera.azimuth_deg;
+    an.keys.camera.push_back({.name = "azimuth_deg",
+                              .times = {0, 1},
+                              .values = {az, az + orbit_deg},
+                              .eases = {Ease::kLinear}});
+  }
+  return an;
+}
+
+void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArgs& a) {
+  if (a.frame_range_opt->count() > 0 && a.frame_range.empty())
+    throw InvalidArgument("--frame-range", "''", "expected FIRST-LAST, e.g. 0-9");
+  const FrameRange range = parse_frame_range(a.frame_range, a.frames, "--frame-range");
+  // A part of the animation makes no video; the frames are joined once all parts are done.
+  const bool whole = range.count() == a.frames;
+  if (!whole && !a.video.empty())
+    throw InvalidArgument("--video", a.video,
+                          "a --frame-range that is not the whole animation makes no video; "
+                          "join the frames with ffmpeg when every part is rendered");
   const fs::path dir(a.dir);
   std::error_code ec;
   if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
     throw IoError(a.dir, "exists and is not a directory");
   // Before any work: frames can be written into DIR, or DIR can be created.
-  check_writable(fs::is_directory(dir, ec) ? (dir / "frame_0000.png").string() : a.dir);
-  const bool want_video = !a.no_video;
+  check_writable(fs::is_directory(dir, ec) ? (dir / frame_file_name(range.first)).string()
+                                           : a.dir);
+  const bool want_video = !a.no_video && whole;
   const bool have_ffmpeg = want_video && on_path("ffmpeg");
   std::string video = a.video.empty() ? (dir / "animation.mp4").string() : a.video;
   if (want_video && !a.video.empty()) require_extension(video, "mp4", "--video");
 
-  const Scene scene = resolve_scene(args.spec, overrides);
-  Surface surface = scene.surface;
-  for (const ParamRange& r : ranges)
-    if (surface.field.parameter_index(r.name) < 0)
-      throw InvalidArgument("--param", r.name, "the surface has no parameter of that name");
-  RenderOptions o = look.options(scene, args.spec);
-  const Camera base_camera = *o.camera;
+  const Animation an = resolve_animation(args, look, a.orbit_deg, a.frames);
+  RenderOptions o = an.options;
   fs::create_directories(dir, ec);
   if (ec) throw IoError(a.dir, "cannot create the directory: " + ec.message());
   if (want_video && !a.video.empty()) check_writable(video);
 
   Progress progress("animate", global_flags().quiet);
-  for (int f = 0; f < a.frames; ++f) {
-    const double s = a.frames == 1 ? 0.0 : static_cast<double>(f) / (a.frames - 1);
-    for (const ParamRange& r : ranges)
-      surface.field.set_parameter(r.name, r.from + s * (r.to - r.from));
-    Camera cam = base_camera;
-    cam.azimuth_deg += s * a.orbit_deg;
-    o.camera = cam;
-    o.progress = [&](double x) { progress.update((f + x) / a.frames); };
+  for (int f = range.first; f <= range.last; ++f) {
+    // The frame's time in the whole animation, whichever part of it this run renders.
+    const Surface surface = an.keys.at(an.surface, frame_time(f, a.frames));
+    o.camera = surface.camera;
+    o.progress = [&](double x) { progress.update((f - range.first + x) / range.count()); };
     // The set of this frame's parameters: it moves with them.
     if (a.show_singular) o.singular_overlay = SingularOverlay{.set = find_singular_set(surface)};
     const Image image = render_surface(surface, o);
-    write_png(image, (dir / fmt::format("frame_{:04d}.png", f)).string());
+    write_png(image, (dir / frame_file_name(f)).string());
   }
   progress.finish();
-  say(fmt::format("wrote {} frames to {}", a.frames, a.dir));
+  if (whole)
+    say(fmt::format("wrote {} frames to {}", a.frames, a.dir));
+  else
+    say(fmt::format("wrote frames {} to {} of {} to {}", range.first, range.last, a.frames, a.dir));
   if (!want_video) return;
   if (!have_ffmpeg) {
     say("ffmpeg not found on PATH: no video (frames are in " + a.dir + ")");
@@ -238,7 +293,7 @@ void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArg
   const std::string cmd = fmt::format(
       "ffmpeg -nostdin -y -loglevel error -framerate {} -i {} -c:v libx264 -pix_fmt yuv420p "
       "-vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' {} 2>&1",
-      a.fps, shell_quote((dir / "frame_%04d.png").string()), shell_quote(tmp.string()));
+      a.fps, shell_quote((dir / frame_file_name_pattern()).string()), shell_quote(tmp.string()));
   std::string log;
   FILE* pipe = ::popen(cmd.c_str(), "r");
   if (!pipe) throw Error("cannot run ffmpeg");
@@ -259,12 +314,54 @@ void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArg
 }
 
 // ---------------------------------------------------------------------------------- export
-void run_export(const SurfaceArgs& args, const LookArgs& look, std::string format,
-                const std::string& output) {
+struct ExportArgs {
+  std::string format;
+  std::string output;
+  bool animate = false;
+  int frames = 60;
+  std::string frame_range;
+  double orbit_deg = 0;
+  CLI::Option* frames_opt = nullptr;
+  CLI::Option* frame_range_opt = nullptr;
+  CLI::Option* orbit_opt = nullptr;
+};
+
+/// --animate: a clock-driven .pov and the .ini beside it that renders its frames.
+void run_export_animation(const SurfaceArgs& args, const LookArgs& look, const ExportArgs& e) {
+  if (e.frame_range_opt->count() > 0 && e.frame_range.empty())
+    throw InvalidArgument("--frame-range", "''", "expected FIRST-LAST, e.g. 0-9");
+  const FrameRange range = parse_frame_range(e.frame_range, e.frames, "--frame-range");
+  fs::path ini(e.output);
+  ini.replace_extension(".ini");
+  check_writable(e.output);
+  check_writable(ini.string());
+  const Animation an = resolve_animation(args, look, e.orbit_deg, e.frames);
+  write_pov_animation(an.surface, an.options, an.keys,
+                      PovFrames{.frames = e.frames, .first = range.first, .last = range.last},
+                      e.output);
+  const fs::path dir = fs::path(e.output).parent_path();
+  say(fmt::format("wrote {} and {}; render frames {} to {} of {} with: {}povray {}", e.output,
+                  ini.string(), range.first, range.last, e.frames,
+                  dir.empty() ? "" : "cd " + shell_quote(dir.string()) + " && ",
+                  ini.filename().string()));
+}
+
+void run_export(const SurfaceArgs& args, const LookArgs& look, const ExportArgs& e) {
+  std::string format = e.format;
+  const std::string& output = e.output;
   if (format.empty()) format = file_extension(output) == "jsurf" ? "jsurf" : "pov";
   if (format != "pov" && format != "jsurf")
     throw InvalidArgument("--format", format, "expected pov or jsurf");
   require_extension(output, format, "--output");
+  if (e.animate) {
+    if (format != "pov")
+      throw InvalidArgument("--format", format, "--animate writes POV-Ray scenes only");
+    run_export_animation(args, look, e);
+    return;
+  }
+  for (const CLI::Option* opt : {e.frames_opt, e.frame_range_opt, e.orbit_opt})
+    if (opt->count() > 0)
+      throw InvalidArgument(opt->get_name(), opt->as<std::string>(), "needs --animate");
   check_writable(output);
   const Scene scene = args.resolve();
   RenderOptions o = look.options(scene, args.spec);
@@ -329,7 +426,9 @@ void register_render_commands(CLI::App& app) {
         "Examples:\n"
         "  zeroset animate kummer --param mu=0.34:3.0 --frames 60 -o kummer-frames\n"
         "  zeroset animate torus --param r=0.2:0.9 --orbit 90 --size 480x480 -o torus\n"
-        "  zeroset animate planes --param a=-0.5:0.5 --no-video -o planes");
+        "  zeroset animate planes --param a=-0.5:0.5 --no-video -o planes\n"
+        "  zeroset animate kummer --param mu=0.34:3.0 --frames 600 --frame-range 100-199 -o k\n"
+        "                          (frames 100 to 199 of 600: frame_0100.png ... frame_0199.png)");
     auto args = std::make_shared<SurfaceArgs>();
     auto look = std::make_shared<LookArgs>();
     auto a = std::make_shared<AnimateArgs>();
@@ -341,7 +440,13 @@ void register_render_commands(CLI::App& app) {
     cmd->add_option("-o,--output", a->dir, "Output directory for frame_0000.png, ...")
         ->required()
         ->type_name("DIR");
-    cmd->add_option("--frames", a->frames, "Number of frames")->capture_default_str();
+    cmd->add_option("--frames", a->frames, "Number of frames of the whole animation")
+        ->capture_default_str();
+    a->frame_range_opt = cmd->add_option("--frame-range", a->frame_range,
+                    "Render only frames FIRST to LAST (both included, counted from 0 as the file "
+                    "names) of the --frames animation, e.g. to share it out over the nodes of a "
+                    "cluster; no video unless it is the whole animation")
+        ->type_name("FIRST-LAST");
     cmd->add_option("--fps", a->fps, "Frames per second of the video")
         ->check(CLI::Range(1.0, 240.0))
         ->capture_default_str();
@@ -366,21 +471,39 @@ void register_render_commands(CLI::App& app) {
         "Examples:\n"
         "  zeroset export kummer --param mu=2.44 -o kummer.pov\n"
         "  povray +W800 +H800 +A0.1 +Ikummer.pov +Okummer.png\n"
-        "  zeroset export kummer --camera 40,25 --front '#3060c0' -o kummer.jsurf");
+        "  zeroset export kummer --camera 40,25 --front '#3060c0' -o kummer.jsurf\n"
+        "  zeroset export kummer --animate --param mu=0.5:2.5 --frames 60 -o k.pov\n"
+        "  povray k.ini    (frames k_00.png ... k_59.png)");
     auto args = std::make_shared<SurfaceArgs>();
     auto look = std::make_shared<LookArgs>();
-    auto output = std::make_shared<std::string>();
-    auto format = std::make_shared<std::string>();
+    auto e = std::make_shared<ExportArgs>();
     args->add_to(cmd);
+    cmd->get_option("--param")
+        ->description("Fixed value name=value, or with --animate an animated range name=from:to "
+                      "(repeatable)")
+        ->type_name("NAME=V|A:B");
     look->add_to(cmd, false);
-    cmd->add_option("-o,--output", *output, "Output .pov or .jsurf file")
+    cmd->add_option("-o,--output", e->output, "Output .pov or .jsurf file")
         ->required()
         ->type_name("FILE");
-    cmd->add_option("--format", *format,
+    cmd->add_option("--format", e->format,
                     "pov (POV-Ray) or jsurf (SURFER); default: from the output's extension, "
                     "else pov")
         ->type_name("FORMAT");
-    cmd->callback([=] { run_export(*args, *look, *format, *output); });
+    cmd->add_flag("--animate", e->animate,
+                  "Write an animation: a .pov driven by POV-Ray's clock and FILE.ini beside it "
+                  "(the scene file's keyframes, or --param ranges and --orbit, as animate)");
+    e->frames_opt = cmd->add_option("--frames", e->frames,
+                                    "With --animate: number of frames of the whole animation")
+                        ->capture_default_str();
+    e->frame_range_opt =
+        cmd->add_option("--frame-range", e->frame_range,
+                        "With --animate: the .ini renders only frames FIRST to LAST (from 0)")
+            ->type_name("FIRST-LAST");
+    e->orbit_opt = cmd->add_option(
+        "--orbit", e->orbit_deg,
+        "With --animate: turn the camera's azimuth by this many degrees over the animation");
+    cmd->callback([=] { run_export(*args, *look, *e); });
   }
 }
 

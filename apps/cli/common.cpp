@@ -115,6 +115,32 @@ ParamRange parse_range(const std::string& text, const std::string& flag) {
   return r;
 }
 
+FrameRange parse_frame_range(const std::string& text, int frames, const std::string& flag) {
+  if (frames < 1) throw InvalidArgument("--frames", std::to_string(frames), "must be ≥ 1");
+  if (text.empty()) return {0, frames - 1};
+  // Digits only: a sign, a decimal point or an exponent is refused, not rounded.
+  const auto frame_number = [&](const std::string& part) {
+    if (part.empty() || part.size() > 9 ||
+        part.find_first_not_of("0123456789") != std::string::npos)
+      throw InvalidArgument(flag, text,
+                            fmt::format("expected FIRST-LAST, whole frame numbers from 0 to {} "
+                                        "(frames count from 0), e.g. 0-{}",
+                                        frames - 1, std::min(9, frames - 1)));
+    return std::stoi(part);
+  };
+  const size_t dash = text.find('-');
+  FrameRange r;
+  r.first = frame_number(text.substr(0, dash));
+  r.last = dash == std::string::npos ? r.first : frame_number(text.substr(dash + 1));
+  if (r.first > r.last)
+    throw InvalidArgument(flag, text, "the first frame comes after the last");
+  if (r.last >= frames)
+    throw InvalidArgument(flag, text,
+                          fmt::format("the animation has {} frames, numbered 0 to {}", frames,
+                                      frames - 1));
+  return r;
+}
+
 std::pair<int, int> parse_size(const std::string& text, const std::string& flag) {
   const size_t x = text.find('x');
   if (x == std::string::npos) throw InvalidArgument(flag, text, "expected WIDTHxHEIGHT, e.g. 800x600");

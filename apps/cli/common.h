@@ -37,6 +37,15 @@ struct ParamRange {
   double from = 0, to = 0;
 };
 ParamRange parse_range(const std::string& text, const std::string& flag);
+/// The frames an animation run renders: first..last, both included, 0-based as the frames'
+/// file names (frame_0000.png is frame 0).
+struct FrameRange {
+  int first = 0, last = 0;
+  int count() const { return last - first + 1; }
+};
+/// Parses --frame-range "A-B" (or "A", one frame) for an animation of `frames` frames: whole
+/// numbers with 0 ≤ A ≤ B < frames. Empty `text`: every frame. Throws InvalidArgument.
+FrameRange parse_frame_range(const std::string& text, int frames, const std::string& flag);
 /// Parses "WxH" (whole numbers within validate_image_size's limits). Throws InvalidArgument.
 std::pair<int, int> parse_size(const std::string& text, const std::string& flag);
 

@@ -5,19 +5,25 @@
 #include <cmath>
 #include <numbers>
 
+#include "pov_detail.h"
 #include "render_detail.h"
 #include "zeroset/error.h"
 #include "zeroset/expr/polynomial.h"
 #include "zeroset/io/atomic_file.h"
 
 namespace zeroset {
+namespace detail {
+
+std::string pov_vec(const Vec3& v) {
+  return fmt::format("<{:.17g}, {:.17g}, {:.17g}>", v.x(), v.y(), v.z());
+}
+
+}  // namespace detail
+
 namespace {
 
 constexpr int kPovMaxOrder = 35;
-
-std::string vec(const Vec3& v) {
-  return fmt::format("<{:.17g}, {:.17g}, {:.17g}>", v.x(), v.y(), v.z());
-}
+using detail::pov_vec;
 
 std::string texture(const char* keyword, const Material& m) {
   // POV-Ray: ambient × pigment + diffuse × pigment × (n·l) + phong × (r·v)^phong_size, the
@@ -27,25 +33,59 @@ std::string texture(const char* keyword, const Material& m) {
       "    pigment {{ color rgb {} }}\n"
       "    finish {{ ambient {:.6g} diffuse 1 phong {:.6g} phong_size {:.6g} }}\n"
       "  }}\n",
-      keyword, vec(m.diffuse), m.ambient, m.specular, m.shininess);
+      keyword, pov_vec(m.diffuse), m.ambient, m.specular, m.shininess);
 }
 
 }  // namespace
 
-std::string pov_scene(const Surface& surface, const RenderOptions& options) {
-  detail::validate(options);
+namespace detail {
+
+Polynomial pov_polynomial(const Surface& surface) {
   const Field& field = surface.field;
   if (!field.is_polynomial())
     throw BadInput("POV-Ray export needs a polynomial surface; '" + surface.label() +
                    "' is not a polynomial in x, y, z");
   field.require_parameters();
-  const Polynomial poly = field.polynomial();
+  Polynomial poly = field.polynomial();
   if (poly.degree() > kPovMaxOrder)
     throw InvalidArgument("degree", std::to_string(poly.degree()),
                           "POV-Ray's polynomial object supports degree up to 35");
   if (poly.degree() < 1)
     throw BadInput("POV-Ray export: '" + surface.label() + "' is a constant, there is no surface");
   (void)surface.bounds();  // throws BadInput when the clip is unbounded
+  return poly;
+}
+
+std::string pov_preamble(const RenderOptions& options) {
+  std::string out = "#version 3.7;\n";
+  out += "global_settings { assumed_gamma 1.0 ambient_light rgb <1, 1, 1> }\n";
+  out += fmt::format("background {{ color rgb {} }}\n\n", pov_vec(options.background));
+  return out;
+}
+
+std::string pov_polynomial_object(int degree, const std::vector<PovTerm>& terms,
+                                  const Surface& surface, const RenderOptions& options) {
+  std::string out = fmt::format("\npolynomial {{ {},\n", degree);
+  for (size_t n = 0; n < terms.size(); ++n)
+    out += fmt::format("  xyz({}, {}, {}): {}{}\n", terms[n].i, terms[n].j, terms[n].k,
+                       terms[n].coefficient, n + 1 < terms.size() ? "," : "");
+  out += "  sturm\n  clipped_by {\n";
+  for (const SphereClip& s : surface.clip.spheres)
+    out += fmt::format("    sphere {{ {}, {:.17g} }}\n", pov_vec(s.center), s.radius);
+  for (const HalfSpaceClip& h : surface.clip.planes)
+    out += fmt::format("    plane {{ {}, {:.17g} }}\n", pov_vec(h.normal), h.offset);
+  out += "  }\n  bounded_by { clipped_by }\n";
+  out += texture("texture", options.front);
+  out += texture("interior_texture", options.back);
+  out += "}\n";
+  return out;
+}
+
+}  // namespace detail
+
+std::string pov_scene(const Surface& surface, const RenderOptions& options) {
+  detail::validate(options);
+  const Polynomial poly = detail::pov_polynomial(surface);
   const View view = View::from_camera(detail::camera_of(surface, options),
                                       surface.scene_radius(), options.width, options.height);
   const detail::Shader shader(options, view);
@@ -55,40 +95,28 @@ std::string pov_scene(const Surface& surface, const RenderOptions& options) {
   out += fmt::format("// F = {}\n", poly.to_string());
   out += fmt::format("// Render: povray +W{} +H{} +Iscene.pov +Oscene.png\n", options.width,
                      options.height);
-  out += "#version 3.7;\n";
-  out += "global_settings { assumed_gamma 1.0 ambient_light rgb <1, 1, 1> }\n";
-  out += fmt::format("background {{ color rgb {} }}\n\n", vec(options.background));
+  out += detail::pov_preamble(options);
   // POV-Ray's camera is left-handed: a negative `right` makes the frame right-handed, as
   // ours. `angle` is the horizontal field of view; `sky` is the image's up direction.
   const double horizontal_deg =
       2.0 * std::atan(view.tan_half_fov * view.aspect()) * 180.0 / std::numbers::pi;
   out += "camera {\n  perspective\n";
-  out += fmt::format("  location {}\n", vec(view.eye));
-  out += fmt::format("  sky {}\n", vec(view.up));
+  out += fmt::format("  location {}\n", pov_vec(view.eye));
+  out += fmt::format("  sky {}\n", pov_vec(view.up));
   out += "  up <0, 1, 0>\n";
   out += fmt::format("  right <{:.17g}, 0, 0>\n", -view.aspect());
   out += fmt::format("  angle {:.17g}\n", horizontal_deg);
-  out += fmt::format("  look_at {}\n}}\n\n", vec(view.target));
+  out += fmt::format("  look_at {}\n}}\n\n", pov_vec(view.target));
   const double far = 1000.0 * surface.scene_radius();
   for (const auto& l : shader.lights)
     out += fmt::format(
         "light_source {{ {} color rgb {} parallel point_at {} shadowless }}\n",
-        vec(view.target + far * l.direction), vec(l.color), vec(view.target));
+        pov_vec(view.target + far * l.direction), pov_vec(l.color), pov_vec(view.target));
 
-  out += fmt::format("\npolynomial {{ {},\n", poly.degree());
-  const auto& terms = poly.terms();
-  for (size_t n = 0; n < terms.size(); ++n)
-    out += fmt::format("  xyz({}, {}, {}): {:.17g}{}\n", terms[n].i, terms[n].j, terms[n].k,
-                       terms[n].c, n + 1 < terms.size() ? "," : "");
-  out += "  sturm\n  clipped_by {\n";
-  for (const SphereClip& s : surface.clip.spheres)
-    out += fmt::format("    sphere {{ {}, {:.17g} }}\n", vec(s.center), s.radius);
-  for (const HalfSpaceClip& h : surface.clip.planes)
-    out += fmt::format("    plane {{ {}, {:.17g} }}\n", vec(h.normal), h.offset);
-  out += "  }\n  bounded_by { clipped_by }\n";
-  out += texture("texture", options.front);
-  out += texture("interior_texture", options.back);
-  out += "}\n";
+  std::vector<detail::PovTerm> terms;
+  for (const Monomial& m : poly.terms())
+    terms.push_back({m.i, m.j, m.k, fmt::format("{:.17g}", m.c)});
+  out += detail::pov_polynomial_object(poly.degree(), terms, surface, options);
   return out;
 }
 

@@ -13,21 +13,15 @@
 
 #include <nlohmann/json.hpp>
 
-#include "support/run_command.h"
+#include "cli/cli_support.h"
 #include "zeroset/io/image.h"
 
 namespace zeroset {
 namespace {
 
 using test::run_command;
-
-std::string zs(const std::string& args) { return std::string(ZEROSET_BINARY) + " " + args; }
-
-std::string temp_dir() {
-  auto d = std::filesystem::temp_directory_path() / "zeroset_cli_test";
-  std::filesystem::create_directories(d);
-  return d.string();
-}
+using test::temp_dir;
+using test::zs;
 
 TEST(Cli, ListShowsEveryCatalogSurfaceOnOneLineEach) {
   const auto r = run_command(zs("list"));
