@@ -368,15 +368,5 @@ TEST(CliJsurf, EveryCommandTakesAJsurfSurface) {
   }
 }
 
-TEST(CliJsurf, TheViewerOpensAJsurfSurface) {
-  const std::string dir = temp_dir();
-  const std::string f = write_text("view.jsurf", surfer_file(10));
-  const auto help = run_command(zs("view --help"));
-  if (help.output.find("--screenshot") == std::string::npos || !std::getenv("DISPLAY"))
-    GTEST_SKIP() << "no viewer or no display: view not run";
-  const auto r = run_command(zs("view " + f + " --screenshot " + dir + "/view.png --frames 3"));
-  EXPECT_EQ(r.exit_code, 0) << r.output;
-}
-
 }  // namespace
 }  // namespace zeroset

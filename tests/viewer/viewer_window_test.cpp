@@ -279,6 +279,25 @@ TEST(ViewerWindow, SingularSetNotesForASquareAndAnUnboundedSurface) {
   }
 }
 
+TEST(ViewerWindow, OpensASurferFile) {
+  if (!has_xvfb()) GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb)";
+  const std::string dir = temp_dir();
+  // SURFER's own syntax: the parameter a, a clip sphere of radius 10^0.3, a rotation.
+  const std::string surface = write_script(
+      "cayley.jsurf",
+      "# a SURFER file\r\n"
+      "surface_equation=4*(x^2+y^2+z^2) + 16*x*y*z - a\r\n"
+      "surface_parameter_a=1\r\n"
+      "scale_factor=0.3\r\n"
+      "rotation_matrix=1 0 0 0 0 0.8 -0.6 0 0 0.6 0.8 0 0 0 0 1\r\n");
+  const std::string shot = dir + "/jsurf.png";
+  const auto r = view(surface + " --size 700x500 --script " +
+                      write_script("jsurf.txt", "wait\nscreenshot " + shot + "\n"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // The picture right of the panel shows the surface.
+  EXPECT_GT(census(read_image(shot), 360).surface, 0.05);
+}
+
 TEST(ViewerWindow, MalformedScriptIsBadInputBeforeAWindowOpens) {
   const std::string script = write_script("bad-script.txt", "mode mesh\nparam mu\n");
   const auto r = run_command(std::string(ZEROSET_BINARY) + " view kummer --script " + script);
