@@ -3,7 +3,7 @@
 # Usage: scripts/install-deps.sh [--peers]   (--peers adds the tools the benchmarks compare against)
 set -euo pipefail
 
-build=(cmake g++ make pkg-config clang libclang-rt-14-dev
+build=(cmake g++ make pkg-config clang libclang-rt-14-dev dpkg-dev
        zlib1g-dev libeigen3-dev libcli11-dev libfmt-dev nlohmann-json3-dev libstb-dev libomp-dev
        libgtest-dev libgmock-dev libbenchmark-dev
        libglfw3-dev libepoxy-dev libimgui-dev

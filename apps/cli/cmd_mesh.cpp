@@ -373,12 +373,15 @@ void register_mesh_command(CLI::App& app) {
                 "rounded off a cell away from the curve) instead of meeting exactly on it");
   cmd->add_flag("--no-curves", args->no_curves,
                 "Leave the singular curves out of the mesh file (OBJ 'l' lines, PLY edges)");
-  cmd->add_option("-o,--output", args->output, "Mesh file: .obj, .ply, .stl or .glb");
+  cmd->add_option("-o,--output", args->output, "Mesh file: .obj, .ply, .stl or .glb")
+      ->type_name("FILE");
   cmd->add_option("--stats", args->stats,
                   "JSON file with counts, timings, quality before and after improvement and the "
-                  "singular set found");
-  cmd->add_option("--png", args->png, "Picture of the final mesh");
-  cmd->add_option("--png-raw", args->png_raw, "Picture of the polygonizer's mesh before improvement");
+                  "singular set found")
+      ->type_name("FILE.json");
+  cmd->add_option("--png", args->png, "Picture of the final mesh")->type_name("FILE.png");
+  cmd->add_option("--png-raw", args->png_raw, "Picture of the polygonizer's mesh before improvement")
+      ->type_name("FILE.png");
   cmd->add_option("--size", args->size, "Picture size WxH")->capture_default_str();
   cmd->add_flag("--wireframe", args->wireframe, "Draw the mesh edges in the pictures");
   add_show_singular_flag(cmd, args->show_singular, "the pictures (--png, --png-raw)");

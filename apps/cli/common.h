@@ -112,5 +112,6 @@ void register_render_commands(CLI::App& app);   // render, animate, export
 void register_sample_command(CLI::App& app);    // sample
 void register_mesh_command(CLI::App& app);      // mesh
 void register_view_command(CLI::App& app);      // view
+void register_completion_command(CLI::App& app);  // completion
 
 }  // namespace zeroset::cli

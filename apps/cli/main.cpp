@@ -79,6 +79,7 @@ int main(int argc, char** argv) {
   cli::register_sample_command(app);
   cli::register_mesh_command(app);
   cli::register_view_command(app);
+  cli::register_completion_command(app);
 
   try {
     app.parse(argc, argv);
