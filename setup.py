@@ -45,5 +45,7 @@ setup(
     package_dir={"": "python"},
     ext_modules=[Extension("zeroset._zeroset", sources=[])],
     cmdclass={"build_ext": CMakeBuild},
+    # Beside the CMake build directory's own files, not among them.
+    options={"build": {"build_base": "build/pip"}},
     zip_safe=False,
 )

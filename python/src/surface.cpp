@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <exception>
 #include <thread>
 
 #include "bindings.h"
@@ -45,8 +46,8 @@ py::dict camera_dict(const Camera& c) {
 
 // --- batched evaluation --------------------------------------------------------------------
 enum class What { kValue, kGradient, kHessian };
-constexpr size_t kChunk =
-    4096;  // as bench/field_bench: the structure-of-arrays buffers stay in cache
+// Points per batch call: the structure-of-arrays buffers stay in cache (field_bench: 4,096).
+constexpr size_t kChunk = 1024;
 
 // Evaluates points [begin, end) with one Evaluator through the library's batch calls, copying
 // each chunk into structure-of-arrays buffers and the results back into `out` (1, 3 or 9
@@ -101,7 +102,7 @@ py::array_t<double> evaluate(const PySurface& s, const py::array_t<double, py::a
   if (threads < 0) throw py::value_error("threads must be 0 (all cores) or positive");
   const size_t n = p.size() / 3;
   const Field& field = s.surface().field;
-  Evaluator check(field);  // throws for a parameter without a value, before any work
+  field.require_parameters();  // before any work: a worker thread must not throw
   std::vector<py::ssize_t> shape{static_cast<py::ssize_t>(n)};
   if (what == What::kGradient) shape.push_back(3);
   if (what == What::kHessian) shape.insert(shape.end(), {3, 3});
@@ -114,12 +115,22 @@ py::array_t<double> evaluate(const PySurface& s, const py::array_t<double, py::a
   py::gil_scoped_release release;
   if (workers == 1) {
     evaluate_range(field, p.data(), 0, n, what, o);
-  } else {
+    return out;
+  }
+  std::vector<std::exception_ptr> errors(workers);
+  {
     std::vector<std::jthread> pool;
     for (size_t w = 0; w < workers; ++w)
-      pool.emplace_back(evaluate_range, std::cref(field), p.data(), n * w / workers,
-                        n * (w + 1) / workers, what, o);
+      pool.emplace_back([&, w] {
+        try {
+          evaluate_range(field, p.data(), n * w / workers, n * (w + 1) / workers, what, o);
+        } catch (...) {  // out of memory: raised in the calling thread below
+          errors[w] = std::current_exception();
+        }
+      });
   }
+  for (const auto& e : errors)
+    if (e) std::rethrow_exception(e);
   return out;
 }
 
