@@ -23,6 +23,25 @@ using namespace pybind11::literals;
 struct PyFloaters {
   FloaterSystem sys;
   StepStats last;
+  bool busy = false;  ///< a call works on `sys` without the GIL (read and set with the GIL held)
+};
+
+// Refuses a call while another Python thread steps or draws the system without the GIL.
+const PyFloaters& idle(const PyFloaters& f) {
+  if (f.busy) throw std::runtime_error("the floater system is busy in another thread");
+  return f;
+}
+
+/// Marks the system busy for one call that releases the GIL.
+struct Busy {
+  PyFloaters& f;
+  explicit Busy(PyFloaters& floaters) : f(floaters) {
+    idle(f);
+    f.busy = true;
+  }
+  ~Busy() { f.busy = false; }
+  Busy(const Busy&) = delete;
+  Busy& operator=(const Busy&) = delete;
 };
 
 py::dict step_dict(const StepStats& s) {
@@ -95,7 +114,7 @@ py::tuple sample(const PySurface& s, const std::string& given, std::optional<siz
   double seconds = 0;
   std::optional<size_t> converged_at;
   run_interruptible([&](std::stop_token stop) {
-    PyFloaters f{FloaterSystem(surface, options), {}};
+    PyFloaters f{FloaterSystem(surface, options), {}, false};
     auto run = [&](const StepStats& st) {
       f.last = st;
       seconds += st.seconds;
@@ -131,6 +150,7 @@ py::tuple sample(const PySurface& s, const std::string& given, std::optional<siz
 // Steps `n` times, the parameters moving linearly to `target` when given; each step is whole,
 // so an interrupt leaves the system after its last complete step.
 py::dict step(PyFloaters& f, size_t n, const std::optional<std::map<std::string, double>>& target) {
+  const Busy busy(f);
   std::vector<double> from(f.sys.parameters().begin(), f.sys.parameters().end());
   const std::vector<double> to = target ? parameters_with(f.sys, *target) : from;
   run_interruptible([&](std::stop_token stop) {
@@ -159,43 +179,85 @@ void bind_floaters(py::module_& m) {
       .def("step", &step, "n"_a = 1, "target"_a = py::none())
       .def("set_params",
            [](PyFloaters& f, const std::map<std::string, double>& values) {
+             idle(f);
              f.sys.set_parameters(parameters_with(f.sys, values));
            })
       .def("get_params",
            [](const PyFloaters& f) {
+             idle(f);
              py::dict d;
              const auto& names = f.sys.surface().field.parameter_names();
              for (size_t k = 0; k < names.size(); ++k) d[py::str(names[k])] = f.sys.parameters()[k];
              return d;
            })
-      .def("reset", [](PyFloaters& f) { f.sys.reset(); })
+      .def("reset",
+           [](PyFloaters& f) {
+             idle(f);
+             f.sys.reset();
+           })
       .def(
-          "reseed", [](PyFloaters& f, std::uint64_t seed) { f.sys.reseed(seed); }, "seed"_a)
+          "reseed",
+          [](PyFloaters& f, std::uint64_t seed) {
+            idle(f);
+            f.sys.reseed(seed);
+          },
+          "seed"_a)
       .def_property_readonly("positions",
-                             [](const PyFloaters& f) { return to_array(f.sys.positions()); })
+                             [](const PyFloaters& f) {
+                               idle(f);
+                               return to_array(f.sys.positions());
+                             })
       .def_property_readonly("normals",
-                             [](const PyFloaters& f) { return to_array(f.sys.normals()); })
-      .def_property_readonly("radii", [](const PyFloaters& f) { return doubles(f.sys.radii()); })
+                             [](const PyFloaters& f) {
+                               idle(f);
+                               return to_array(f.sys.normals());
+                             })
+      .def_property_readonly("radii",
+                             [](const PyFloaters& f) {
+                               idle(f);
+                               return doubles(f.sys.radii());
+                             })
       .def_property_readonly("max_radii",
-                             [](const PyFloaters& f) { return doubles(f.sys.max_radii()); })
+                             [](const PyFloaters& f) {
+                               idle(f);
+                               return doubles(f.sys.max_radii());
+                             })
       .def_property_readonly("ids",
                              [](const PyFloaters& f) {
+                               idle(f);
                                const auto ids = f.sys.ids();
                                return py::array_t<std::uint64_t>(
                                    static_cast<py::ssize_t>(ids.size()), ids.data());
                              })
-      .def_property_readonly("count", [](const PyFloaters& f) { return f.sys.size(); })
-      .def_property_readonly("steps_taken", [](const PyFloaters& f) { return f.sys.steps_taken(); })
+      .def_property_readonly("count",
+                             [](const PyFloaters& f) {
+                               idle(f);
+                               return f.sys.size();
+                             })
+      .def_property_readonly("steps_taken",
+                             [](const PyFloaters& f) {
+                               idle(f);
+                               return f.sys.steps_taken();
+                             })
       .def_property_readonly("nominal_radius",
-                             [](const PyFloaters& f) { return f.sys.nominal_radius(); })
-      .def_property_readonly("last_step", [](const PyFloaters& f) { return step_dict(f.last); })
+                             [](const PyFloaters& f) {
+                               idle(f);
+                               return f.sys.nominal_radius();
+                             })
+      .def_property_readonly("last_step",
+                             [](const PyFloaters& f) {
+                               idle(f);
+                               return step_dict(f.last);
+                             })
       .def_property_readonly("surface",
                              [](const PyFloaters& f) {
+                               idle(f);
                                return PySurface{Scene{f.sys.surface()}, f.sys.surface().label()};
                              })
       .def(
           "save",
           [](const PyFloaters& f, const std::string& path, bool ascii) {
+            idle(f);
             if (file_extension(path) != "ply")
               throw InvalidArgument("path", path,
                                     "the point set is written as PLY: use a .ply name");
@@ -205,8 +267,9 @@ void bind_floaters(py::module_& m) {
           "path"_a, "ascii"_a = false)
       .def(
           "render",
-          [](const PyFloaters& f, int width, int height, std::optional<std::vector<double>> camera,
+          [](PyFloaters& f, int width, int height, std::optional<std::vector<double>> camera,
              double disk_scale, bool show_singular, int threads) {
+            const Busy busy(f);  // drawn without the GIL
             // As `zeroset sample --png`.
             if (!(disk_scale > 0) || !std::isfinite(disk_scale))
               throw InvalidArgument("disk_scale", std::to_string(disk_scale), "must be positive");
@@ -242,7 +305,7 @@ void bind_floaters(py::module_& m) {
   m.def("_sample", &sample, "surface"_a, "options"_a, "steps"_a, "max_steps"_a, "animate"_a,
         "settle_steps"_a, "threads"_a);
   m.def("_floaters", [](const PySurface& s, const std::string& given, int threads) {
-    return PyFloaters{FloaterSystem(s.surface(), options_from(s, given, threads)), {}};
+    return PyFloaters{FloaterSystem(s.surface(), options_from(s, given, threads)), {}, false};
   });
 }
 

@@ -111,7 +111,8 @@ py::dict quality_dict(const MeshQuality& q, const MeshTopology& t) {
 }
 
 py::tuple make_mesh(const PySurface& s, const MeshArgs& a) {
-  const Surface& surface = s.surface();
+  // Its own copy: another Python thread may change the surface while the GIL is released.
+  const Surface surface = s.surface();
   const MeshSettings settings = settings_from(a, s);
   PolygonizeOptions po;
   po.cells = settings.cells;

@@ -87,11 +87,12 @@ void bind_render(py::module_& m) {
         Image image;
         py::dict stats;
         RenderStats rs;
+        const Surface surface = s.surface();  // its own copy while the GIL is released
         run_interruptible([&](std::stop_token stop) {
           // As `zeroset render --show-singular`: the set when the clip is bounded.
-          if (show_singular && s.surface().clip.is_bounded())
-            o.singular_overlay = SingularOverlay{.set = find_singular_set(s.surface(), {}, stop)};
-          if (!stop.stop_requested()) image = render_surface(s.surface(), o, &rs, stop);
+          if (show_singular && surface.clip.is_bounded())
+            o.singular_overlay = SingularOverlay{.set = find_singular_set(surface, {}, stop)};
+          if (!stop.stop_requested()) image = render_surface(surface, o, &rs, stop);
         });
         stats["width"] = o.width;
         stats["height"] = o.height;

@@ -101,7 +101,8 @@ py::array_t<double> evaluate(const PySurface& s, const py::array_t<double, py::a
   const std::span<const double> p = points_of(pts);
   if (threads < 0) throw py::value_error("threads must be 0 (all cores) or positive");
   const size_t n = p.size() / 3;
-  const Field& field = s.surface().field;
+  // A copy (the tape is shared): another Python thread may change the parameters meanwhile.
+  const Field field = s.surface().field;
   field.require_parameters();  // before any work: a worker thread must not throw
   std::vector<py::ssize_t> shape{static_cast<py::ssize_t>(n)};
   if (what == What::kGradient) shape.push_back(3);
@@ -186,8 +187,9 @@ void bind_surface(py::module_& m) {
           "singular_set",
           [](const PySurface& s, int cells) {
             SingularSet set;
+            const Surface surface = s.surface();  // its own copy while the GIL is released
             run_interruptible([&](std::stop_token stop) {
-              set = find_singular_set(s.surface(), {.cells = cells}, stop);
+              set = find_singular_set(surface, {.cells = cells}, stop);
             });
             return singular_set_dict(set);
           },

@@ -163,3 +163,16 @@ def test_bad_paths_raise_value_error(tmp_path):
         s.export_pov(tmp_path / "x.txt")
     with pytest.raises(ValueError):
         zeroset.Surface(tmp_path / "missing.json")
+
+
+def test_a_floater_system_stepping_in_a_thread_refuses_other_calls():
+    f = zeroset.Surface("kummer", mu=1.5).floaters(max_count=3000)
+    worker = threading.Thread(target=lambda: f.step(400))
+    worker.start()
+    time.sleep(0.1)
+    busy = worker.is_alive()
+    if busy:
+        with pytest.raises(RuntimeError, match="busy"):
+            f.positions
+    worker.join()
+    assert f.steps_taken == 400 and len(f.positions) == f.count
