@@ -115,6 +115,34 @@ void BM_KummerValuesCompiled(benchmark::State& state) {
 }
 BENCHMARK(BM_KummerValuesCompiled);
 
+// The same calls over 10^6 points at once, which stream from memory instead of staying in
+// cache: the reference for evaluating a large array from Python (bench/python_overhead.py).
+constexpr int kMillion = 1'000'000;
+
+void BM_KummerValuesCompiledMillion(benchmark::State& state) {
+  Batch b(kMillion);
+  zeroset::Evaluator ev(field(kKummer, "mu", kMu));
+  for (auto _ : state) {
+    ev.values(b.x, b.y, b.z, b.value);
+    benchmark::DoNotOptimize(b.value.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations() * kMillion);
+}
+BENCHMARK(BM_KummerValuesCompiledMillion);
+
+void BM_KummerValueGradientCompiledMillion(benchmark::State& state) {
+  Batch b(kMillion);
+  zeroset::Evaluator ev(field(kKummer, "mu", kMu));
+  for (auto _ : state) {
+    ev.values_gradients(b.x, b.y, b.z, b.value, b.gx, b.gy, b.gz);
+    benchmark::DoNotOptimize(b.value.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations() * kMillion);
+}
+BENCHMARK(BM_KummerValueGradientCompiledMillion);
+
 void BM_BarthValueGradientCompiled(benchmark::State& state) {
   Batch b(kPoints);
   zeroset::Evaluator ev(field(kBarth, "phi", std::numbers::phi));

@@ -7,7 +7,9 @@ build=(cmake g++ make pkg-config clang libclang-rt-14-dev dpkg-dev
        zlib1g-dev libeigen3-dev libcli11-dev libfmt-dev nlohmann-json3-dev libstb-dev libomp-dev
        libgtest-dev libgmock-dev libbenchmark-dev
        libglfw3-dev libepoxy-dev libimgui-dev
-       xvfb xauth libgl1-mesa-dri povray)
+       xvfb xauth libgl1-mesa-dri povray
+       pybind11-dev python3-dev python3-pytest python3-numpy python3-setuptools python3-pip
+       python3-venv)
 peers=(surf-alggeo-nox python3-vtk9 python3-skimage python3-numpy libcgal-dev ffmpeg hyperfine)
 
 want=("${build[@]}")

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <memory>
 #include <new>
+#include <sstream>
 #include <thread>
 
 #define STB_IMAGE_IMPLEMENTATION
@@ -99,8 +100,9 @@ void Image::set_linear(int x, int y, const Color& c) {
   }
 }
 
-void write_png(const Image& image, const std::string& path) {
-  if (image.width <= 0 || image.height <= 0) throw IoError(path, "image is empty");
+std::vector<std::uint8_t> encode_png(const Image& image) {
+  if (image.width <= 0 || image.height <= 0)
+    throw InvalidArgument("image", "empty", "no pixels to encode");
   // Compress bands of rows in parallel (as pigz does) and join them into one zlib stream.
   const size_t bytes = (static_cast<size_t>(image.width) * 3 + 1) * image.height;
   const size_t cores = std::max(1u, std::thread::hardware_concurrency());
@@ -122,7 +124,7 @@ void write_png(const Image& image, const std::string& path) {
   std::vector<unsigned char> idat{0x78, 0x01};  // zlib header: deflate, 32K window, fastest
   uLong adler = part[0].adler;
   for (size_t i = 0; i < part.size(); ++i) {
-    if (!part[i].ok) throw IoError(path, "PNG compression failed (out of memory?)");
+    if (!part[i].ok) throw Error("PNG compression failed (out of memory?)");
     if (i > 0)
       adler = adler32_combine(adler, part[i].adler, static_cast<z_off_t>(part[i].raw_size));
     idat.insert(idat.end(), part[i].deflated.get(), part[i].deflated.get() + part[i].size);
@@ -133,12 +135,27 @@ void write_png(const Image& image, const std::string& path) {
   append_u32(header, static_cast<std::uint32_t>(image.width));
   append_u32(header, static_cast<std::uint32_t>(image.height));
   header.insert(header.end(), {8, 2, 0, 0, 0});  // 8-bit RGB, deflate, filters 0, no interlace
+  std::ostringstream out;
+  static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  out.write(reinterpret_cast<const char*>(kSignature), sizeof kSignature);
+  write_chunk(out, "IHDR", header.data(), header.size());
+  write_chunk(out, "IDAT", idat.data(), idat.size());
+  write_chunk(out, "IEND", nullptr, 0);
+  const std::string png = std::move(out).str();
+  return {png.begin(), png.end()};
+}
+
+void write_png(const Image& image, const std::string& path) {
+  if (image.width <= 0 || image.height <= 0) throw IoError(path, "image is empty");
+  std::vector<unsigned char> bytes;
+  try {
+    bytes = encode_png(image);
+  } catch (const Error& e) {
+    throw IoError(path, e.what());
+  }
   write_file_atomically(path, [&](std::ostream& out) {
-    static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-    out.write(reinterpret_cast<const char*>(kSignature), sizeof kSignature);
-    write_chunk(out, "IHDR", header.data(), header.size());
-    write_chunk(out, "IDAT", idat.data(), idat.size());
-    write_chunk(out, "IEND", nullptr, 0);
+    out.write(reinterpret_cast<const char*>(bytes.data()),
+              static_cast<std::streamsize>(bytes.size()));
   });
 }
 

@@ -24,6 +24,9 @@ struct Image {
   void set_linear(int x, int y, const Color& c);
 };
 
+/// The PNG file's bytes (8-bit RGB, zlib level 1), as write_png writes them: for front ends
+/// that show a picture without a file. Throws InvalidArgument for an empty image.
+std::vector<std::uint8_t> encode_png(const Image& image);
 /// Writes a PNG (8-bit RGB, zlib level 1) atomically. Large pictures are compressed in bands
 /// on all cores (an 800×800 picture in a few milliseconds). Throws IoError.
 void write_png(const Image& image, const std::string& path);

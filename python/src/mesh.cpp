@@ -1,0 +1,261 @@
+// Surface.mesh: the steps of `zeroset mesh` (apps/cli/cmd_mesh.cpp) in the same order with the
+// same options: polygonize, crossings, the improver until at rest or its step limit, finish.
+#include <unistd.h>
+
+#include <chrono>
+#include <optional>
+
+#include "bindings.h"
+#include "zeroset/error.h"
+#include "zeroset/mesh/adjacency.h"
+#include "zeroset/mesh/crossings.h"
+#include "zeroset/mesh/improve.h"
+#include "zeroset/mesh/mesh_io.h"
+#include "zeroset/mesh/polygonize.h"
+#include "zeroset/mesh/quality.h"
+#include "zeroset/mesh/settings.h"
+#include "zeroset/render/render.h"
+
+namespace zeroset::python {
+namespace {
+
+using namespace pybind11::literals;
+
+/// A mesh with the surface it was made from (for pictures: camera, scene size, ∇F normals).
+struct PyMesh {
+  Mesh mesh;
+  Surface surface;
+};
+
+struct MeshArgs {
+  std::optional<int> resolution;
+  std::optional<std::string> improve;  // "auto", "off" or a number of steps
+  std::optional<std::string> boundary;
+  std::string grid = "auto";
+  int refine_steps = PolygonizeOptions{}.refine_steps;
+  bool curvature = true, singularity = true, flips = true, find_singular = true;
+  bool crossings = true, curves = true, quality = false;
+  int threads = 0;
+};
+
+// As `zeroset mesh`: the scene file's "mesh" object, then the arguments given.
+MeshSettings settings_from(const MeshArgs& a, const PySurface& s) {
+  MeshSettings m;
+  if (s.scene.settings.contains("mesh"))
+    apply_mesh_settings(s.scene.settings["mesh"], m, "'" + s.spec + "'");
+  if (a.resolution) m.cells = *a.resolution;
+  if (a.improve) apply_improve(*a.improve, m);
+  if (a.boundary) m.boundary = parse_boundary(*a.boundary);
+  validate_settings(m);
+  return m;
+}
+
+// The grid's estimated memory against what the machine has, so that a resolution far too
+// large is refused instead of exhausting the memory.
+void check_memory(const Surface& surface, const PolygonizeOptions& po) {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || page <= 0) return;
+  const double have = static_cast<double>(pages) * static_cast<double>(page);
+  const double needed = plan_grid(surface, po).estimated_bytes;
+  if (needed > 0.75 * have)
+    throw InvalidArgument("resolution", std::to_string(po.cells),
+                          "would need about " + std::to_string(needed / 1e9).substr(0, 6) +
+                              " GB of memory and this machine has " +
+                              std::to_string(have / 1e9).substr(0, 6) + " GB");
+}
+
+py::dict polygonize_dict(const PolygonizeStats& ps, int resolution, const Mesh& mesh) {
+  return py::dict("resolution"_a = resolution, "cells"_a = ps.cells, "cell_size"_a = ps.cell_size,
+                  "grid"_a = ps.sparse ? "sparse" : "dense", "bricks"_a = ps.bricks,
+                  "bricks_kept"_a = ps.bricks_kept, "grid_samples"_a = ps.grid_samples,
+                  "refine_evaluations"_a = ps.refine_evaluations, "nan_samples"_a = ps.nan_samples,
+                  "active_cells"_a = ps.active_cells, "ambiguous_faces"_a = ps.ambiguous_faces,
+                  "edge_vertices"_a = ps.edge_vertices, "collapsed_edges"_a = ps.collapsed_edges,
+                  "clip_cut_edges"_a = ps.clip_cut_edges,
+                  "clip_snapped_vertices"_a = ps.clip_snapped, "seconds"_a = ps.seconds_total,
+                  "vertices"_a = mesh.vertex_count(), "triangles"_a = mesh.triangle_count());
+}
+
+py::dict crossings_dict(const CrossingStats& cs) {
+  return py::dict("crossing_curves"_a = cs.crossing_curves,
+                  "isolated_curves"_a = cs.isolated_curves, "curve_vertices"_a = cs.curve_vertices,
+                  "removed_triangles"_a = cs.removed_triangles,
+                  "added_triangles"_a = cs.added_triangles, "strip_vertices"_a = cs.strip_vertices,
+                  "failure"_a = cs.failure, "seconds"_a = cs.seconds);
+}
+
+py::dict improve_dict(const ImproveStats& is, int max_steps) {
+  std::vector<Vec3> found = is.singular_points;
+  return py::dict(
+      "steps"_a = is.steps, "max_steps"_a = max_steps, "converged"_a = is.converged,
+      "last_max_move_in_mean_edges"_a = is.max_move, "edge_flips"_a = is.flips,
+      "shortened_moves"_a = is.shortened_moves, "cancelled_moves"_a = is.cancelled_moves,
+      "flipped_triangles"_a = is.flipped_triangles, "singular_points_found"_a = to_array(found),
+      "max_residual"_a = is.max_residual, "seconds"_a = is.seconds);
+}
+
+py::dict quality_dict(const MeshQuality& q, const MeshTopology& t) {
+  return py::dict(
+      "vertices"_a = q.vertices, "triangles"_a = q.triangles,
+      "mean_edge_length"_a = q.mean_edge_length, "min_angle_histogram"_a = q.min_angle_histogram,
+      "percent_min_angle_below_10"_a = q.percent_below_10,
+      "percent_min_angle_below_20"_a = q.percent_below_20,
+      "percent_min_angle_below_30"_a = q.percent_below_30,
+      "mean_min_angle_deg"_a = q.mean_min_angle_deg, "smallest_angle_deg"_a = q.smallest_angle_deg,
+      "mean_radius_ratio"_a = q.mean_radius_ratio, "max_residual"_a = q.max_residual,
+      "rms_residual"_a = q.rms_residual, "max_normal_deviation_deg"_a = q.max_normal_deviation_deg,
+      "flipped_triangles"_a = q.flipped_triangles, "boundary_vertices"_a = q.boundary_vertices,
+      "edges"_a = t.edges, "boundary_edges"_a = t.boundary_edges,
+      "non_manifold_edges"_a = t.non_manifold_edges,
+      "euler_characteristic"_a = t.euler_characteristic, "watertight"_a = t.is_watertight());
+}
+
+py::tuple make_mesh(const PySurface& s, const MeshArgs& a) {
+  // Its own copy: another Python thread may change the surface while the GIL is released.
+  const Surface surface = s.surface();
+  const MeshSettings settings = settings_from(a, s);
+  PolygonizeOptions po;
+  po.cells = settings.cells;
+  po.threads = a.threads;
+  po.refine_steps = a.refine_steps;
+  if (a.grid == "dense")
+    po.mode = GridMode::kDense;
+  else if (a.grid == "sparse")
+    po.mode = GridMode::kSparse;
+  else if (a.grid != "auto")
+    throw InvalidArgument("grid", a.grid, "use auto, dense or sparse");
+  if (a.refine_steps < 0 || a.refine_steps > 64)
+    throw InvalidArgument("refine_steps", std::to_string(a.refine_steps), "must lie in [0, 64]");
+  ImproveOptions io;
+  io.boundary = settings.boundary;
+  io.use_curvature = a.curvature;
+  io.use_singularity = a.singularity;
+  io.flip_edges = a.flips;
+  io.find_singular_points = a.find_singular;
+  io.threads = a.threads;
+  const int max_steps = settings.improve ? settings.max_improve_steps.value_or(io.max_steps) : 0;
+  check_memory(surface, po);
+
+  Mesh mesh;
+  PolygonizeStats ps;
+  std::optional<CrossingStats> cs;
+  ImproveStats is;
+  std::optional<MeshQuality> before, after;
+  std::optional<MeshTopology> topology_before, topology_after;
+  double seconds = 0;
+  QualityOptions qo;
+  qo.threads = a.threads;
+  run_interruptible([&](std::stop_token stop) {
+    const auto t0 = std::chrono::steady_clock::now();
+    mesh = polygonize(surface, po, &ps, stop);
+    if (a.crossings && !mesh.empty() && !stop.stop_requested())
+      cs = mesh_crossings(mesh, surface, ps.cell_size, {}, nullptr, stop);
+    if (a.quality) {
+      before = measure_quality(mesh, surface, qo);
+      topology_before = mesh_topology(mesh);
+    }
+    if (max_steps > 0 && !mesh.empty() && !stop.stop_requested()) {
+      MeshImprover improver(std::move(mesh), surface, io);
+      for (int k = 0; k < max_steps && !improver.converged(); ++k) {
+        if (stop.stop_requested()) return;
+        improver.step();
+      }
+      improver.finish();
+      is = improver.stats();
+      mesh = improver.take_mesh();
+    }
+    if (a.quality) {
+      after = measure_quality(mesh, surface, qo);
+      topology_after = mesh_topology(mesh);
+    }
+    if (!a.curves) mesh.curves.clear();
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  });
+
+  py::dict stats;
+  stats["surface"] = surface.label();
+  stats["polygonize"] = polygonize_dict(ps, settings.cells, mesh);
+  if (cs) stats["crossings"] = crossings_dict(*cs);
+  if (max_steps > 0) {
+    py::dict d = improve_dict(is, max_steps);
+    d["boundary"] = std::string(to_string(settings.boundary));
+    stats["improve"] = d;
+  }
+  if (before) stats["quality_before"] = quality_dict(*before, *topology_before);
+  if (after) stats["quality_after"] = quality_dict(*after, *topology_after);
+  stats["seconds_total"] = seconds;
+  return py::make_tuple(PyMesh{std::move(mesh), surface}, stats);
+}
+
+py::array_t<std::uint32_t> faces(const Mesh& m) {
+  py::array_t<std::uint32_t> out({static_cast<py::ssize_t>(m.triangles.size()), py::ssize_t{3}});
+  std::uint32_t* d = out.mutable_data();
+  for (size_t i = 0; i < m.triangles.size(); ++i)
+    for (int k = 0; k < 3; ++k) d[3 * i + k] = m.triangles[i][k];
+  return out;
+}
+
+}  // namespace
+
+void bind_mesh(py::module_& m) {
+  py::class_<PyMesh>(m, "_Mesh")
+      .def_property_readonly("vertices", [](const PyMesh& p) { return to_array(p.mesh.positions); })
+      .def_property_readonly("faces", [](const PyMesh& p) { return faces(p.mesh); })
+      .def_property_readonly("normals", [](const PyMesh& p) { return to_array(p.mesh.normals); })
+      .def_property_readonly(
+          "is_boundary",
+          [](const PyMesh& p) {
+            py::array_t<bool> out(static_cast<py::ssize_t>(p.mesh.is_boundary.size()));
+            std::copy(p.mesh.is_boundary.begin(), p.mesh.is_boundary.end(), out.mutable_data());
+            return out;
+          })
+      .def_property_readonly(
+          "curves",
+          [](const PyMesh& p) {
+            py::list out;
+            for (const MeshCurve& c : p.mesh.curves)
+              out.append(
+                  py::dict("kind"_a = std::string(to_string(c.kind)), "closed"_a = c.closed,
+                           "vertices"_a = py::array_t<std::uint32_t>(
+                               static_cast<py::ssize_t>(c.vertices.size()), c.vertices.data())));
+            return out;
+          })
+      .def(
+          "save", [](const PyMesh& p, const std::string& path) { write_mesh(p.mesh, path); },
+          "path"_a)
+      .def(
+          "render",
+          [](const PyMesh& p, int width, int height, bool wireframe, bool show_singular,
+             int threads) {
+            // As the pictures of `zeroset mesh --png`.
+            RenderOptions ro;
+            ro.width = width;
+            ro.height = height;
+            ro.samples = 2;
+            ro.threads = threads;
+            Image image;
+            run_interruptible([&](std::stop_token stop) {
+              if (show_singular && p.surface.clip.is_bounded())
+                ro.singular_overlay =
+                    SingularOverlay{.set = find_singular_set(p.surface, {}, stop)};
+              if (!stop.stop_requested()) image = render_mesh(p.surface, p.mesh, ro, wireframe);
+            });
+            return to_array(image);
+          },
+          "width"_a, "height"_a, "wireframe"_a, "show_singular"_a, "threads"_a);
+
+  m.def("_mesh", [](const PySurface& s, std::optional<int> resolution,
+                    std::optional<std::string> improve, std::optional<std::string> boundary,
+                    std::string grid, int refine_steps, bool curvature, bool singularity,
+                    bool flips, bool find_singular, bool crossings, bool curves, bool quality,
+                    int threads) {
+    MeshArgs a{resolution, improve,       boundary,  grid,   refine_steps, curvature, singularity,
+               flips,      find_singular, crossings, curves, quality,      threads};
+    return make_mesh(s, a);
+  });
+  m.def("_read_mesh", [](const std::string& path, const PySurface& s) {
+    return PyMesh{read_mesh(path), s.surface()};
+  });
+}
+
+}  // namespace zeroset::python
