@@ -85,22 +85,6 @@ FloaterOptions options_from(const SampleArgs& a, const Scene& scene) {
 
 nlohmann::json vec_json(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
-// Without a distance, the camera is aimed at the floaters: the clip volume can be much larger
-// than what lies on the surface inside it (the cone fills a third of its clip sphere).
-Camera framing(Camera c, const Surface& surface, std::span<const Vec3> points) {
-  if (points.empty() || c.distance > 0) return c;
-  Box3 b{points[0], points[0]};
-  for (const Vec3& p : points) {
-    b.lo = b.lo.cwiseMin(p);
-    b.hi = b.hi.cwiseMax(p);
-  }
-  double radius = 1e-9 * surface.scene_radius();
-  for (const Vec3& p : points) radius = std::max(radius, (p - b.center()).norm());
-  c.target = b.center();
-  c.distance = 1.08 * radius / std::sin(0.5 * c.fov_deg * M_PI / 180);
-  return c;
-}
-
 nlohmann::json metrics_json(const SampleMetrics& m, double band) {
   nlohmann::json j;
   j["count"] = m.count;
@@ -251,7 +235,7 @@ void run_sample(const SampleArgs& a) {
     ro.threads = global_flags().threads;
     std::vector<double> disks(sys.radii().begin(), sys.radii().end());
     for (double& r : disks) r *= a.disk_scale;
-    ro.camera = framing(camera, final_surface, sys.positions());
+    ro.camera = camera.aimed_at(sys.positions(), 1e-9 * final_surface.scene_radius());
     if (a.show_singular && singular) ro.singular_overlay = SingularOverlay{.set = *singular};
     write_png(render_points(final_surface, sys.positions(), sys.normals(), disks, ro), a.png);
   }

@@ -79,21 +79,6 @@ std::vector<double> parameters_with(const FloaterSystem& sys,
   return q;
 }
 
-// Without a distance the camera is aimed at the floaters, as `zeroset sample --png` frames them.
-Camera framing(Camera c, const Surface& surface, std::span<const Vec3> points) {
-  if (points.empty() || c.distance > 0) return c;
-  Box3 b{points[0], points[0]};
-  for (const Vec3& p : points) {
-    b.lo = b.lo.cwiseMin(p);
-    b.hi = b.hi.cwiseMax(p);
-  }
-  double radius = 1e-9 * surface.scene_radius();
-  for (const Vec3& p : points) radius = std::max(radius, (p - b.center()).norm());
-  c.target = b.center();
-  c.distance = 1.08 * radius / std::sin(0.5 * c.fov_deg * M_PI / 180);
-  return c;
-}
-
 py::tuple sample(const PySurface& s, const std::string& given, std::optional<size_t> steps,
                  size_t max_steps, std::optional<std::tuple<std::string, double, double>> animate,
                  size_t settle_steps, int threads) {
@@ -290,7 +275,7 @@ void bind_floaters(py::module_& m) {
             ro.threads = threads;
             std::vector<double> disks(f.sys.radii().begin(), f.sys.radii().end());
             for (double& r : disks) r *= disk_scale;
-            ro.camera = framing(cam, surface, f.sys.positions());
+            ro.camera = cam.aimed_at(f.sys.positions(), 1e-9 * surface.scene_radius());
             Image image;
             run_interruptible([&](std::stop_token stop) {
               if (show_singular && surface.clip.is_bounded())

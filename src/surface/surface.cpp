@@ -20,6 +20,19 @@ Vec3 Camera::eye(double scene_radius) const {
   return target + dist * dir;
 }
 
+Camera Camera::aimed_at(std::span<const Vec3> points, double min_radius) const {
+  if (points.empty() || distance > 0) return *this;
+  Vec3 lo = points[0], hi = points[0];
+  for (const Vec3& p : points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  const Vec3 centre = 0.5 * (lo + hi);
+  double radius = min_radius;
+  for (const Vec3& p : points) radius = std::max(radius, (p - centre).norm());
+  Camera c = *this;
+  c.target = centre;
+  c.distance = 1.08 * radius / std::sin(0.5 * fov_deg * M_PI / 180);
+  return c;
+}
+
 CameraFrame Camera::frame(double scene_radius) const {
   CameraFrame f;
   f.eye = eye(scene_radius);

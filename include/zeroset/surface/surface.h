@@ -3,6 +3,7 @@
 /// "From text to output").
 #include <functional>
 #include <map>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -51,6 +52,12 @@ struct Camera {
   /// the unrolled image's up is the azimuth's direction. Meaningful only when the eye differs
   /// from the target.
   CameraFrame frame(double scene_radius) const;
+  /// Without a distance: this camera aimed at the centre of the points' bounding box, from
+  /// the distance at which the ball around it holding them all (radius at least
+  /// `min_radius`) fills the field of view. The clip volume can be much larger than what lies
+  /// on the surface inside it (the cone fills a third of its clip sphere). With a distance, or
+  /// no points, the camera as it is.
+  Camera aimed_at(std::span<const Vec3> points, double min_radius) const;
 };
 
 /// Known singular points of a surface for given parameter values (may be empty).
