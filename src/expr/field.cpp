@@ -197,6 +197,16 @@ int Field::parameter_index(std::string_view name) const {
   return it == names.end() ? -1 : static_cast<int>(it - names.begin());
 }
 
+void check_parameter_value(std::string_view name, double value) {
+  if (!std::isfinite(value))
+    throw InvalidArgument(std::string(name), fmt::format("{}", value),
+                          "a parameter value must be finite");
+  if (std::abs(value) > kMaxParameterMagnitude)
+    throw InvalidArgument(std::string(name), fmt::format("{}", value),
+                          fmt::format("a parameter value must lie in [-{:g}, {:g}]",
+                                      kMaxParameterMagnitude, kMaxParameterMagnitude));
+}
+
 void Field::set_parameter(std::string_view name, double value) {
   const int index = parameter_index(name);
   if (index < 0) {
@@ -213,9 +223,7 @@ void Field::set_parameter(int index, double value) {
   if (index < 0 || static_cast<std::size_t>(index) >= params_.size())
     throw InvalidArgument(fmt::format("parameter index {} is out of range (the surface has {})",
                                       index, params_.size()));
-  if (!std::isfinite(value))
-    throw InvalidArgument(tape_->parameters[static_cast<std::size_t>(index)],
-                          fmt::format("{}", value), "a parameter value must be finite");
+  check_parameter_value(tape_->parameters[static_cast<std::size_t>(index)], value);
   params_[static_cast<std::size_t>(index)] = value;
 }
 

@@ -19,6 +19,16 @@ struct Tape;
 /// A compiled scalar field. Copying is cheap (the tape is shared and immutable); each copy has
 /// its own parameter values, and changing one never recompiles. Thread safety: a const Field
 /// may be shared between threads; evaluate it through one `Evaluator` per thread.
+/// The largest magnitude a parameter value (or a parameter range's end) may have. Beyond it
+/// the products of a few parameters overflow, and a slider's span max − min is no longer a
+/// finite number; every entry point (flags, scene files, scripts, the viewer's widgets) refuses
+/// or clamps to it through `check_parameter_value`.
+inline constexpr double kMaxParameterMagnitude = 1e100;
+
+/// Throws InvalidArgument naming `name` when `value` is not finite or its magnitude exceeds
+/// kMaxParameterMagnitude.
+void check_parameter_value(std::string_view name, double value);
+
 class Field {
  public:
   Field();  ///< the zero field (no parameters)
@@ -30,7 +40,8 @@ class Field {
   int parameter_index(std::string_view name) const;
   /// Current values (NaN for a parameter that has none yet).
   const std::vector<double>& parameter_values() const { return params_; }
-  /// Sets one value. Throws InvalidArgument for an unknown name or a non-finite value.
+  /// Sets one value. Throws InvalidArgument for an unknown name or a value
+  /// `check_parameter_value` refuses.
   void set_parameter(std::string_view name, double value);
   void set_parameter(int index, double value);
   /// Sets every listed value; names the field does not have are an InvalidArgument.
