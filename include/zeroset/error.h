@@ -1,6 +1,7 @@
 #pragma once
 /// The exceptions the core throws. Front ends catch `Error`: `BadInput` and its subclasses
-/// are the user's to fix (CLI exit code 2), everything else is a runtime failure (exit 1).
+/// (IoError included) are the user's to fix (CLI exit code 2), everything else (WriteError
+/// included) is a runtime failure (exit 1).
 #include <stdexcept>
 #include <string>
 
@@ -59,11 +60,27 @@ class SettingError : public InvalidArgument {
   std::string why_;
 };
 
-/// A file could not be read or written (unreadable input is bad input: exit code 2).
+/// A file the user named cannot be used as given: an input file that cannot be read (or is
+/// malformed), or an output path that is wrong before any work starts (its directory is
+/// missing or not writable, it is a directory). The user's to fix: exit code 2. The message is
+/// "'path': reason".
 class IoError : public BadInput {
  public:
   IoError(const std::string& path, const std::string& reason)
       : BadInput("'" + path + "': " + reason), path_(path) {}
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+/// Writing an output failed during or after the work (disk full, an I/O error, a rename that
+/// failed): a runtime failure, not the user's input (exit code 1). The message is
+/// "'path': reason".
+class WriteError : public Error {
+ public:
+  WriteError(const std::string& path, const std::string& reason)
+      : Error("'" + path + "': " + reason), path_(path) {}
   const std::string& path() const { return path_; }
 
  private:

@@ -151,7 +151,7 @@ void write_png(const Image& image, const std::string& path) {
   try {
     bytes = encode_png(image);
   } catch (const Error& e) {
-    throw IoError(path, e.what());
+    throw WriteError(path, e.what());
   }
   write_file_atomically(path, [&](std::ostream& out) {
     out.write(reinterpret_cast<const char*>(bytes.data()),
