@@ -1,0 +1,318 @@
+#include "zeroset/io/output_transaction.h"
+
+#include <signal.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <new>
+
+#include "zeroset/error.h"
+#include "zeroset/io/atomic_file.h"
+
+namespace zeroset {
+namespace fs = std::filesystem;
+
+// ------------------------------------------------------------------- signal-safe clean-up
+// The paths a signal handler removes: C strings copied when an output is declared (never in
+// the handler), in fixed arrays of atomic pointers. Whoever takes a pointer out of its slot
+// (exchange with nullptr) owns it: the handler unlinks it, the transaction frees it; never
+// both, whichever thread the signal lands on.
+namespace {
+
+constexpr int kFileSlots = 1 << 16;
+constexpr int kDirSlots = 256;
+std::atomic<char*> g_files[kFileSlots];
+std::atomic<char*> g_dirs[kDirSlots];
+std::atomic<int> g_next_file{0};  // where the search for a free slot starts
+
+int register_path(std::atomic<char*>* slots, int count, std::atomic<int>* next,
+                  const std::string& path) {
+  char* copy = ::strdup(path.c_str());
+  if (copy == nullptr) throw std::bad_alloc();
+  const int start = next ? next->load(std::memory_order_relaxed) : 0;
+  for (int k = 0; k < count; ++k) {
+    const int i = (start + k) % count;
+    char* expected = nullptr;
+    if (slots[i].compare_exchange_strong(expected, copy)) {
+      if (next) next->store((i + 1) % count, std::memory_order_relaxed);
+      return i;
+    }
+  }
+  std::free(copy);
+  throw Error("'" + path + "': more than " + std::to_string(count) +
+              " output files or directories pending at once");
+}
+
+void unregister_path(std::atomic<char*>* slots, int slot) {
+  if (slot < 0) return;
+  std::free(slots[slot].exchange(nullptr));
+}
+
+extern "C" void remove_pending_outputs(int sig) {
+  const int saved_errno = errno;
+  for (auto& slot : g_files)
+    if (char* p = slot.exchange(nullptr)) ::unlink(p);
+  // Directories made for outputs, deepest first: repeat while one more could be removed (rmdir
+  // refuses a directory that is not empty, so a user's files are never touched).
+  char* dirs[kDirSlots];
+  int n = 0;
+  for (auto& slot : g_dirs)
+    if (char* p = slot.exchange(nullptr)) dirs[n++] = p;
+  for (bool removed = true; removed;) {
+    removed = false;
+    for (int i = 0; i < n; ++i)
+      if (dirs[i] && ::rmdir(dirs[i]) == 0) dirs[i] = nullptr, removed = true;
+  }
+  struct sigaction dfl {};
+  dfl.sa_handler = SIG_DFL;
+  sigemptyset(&dfl.sa_mask);
+  ::sigaction(sig, &dfl, nullptr);
+  errno = saved_errno;
+  // Pending while the handler runs (the signal is blocked in it), delivered when it returns:
+  // the process ends as the signal's default action ends it.
+  ::raise(sig);
+}
+
+// ----------------------------------------------------------------------- output paths
+fs::path parent_or_dot(const fs::path& p) {
+  fs::path dir = p.parent_path();
+  return dir.empty() ? fs::path(".") : dir;
+}
+
+/// `path` with every symbolic link at its end followed (dangling ones too): the file a write
+/// through it has to replace.
+fs::path follow_links(const std::string& path) {
+  fs::path p(path);
+  std::error_code ec;
+  for (int hops = 0; fs::is_symlink(fs::symlink_status(p, ec)); ++hops) {
+    if (hops == 40) throw IoError(path, "too many levels of symbolic links");
+    const fs::path to = fs::read_symlink(p, ec);
+    if (ec) throw IoError(path, "cannot read the symbolic link: " + ec.message());
+    p = to.is_absolute() ? to : parent_or_dot(p) / to;
+  }
+  return p;
+}
+
+struct CheckedPath {
+  fs::path target;   // links followed
+  bool direct;       // an existing file that is not a regular file: written in place
+};
+
+CheckedPath check_output_path(const std::string& path) {
+  if (path.empty()) throw IoError(path, "empty output path");
+  CheckedPath c{follow_links(path), false};
+  std::error_code ec;
+  const fs::file_status st = fs::status(c.target, ec);
+  if (fs::is_directory(st)) throw IoError(path, "is a directory, not a file");
+  if (fs::exists(st) && !fs::is_regular_file(st)) {
+    c.direct = true;
+    if (::access(c.target.c_str(), W_OK) != 0) throw IoError(path, "is not writable");
+    return c;
+  }
+  const fs::path dir = parent_or_dot(c.target);
+  if (!fs::is_directory(dir, ec))
+    throw IoError(path, "directory '" + dir.string() + "' does not exist");
+  if (::access(dir.c_str(), W_OK) != 0)
+    throw IoError(path, "directory '" + dir.string() + "' is not writable");
+  return c;
+}
+
+fs::path canonical_or_absolute(const fs::path& p) {
+  std::error_code ec;
+  const fs::path absolute = fs::absolute(p, ec).lexically_normal();
+  fs::path c = fs::weakly_canonical(absolute, ec);
+  return ec ? absolute : c;
+}
+
+/// ".NAME.tmp-PID-ID.EXT" beside `target`: hidden, unique per process and transaction (two
+/// outputs of one transaction never share a target), and with the target's extension for
+/// programs that go by it.
+std::string temp_name_for(const fs::path& target, unsigned id) {
+  std::string stem = target.stem().string().substr(0, 180);
+  return (parent_or_dot(target) / ("." + stem + ".tmp-" + std::to_string(::getpid()) + "-" +
+                                   std::to_string(id) + target.extension().string()))
+      .string();
+}
+
+std::atomic<unsigned> g_next_id{0};
+thread_local OutputTransaction* t_active = nullptr;
+
+std::string errno_text(int err) { return err != 0 ? std::strerror(err) : "unknown error"; }
+
+}  // namespace
+
+void remove_pending_outputs_on_signals() {
+  for (int sig : {SIGINT, SIGTERM}) {
+    struct sigaction old {};
+    if (::sigaction(sig, nullptr, &old) != 0 || old.sa_handler == SIG_IGN) continue;
+    struct sigaction sa {};
+    sa.sa_handler = remove_pending_outputs;
+    sigemptyset(&sa.sa_mask);
+    ::sigaction(sig, &sa, nullptr);
+  }
+}
+
+void check_writable(const std::string& path) { check_output_path(path); }
+
+// -------------------------------------------------------------------------- transaction
+struct OutputTransaction::Output {
+  std::string path;  // as given
+  std::string flag;
+  fs::path target;   // links followed
+  std::string temp;  // empty: written directly
+  int slot = -1;     // of `temp` in the signal clean-up
+  bool written = false;
+  bool external = false;
+  bool renamed = false;
+};
+
+OutputTransaction::OutputTransaction() : id_(g_next_id++), outer_(t_active) { t_active = this; }
+
+OutputTransaction::~OutputTransaction() {
+  if (!committed_) roll_back();
+  t_active = outer_;
+}
+
+OutputTransaction* OutputTransaction::active() { return t_active; }
+
+void OutputTransaction::declare(const std::string& path, const std::string& flag) {
+  const CheckedPath c = check_output_path(path);
+  // Two outputs replacing one file: the second would overwrite the first. (Devices such as
+  // /dev/null are written in place and may take several.)
+  const std::string name = canonical_or_absolute(c.target).string();
+  struct stat st {};
+  const bool exists = ::stat(c.target.c_str(), &st) == 0;
+  const std::pair<unsigned long long, unsigned long long> inode{st.st_dev, st.st_ino};
+  if (!c.direct) {
+    const auto by_name = by_name_.find(name);
+    const auto by_inode = exists ? by_inode_.find(inode) : by_inode_.end();
+    if (by_name != by_name_.end() || by_inode != by_inode_.end()) {
+      const Output& o = outputs_[by_name != by_name_.end() ? by_name->second : by_inode->second];
+      throw InvalidArgument(flag, path, "names the same file as " + o.flag + " " + o.path +
+                                            "; give each output its own file");
+    }
+  }
+  Output o;
+  o.path = path;
+  o.flag = flag;
+  o.target = c.target;
+  if (!c.direct) {
+    o.temp = temp_name_for(c.target, id_);
+    o.slot = register_path(g_files, kFileSlots, &g_next_file, o.temp);
+    by_name_[name] = outputs_.size();
+    if (exists) by_inode_[inode] = outputs_.size();
+  }
+  by_path_.emplace(path, outputs_.size());
+  outputs_.push_back(std::move(o));
+}
+
+OutputTransaction::Output& OutputTransaction::find_or_declare(const std::string& path) {
+  if (const auto it = by_path_.find(path); it != by_path_.end()) return outputs_[it->second];
+  declare(path, "output");
+  return outputs_.back();
+}
+
+void OutputTransaction::write(const std::string& path,
+                              const std::function<void(std::ostream&)>& write) {
+  Output& o = find_or_declare(path);
+  if (o.written || o.external) throw Error("internal error: '" + path + "' written twice");
+  const std::string file = o.temp.empty() ? o.target.string() : o.temp;
+  std::ofstream out(file, std::ios::binary | std::ios::trunc);
+  if (!out)
+    throw WriteError(path, (o.temp.empty() ? "cannot open: " : "cannot create its temp file: ") +
+                               errno_text(errno));
+  o.written = true;  // from here on the temp file exists: roll_back removes it
+  write(out);
+  errno = 0;
+  out.flush();
+  if (out) out.close();
+  if (!out) throw WriteError(path, "write failed: " + errno_text(errno));
+}
+
+std::string OutputTransaction::temp_path(const std::string& path) const {
+  const auto it = by_path_.find(path);
+  if (it == by_path_.end()) throw Error("internal error: '" + path + "' was not declared");
+  const Output& o = outputs_[it->second];
+  return o.temp.empty() ? o.target.string() : o.temp;
+}
+
+std::string OutputTransaction::external_temp_path(const std::string& path) {
+  const std::string temp = temp_path(path);
+  outputs_[by_path_.at(path)].external = true;
+  return temp;
+}
+
+void OutputTransaction::create_directories(const std::string& dir) {
+  fs::path p = fs::path(dir).lexically_normal();
+  if (!p.has_filename()) p = p.parent_path();
+  std::vector<fs::path> missing;
+  std::error_code ec;
+  for (fs::path q = p; !q.empty() && !fs::exists(fs::symlink_status(q, ec)); q = q.parent_path()) {
+    missing.push_back(q);
+    if (q == q.parent_path()) break;
+  }
+  for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
+    dir_slots_.push_back(register_path(g_dirs, kDirSlots, nullptr, it->string()));
+    made_dirs_.push_back(it->string());
+    if (!fs::create_directory(*it, ec) && ec)
+      throw IoError(dir, "cannot create the directory '" + it->string() + "': " + ec.message());
+  }
+  if (!fs::is_directory(p, ec)) throw IoError(dir, "exists and is not a directory");
+}
+
+void OutputTransaction::remove_on_commit(const std::string& path) {
+  remove_at_commit_.push_back(path);
+}
+
+void OutputTransaction::commit() {
+  if (committed_) throw Error("internal error: an output transaction committed twice");
+  std::error_code ec;
+  for (const Output& o : outputs_)
+    if (!o.written && !(o.external && fs::exists(o.temp.empty() ? o.target : fs::path(o.temp), ec)))
+      throw WriteError(o.path, o.external ? "the program that makes it wrote nothing"
+                                          : "internal error: declared but never written");
+  for (Output& o : outputs_) {
+    if (o.temp.empty()) continue;
+    fs::rename(o.temp, o.target, ec);
+    if (ec) throw WriteError(o.path, "cannot move into place: " + ec.message());
+    o.renamed = true;
+    unregister_path(g_files, o.slot);
+    o.slot = -1;
+  }
+  committed_ = true;
+  for (const int slot : dir_slots_) unregister_path(g_dirs, slot);
+  dir_slots_.clear();
+  for (const std::string& p : remove_at_commit_) {
+    fs::remove(p, ec);
+    if (ec) throw WriteError(p, "cannot remove this file of an earlier run: " + ec.message());
+  }
+}
+
+void OutputTransaction::roll_back() noexcept {
+  for (Output& o : outputs_) {
+    if (!o.temp.empty() && !o.renamed) ::unlink(o.temp.c_str());
+    unregister_path(g_files, o.slot);
+    o.slot = -1;
+  }
+  for (size_t k = made_dirs_.size(); k-- > 0;) {
+    ::rmdir(made_dirs_[k].c_str());
+    unregister_path(g_dirs, dir_slots_[k]);
+  }
+  dir_slots_.clear();
+}
+
+void write_file_atomically(const std::string& path,
+                           const std::function<void(std::ostream&)>& write) {
+  if (OutputTransaction* tx = OutputTransaction::active()) return tx->write(path, write);
+  OutputTransaction tx;
+  tx.write(path, write);
+  tx.commit();
+}
+
+}  // namespace zeroset
