@@ -12,6 +12,7 @@
 #include "zeroset/error.h"
 #include "zeroset/io/atomic_file.h"
 #include "zeroset/io/image.h"
+#include "zeroset/io/output_transaction.h"
 #include "zeroset/mesh/adjacency.h"
 #include "zeroset/mesh/crossings.h"
 #include "zeroset/mesh/improve.h"
@@ -163,8 +164,10 @@ void run_mesh(const MeshArgs& a) {
   if (!a.stats.empty() && file_extension(a.stats) != "json")
     throw InvalidArgument("--stats", a.stats, "use a .json name");
   const auto [width, height] = parse_size(a.size, "--size");
-  for (const auto& path : {a.png, a.png_raw, a.stats})
-    if (!path.empty()) check_writable(path);
+  OutputTransaction outputs;  // every file or none (docs/architecture.md, "Errors")
+  for (const auto& [flag, path] : {std::pair{"--output", a.output}, std::pair{"--png-raw", a.png_raw},
+                                   std::pair{"--png", a.png}, std::pair{"--stats", a.stats}})
+    if (!path.empty()) outputs.declare(path, flag);
 
   Scene scene = a.surface.resolve();
   const Surface& surface = scene.surface;
@@ -306,6 +309,7 @@ void run_mesh(const MeshArgs& a) {
     write_picture(surface, mesh, a.png, width, height, a.wireframe, overlay);
   stats["seconds_total"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!a.stats.empty()) write_json(stats, a.stats);
+  outputs.commit();
 
   std::string line = fmt::format("{}: {} vertices, {} triangles ({} grid, {} cells, {:.2f} s)",
                                  surface.label(), mesh.vertex_count(), mesh.triangle_count(),

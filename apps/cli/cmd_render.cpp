@@ -15,6 +15,7 @@
 #include "zeroset/error.h"
 #include "zeroset/io/atomic_file.h"
 #include "zeroset/io/image.h"
+#include "zeroset/io/output_transaction.h"
 #include "zeroset/render/pov_export.h"
 #include "zeroset/render/render.h"
 #include "zeroset/render/settings.h"
@@ -124,8 +125,9 @@ void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string
   const auto& formats = image_file_extensions();
   if (std::find(formats.begin(), formats.end(), file_extension(output)) == formats.end())
     throw InvalidArgument("--output", output, "the file name must end in .png or .ppm");
-  check_writable(output);
-  if (!stats_path.empty()) check_writable(stats_path);
+  OutputTransaction outputs;
+  outputs.declare(output, "--output");
+  if (!stats_path.empty()) outputs.declare(stats_path, "--stats");
   const Scene scene = args.resolve();
   const Surface& surface = scene.surface;
   RenderOptions o = look.options(scene, args.spec);
@@ -140,8 +142,6 @@ void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string
   progress.finish();
   write_image(image, output);
   const char* method = stats.exact ? "polynomial roots" : "interval arithmetic";
-  say(fmt::format("wrote {} ({}x{}, {} rays, {:.2f} s, {})", output, o.width, o.height,
-                  stats.rays, stats.seconds, method));
   if (!stats_path.empty())
     write_json({{"surface", surface.label()},
                 {"width", o.width},
@@ -155,6 +155,10 @@ void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string
                 {"singular_normals", stats.singular_normals},
                 {"singular_set", singular_stats(singular)}},
                stats_path);
+  outputs.commit();
+  say(fmt::format("wrote {} ({}x{}, {} rays, {:.2f} s, {})", output, o.width, o.height,
+                  stats.rays, stats.seconds, method));
+  if (!stats_path.empty()) say("wrote " + stats_path);
 }
 
 // --------------------------------------------------------------------------------- animate
@@ -235,6 +239,47 @@ Animation resolve_animation(const SurfaceArgs& args, const LookArgs& look, doubl
   return an;
 }
 
+/// The number of a frame file this command writes ("frame_0042.png": 42), else -1: files of
+/// another pattern are never the command's to remove.
+int frame_number_of(const std::string& name) {
+  const std::string prefix = "frame_", suffix = ".png";
+  if (name.size() < prefix.size() + 4 + suffix.size() || !name.starts_with(prefix) ||
+      !name.ends_with(suffix))
+    return -1;
+  const std::string digits = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+  if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) return -1;
+  const int f = std::stoi(digits);
+  return frame_file_name(f) == name ? f : -1;
+}
+
+/// Runs ffmpeg on the staged frames (`first_frame_temp`: frame 0's temp file, whose name
+/// numbers them as the frames' own names do) into `video_temp`. Throws Error with its log.
+void encode_video(const std::string& first_frame_temp, const std::string& video_temp,
+                  double fps, const std::string& video) {
+  // The temp files keep the frames' names without their extension: frame_0000 in
+  // .frame_0000.tmp-PID-N.png becomes frame_%04d.
+  fs::path pattern(first_frame_temp);
+  std::string name = pattern.filename().string();
+  const std::string number = fs::path(frame_file_name(0)).stem().string();
+  const size_t at = name.find(number);
+  ZS_ASSERT(at != std::string::npos);
+  name.replace(at, number.size(), fs::path(frame_file_name_pattern()).stem().string());
+  pattern.replace_filename(name);
+  const std::string cmd = fmt::format(
+      "ffmpeg -nostdin -y -loglevel error -framerate {} -i {} -c:v libx264 -pix_fmt yuv420p "
+      "-vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' {} 2>&1",
+      fps, shell_quote(pattern.string()), shell_quote(video_temp));
+  std::string log;
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  if (!pipe) throw Error("cannot run ffmpeg");
+  char buf[4096];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) log.append(buf, n);
+  if (::pclose(pipe) != 0)
+    throw Error("ffmpeg failed to encode " + video + "; no frame was written (--no-video " +
+                "writes the frames alone):\n" + log);
+}
+
 void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArgs& a) {
   if (a.frame_range_opt->count() > 0 && a.frame_range.empty())
     throw InvalidArgument("--frame-range", "''", "expected FIRST-LAST, e.g. 0-9");
@@ -259,9 +304,20 @@ void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArg
 
   const Animation an = resolve_animation(args, look, a.orbit_deg, a.frames);
   RenderOptions o = an.options;
-  fs::create_directories(dir, ec);
-  if (ec) throw IoError(a.dir, "cannot create the directory: " + ec.message());
-  if (want_video && !a.video.empty()) check_writable(video);
+  // Every frame and the video are one transaction: an interrupted or failing run leaves DIR
+  // as it was (docs/rendering.md, "Frames").
+  OutputTransaction outputs;
+  outputs.create_directories(a.dir);
+  for (int f = range.first; f <= range.last; ++f)
+    outputs.declare((dir / frame_file_name(f)).string(), "--output");
+  if (have_ffmpeg) outputs.declare(video, "--video");
+  // Frames an earlier, longer animation left beyond this one's last: ffmpeg's pattern would
+  // join them into this one's video.
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
+    const bool file = entry.is_regular_file(ec) || entry.is_symlink(ec);
+    if (file && frame_number_of(entry.path().filename().string()) >= a.frames)
+      outputs.remove_on_commit(entry.path().string());
+  }
 
   Progress progress("animate", global_flags().quiet);
   for (int f = range.first; f <= range.last; ++f) {
@@ -275,42 +331,18 @@ void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArg
     write_png(image, (dir / frame_file_name(f)).string());
   }
   progress.finish();
+  if (have_ffmpeg)
+    encode_video(outputs.temp_path((dir / frame_file_name(0)).string()),
+                 outputs.external_temp_path(video), a.fps, video);
+  outputs.commit();
   if (whole)
     say(fmt::format("wrote {} frames to {}", a.frames, a.dir));
   else
     say(fmt::format("wrote frames {} to {} of {} to {}", range.first, range.last, a.frames, a.dir));
-  if (!want_video) return;
-  if (!have_ffmpeg) {
+  if (have_ffmpeg)
+    say("wrote " + video);
+  else if (want_video)
     say("ffmpeg not found on PATH: no video (frames are in " + a.dir + ")");
-    return;
-  }
-  // ffmpeg writes beside the target and the result is renamed into place, so a failed
-  // encode leaves no partial video.
-  const fs::path target(video);
-  const fs::path tmp =
-      (target.parent_path().empty() ? fs::path(".") : target.parent_path()) /
-      ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid()) + ".mp4");
-  const std::string cmd = fmt::format(
-      "ffmpeg -nostdin -y -loglevel error -framerate {} -i {} -c:v libx264 -pix_fmt yuv420p "
-      "-vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' {} 2>&1",
-      a.fps, shell_quote((dir / frame_file_name_pattern()).string()), shell_quote(tmp.string()));
-  std::string log;
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  if (!pipe) throw Error("cannot run ffmpeg");
-  char buf[4096];
-  size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) log.append(buf, n);
-  const int status = ::pclose(pipe);
-  if (status != 0) {
-    fs::remove(tmp, ec);
-    throw Error("ffmpeg failed to encode " + video + ":\n" + log);
-  }
-  fs::rename(tmp, target, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw IoError(video, "cannot move the video into place");
-  }
-  say("wrote " + video);
 }
 
 // ---------------------------------------------------------------------------------- export
@@ -333,12 +365,14 @@ void run_export_animation(const SurfaceArgs& args, const LookArgs& look, const E
   const FrameRange range = parse_frame_range(e.frame_range, e.frames, "--frame-range");
   fs::path ini(e.output);
   ini.replace_extension(".ini");
-  check_writable(e.output);
-  check_writable(ini.string());
+  OutputTransaction outputs;  // the scene and its .ini: both or neither
+  outputs.declare(e.output, "--output");
+  outputs.declare(ini.string(), "--output (its .ini)");
   const Animation an = resolve_animation(args, look, e.orbit_deg, e.frames);
   write_pov_animation(an.surface, an.options, an.keys,
                       PovFrames{.frames = e.frames, .first = range.first, .last = range.last},
                       e.output);
+  outputs.commit();
   const fs::path dir = fs::path(e.output).parent_path();
   say(fmt::format("wrote {} and {}; render frames {} to {} of {} with: {}povray {}", e.output,
                   ini.string(), range.first, range.last, e.frames,

@@ -14,6 +14,7 @@
 #include "zeroset/floaters/settings.h"
 #include "zeroset/io/atomic_file.h"
 #include "zeroset/io/image.h"
+#include "zeroset/io/output_transaction.h"
 #include "zeroset/render/render.h"
 
 namespace zeroset::cli {
@@ -146,8 +147,10 @@ void run_sample(const SampleArgs& a) {
       throw InvalidArgument("--animate", a.animate,
                             "give the number of animated steps with --steps N");
   }
-  for (const auto& path : {a.output, a.png, a.stats})
-    if (!path.empty()) check_writable(path);
+  OutputTransaction outputs;  // every file or none (docs/architecture.md, "Errors")
+  for (const auto& [flag, path] :
+       {std::pair{"--output", a.output}, std::pair{"--png", a.png}, std::pair{"--stats", a.stats}})
+    if (!path.empty()) outputs.declare(path, flag);
 
   Scene scene = a.surface.resolve();
   Surface& surface = scene.surface;
@@ -269,6 +272,7 @@ void run_sample(const SampleArgs& a) {
     }
     write_json(stats, a.stats);
   }
+  outputs.commit();
   // Floaters that find no surface are reseeded, wander, and are removed as strays.
   if (sys.size() == 0)
     warn(fmt::format("{}: no floater stayed on the surface; F = 0 may have no point inside the "

@@ -13,6 +13,7 @@
 
 #include "common.h"
 #include "zeroset/error.h"
+#include "zeroset/io/output_transaction.h"
 
 namespace {
 
@@ -51,6 +52,8 @@ void choose_openmp_waiting(int argc, char** argv) {
 int main(int argc, char** argv) {
   using namespace zeroset;
   choose_openmp_waiting(argc, argv);
+  // Ctrl-C or a scheduler's SIGTERM during a long run leaves no temp file behind.
+  remove_pending_outputs_on_signals();
   CLI::App app{
       "zeroset — make implicit surfaces F(x, y, z; q) = 0 visible, singular points and\n"
       "self-intersections included.\n\n"

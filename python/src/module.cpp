@@ -6,8 +6,9 @@
 PYBIND11_MODULE(_zeroset, m) {
   namespace zp = zeroset::python;
   m.doc() = "zeroset: implicit surfaces F(x, y, z; q) = 0 (compiled part; use the zeroset package)";
-  // Bad input (a parse error with its caret line, a refused option) is the caller's to fix:
-  // ValueError; any other failure of the library: RuntimeError.
+  // Bad input (a parse error with its caret line, a refused option, a file that cannot be read,
+  // an output path that cannot be written) is the caller's to fix: ValueError; any other
+  // failure of the library (a write that failed, e.g. on a full disk: WriteError): RuntimeError.
   pybind11::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);

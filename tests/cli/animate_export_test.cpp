@@ -103,20 +103,46 @@ TEST(CliAnimate, BadFrameRangesExitTwoAndWriteNothing) {
   EXPECT_TRUE(files_in(dir).empty());
 }
 
-TEST(CliAnimate, AFailingEncoderIsAnErrorAndLeavesTheFramesAndNoVideo) {
-  // An ffmpeg that fails, first on PATH.
-  const std::string root = fresh_dir("animate-ffmpeg");
+/// A fake ffmpeg first on PATH in `root`/bin: `script` is its body.
+std::string with_fake_ffmpeg(const std::string& root, const std::string& script) {
   const std::string bin = root + "/bin";
   fs::create_directories(bin);
-  std::ofstream(bin + "/ffmpeg") << "#!/bin/sh\necho 'encoder says no' >&2\nexit 1\n";
+  std::ofstream(bin + "/ffmpeg") << "#!/bin/sh\n" << script;
   fs::permissions(bin + "/ffmpeg", fs::perms::owner_all);
-  const auto r = run_command("PATH=" + bin + ":$PATH " +
-                             zs("animate torus --param r=0.2:0.9 --size 32x32 --frames 2 -o " +
-                                root + "/frames"));
+  return "PATH=" + bin + ":$PATH ";
+}
+
+TEST(CliAnimate, AFailingEncoderIsAnErrorAndLeavesNoFrameAndNoVideo) {
+  const std::string root = fresh_dir("animate-ffmpeg");
+  const std::string path = with_fake_ffmpeg(root, "echo 'encoder says no' >&2\nexit 1\n");
+  const auto r = run_command(path + zs("animate torus --param r=0.2:0.9 --size 32x32 --frames 2 "
+                                       "-o " + root + "/frames"));
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("encoder says no"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--no-video"), std::string::npos) << r.output;
+  // One transaction: the directory the command made is gone again, and no temp file is left.
+  EXPECT_FALSE(fs::exists(root + "/frames")) << r.output;
+  EXPECT_EQ(files_in(root), (std::set<std::string>{"bin"}));
+}
+
+TEST(CliAnimate, TheEncoderReadsTheFramesBeforeTheyAreMovedIntoPlace) {
+  // The fake ffmpeg checks that frame 0 of its -i pattern exists and writes the video's name.
+  const std::string root = fresh_dir("animate-ffmpeg-ok");
+  const std::string path = with_fake_ffmpeg(root, R"(
+while [ $# -gt 1 ]; do
+  if [ "$1" = "-i" ]; then first=$(printf "$2" 0); fi
+  shift
+done
+[ -f "$first" ] || { echo "no frame $first" >&2; exit 1; }
+echo video > "$1"
+)");
+  const auto r = run_command(path + zs("animate torus --param r=0.2:0.9 --size 32x32 --frames 3 "
+                                       "-o " + root + "/frames"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(files_in(root + "/frames"),
-            (std::set<std::string>{"frame_0000.png", "frame_0001.png"}));
+            (std::set<std::string>{"animation.mp4", "frame_0000.png", "frame_0001.png",
+                                   "frame_0002.png"}));
+  EXPECT_EQ(bytes_of(root + "/frames/animation.mp4"), "video\n");
 }
 
 TEST(CliExport, WritesAPovSceneThatPovRayRenders) {

@@ -1,0 +1,275 @@
+// The outputs of `zeroset` under a hostile but fair user: two outputs naming one file, symbolic
+// links, a full disk, SIGINT and SIGTERM in the middle of a long run, animations rerun with
+// fewer frames or interrupted. Every run leaves each target whole (old or new) and no temp file.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "cli/cli_support.h"
+#include "zeroset/io/image.h"
+
+namespace zeroset {
+namespace {
+
+namespace fs = std::filesystem;
+using test::fresh_dir;
+using test::run_command;
+using test::zs;
+
+/// Every file under `dir` (relative names) with its bytes.
+std::map<std::string, std::string> contents(const std::string& dir) {
+  std::map<std::string, std::string> out;
+  if (!fs::is_directory(dir)) return out;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    std::string bytes;
+    if (e.is_regular_file()) {
+      std::ifstream in(e.path(), std::ios::binary);
+      bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    out[e.path().lexically_relative(dir).string()] = bytes;
+  }
+  return out;
+}
+
+bool has_temp_file(const std::string& dir) {
+  for (const auto& [name, bytes] : contents(dir))
+    if (name.find(".tmp-") != std::string::npos) return true;
+  return false;
+}
+
+void put(const std::string& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+/// Starts `zeroset args...` with the default signal actions, output into `log`.
+pid_t spawn(const std::vector<std::string>& args, const std::string& log) {
+  const pid_t pid = ::fork();
+  if (pid != 0) return pid;
+  ::signal(SIGINT, SIG_DFL);
+  ::signal(SIGTERM, SIG_DFL);
+  const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  ::dup2(fd, 1);
+  ::dup2(fd, 2);
+  std::vector<char*> argv{const_cast<char*>(ZEROSET_BINARY)};
+  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  ::execv(ZEROSET_BINARY, argv.data());
+  ::_exit(127);
+}
+
+/// Waits for `pid`; its status as a shell gives it (128 + signal when a signal ended it).
+int wait_status(pid_t pid) {
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : WEXITSTATUS(status);
+}
+
+/// Polls `ready` every millisecond for up to a minute while `pid` runs; false when it ended or
+/// the minute passed first.
+bool wait_until(pid_t pid, const std::function<bool()>& ready) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (std::chrono::steady_clock::now() < end) {
+    if (ready()) return true;
+    int status = 0;
+    if (::waitpid(pid, &status, WNOHANG) == pid) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return false;
+}
+
+// ---- outputs naming one file ------------------------------------------------------------------
+
+TEST(HostileOutputs, TwoOutputsNamingOneFileAreRefusedBeforeAnyWork) {
+  const std::string d = fresh_dir("hostile-same-file");
+  fs::create_directories(d + "/sub");
+  fs::create_symlink("m.obj", d + "/m.json");      // dangling: m.obj does not exist yet
+  fs::create_symlink("p.png", d + "/p.json");
+  const std::vector<std::string> cases = {
+      "render sphere --size 16x16 -o " + d + "/a.png --stats " + d + "/a.png",
+      "render sphere --size 16x16 -o " + d + "/a.png --stats " + d + "/./a.png",
+      "render sphere --size 16x16 -o " + d + "/a.png --stats " + d + "/sub/../a.png",
+      "mesh sphere -r 8 -o " + d + "/m.obj --stats " + d + "/m.json",
+      "sample sphere --steps 2 --png " + d + "/p.png --stats " + d + "/p.json",
+      "mesh sphere -r 8 --png " + d + "/q.png --png-raw " + d + "/q.png"};
+  for (const std::string& args : cases) {
+    const auto r = run_command(zs(args));
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find("same file"), std::string::npos) << args << "\n" << r.output;
+    EXPECT_EQ(r.output.find("wrote"), std::string::npos) << args << "\n" << r.output;
+  }
+  EXPECT_EQ(contents(d).size(), 3u);  // sub and the two links, nothing written
+  EXPECT_TRUE(fs::is_symlink(d + "/m.json"));
+}
+
+// ---- symbolic links ---------------------------------------------------------------------------
+
+TEST(HostileOutputs, AnOutputThroughASymbolicLinkReplacesItsTargetAndTheLinkStays) {
+  const std::string d = fresh_dir("hostile-symlink");
+  fs::create_directories(d + "/store");
+  put(d + "/store/a.png", "not yet a picture");
+  fs::create_symlink("store/a.png", d + "/a.png");
+  fs::create_symlink(d + "/store/b.json", d + "/b.json");  // absolute and dangling
+  const auto r = run_command(
+      zs("render sphere --size 24x16 --aa 1 -o " + d + "/a.png --stats " + d + "/b.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::is_symlink(d + "/a.png"));
+  EXPECT_TRUE(fs::is_symlink(d + "/b.json"));
+  const Image img = read_image(d + "/store/a.png");
+  EXPECT_EQ(img.width, 24);
+  EXPECT_EQ(img.height, 16);
+  EXPECT_NE(contents(d).at("store/b.json").find("\"rays\""), std::string::npos);
+  EXPECT_FALSE(has_temp_file(d));
+}
+
+// ---- failing writes and bad paths ------------------------------------------------------------
+
+TEST(HostileOutputs, AFullDiskIsAFailureAndTheEarlierOutputsAreNotWritten) {
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  const std::string d = fresh_dir("hostile-full");
+  auto r = run_command(zs("render sphere --size 16x16 -o " + d + "/x.png --stats /dev/full"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("'/dev/full': write failed"), std::string::npos) << r.output;
+  EXPECT_TRUE(contents(d).empty());
+  // An old file stays as it was.
+  put(d + "/x.png", "old");
+  r = run_command(zs("render sphere --size 16x16 -o " + d + "/x.png --stats /dev/full"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(contents(d), (std::map<std::string, std::string>{{"x.png", "old"}}));
+  EXPECT_TRUE(fs::is_character_file("/dev/full"));
+  // A device that takes the bytes is written in place, not replaced.
+  r = run_command(zs("render sphere --size 16x16 -o " + d + "/y.png --stats /dev/null"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::is_character_file("/dev/null"));
+}
+
+TEST(HostileOutputs, AnOutputPathWrongBeforeAnyWorkIsBadInput) {
+  const std::string d = fresh_dir("hostile-bad-path");
+  for (const std::string& args :
+       {"render sphere -o " + d + "/none/x.png", "render sphere -o " + d + "/x.png --stats " + d,
+        "mesh sphere -o " + d + "/x.obj --stats " + d + "/none/s.json",
+        "sample sphere -o " + d + "/none/s.ply"}) {
+    const auto r = run_command(zs(args));
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find("error: '"), std::string::npos) << args << "\n" << r.output;
+  }
+  EXPECT_TRUE(contents(d).empty());
+}
+
+// ---- signals ----------------------------------------------------------------------------------
+
+/// Runs `args` with an old `target` in `d`; sends `sig` once `ready` holds (or, without it,
+/// after half a second); expects the process ended by the signal, no temp file and `d` as
+/// it was.
+void expect_interrupted_cleanly(const std::string& d, const std::vector<std::string>& args,
+                                int sig, const std::function<bool()>& ready = {}) {
+  const std::map<std::string, std::string> before = contents(d);
+  const std::string log = d + ".log";
+  const pid_t pid = spawn(args, log);
+  ASSERT_GT(pid, 0);
+  if (ready) {
+    ASSERT_TRUE(wait_until(pid, ready)) << "the moment to interrupt never came";
+  } else {
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  }
+  ::kill(pid, sig);
+  const int status = wait_status(pid);
+  std::ifstream in(log);
+  const std::string output{std::istreambuf_iterator<char>(in), {}};
+  EXPECT_EQ(status, 128 + sig) << output;
+  EXPECT_FALSE(has_temp_file(d));
+  EXPECT_EQ(contents(d), before) << output;
+}
+
+TEST(HostileOutputs, SigintAndSigtermDuringALongRenderLeaveTheOldPicture) {
+  const std::string d = fresh_dir("hostile-signal-render");
+  put(d + "/a.png", "old picture");
+  for (const int sig : {SIGINT, SIGTERM})
+    expect_interrupted_cleanly(
+        d, {"render", "kummer", "--size", "3000x3000", "--aa", "3", "-o", d + "/a.png",
+            "--stats", d + "/a.json"},
+        sig);
+}
+
+TEST(HostileOutputs, ASignalWhileAMeshIsStagedRemovesIt) {
+  // The mesh is staged before the --png picture is drawn: the signal comes while its temp file
+  // exists.
+  const std::string d = fresh_dir("hostile-signal-mesh");
+  put(d + "/m.obj", "old mesh");
+  const auto staged = [&] { return has_temp_file(d); };
+  for (const int sig : {SIGINT, SIGTERM})
+    expect_interrupted_cleanly(d, {"mesh", "sphere", "-r", "24", "--improve", "off", "-o",
+                                   d + "/m.obj", "--png", d + "/m.png", "--size", "4000x4000"},
+                               sig, staged);
+}
+
+TEST(HostileOutputs, ASignalWhileFloatersAreStagedRemovesThem) {
+  const std::string d = fresh_dir("hostile-signal-sample");
+  const auto staged = [&] { return has_temp_file(d); };
+  expect_interrupted_cleanly(d, {"sample", "sphere", "--max-count", "200", "--steps", "5", "-o",
+                                 d + "/s.ply", "--png", d + "/s.png", "--size", "4000x4000"},
+                             SIGTERM, staged);
+}
+
+// ---- animations -------------------------------------------------------------------------------
+
+const std::vector<std::string> kAnimate = {"animate", "torus", "--param", "r=0.2:0.9",
+                                           "--size", "40x32", "--aa", "1", "--no-video"};
+
+std::string animate(const std::string& extra) {
+  return zs("animate torus --param r=0.2:0.9 --size 40x32 --aa 1 --no-video " + extra);
+}
+
+TEST(HostileOutputs, ASecondAnimationWithFewerFramesLeavesNoStaleFrame) {
+  const std::string d = fresh_dir("hostile-animate-fewer");
+  put(d + "/notes.txt", "mine");
+  put(d + "/frame_12.png", "not the command's pattern");
+  auto r = run_command(animate("--frames 6 -o " + d));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run_command(animate("--frames 3 -o " + d));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::vector<std::string> names;
+  for (const auto& [name, bytes] : contents(d)) names.push_back(name);
+  EXPECT_EQ(names, (std::vector<std::string>{"frame_0000.png", "frame_0001.png", "frame_0002.png",
+                                             "frame_12.png", "notes.txt"}));
+  // A part of a 4-frame animation keeps the other parts' frames and removes frames 4 and up.
+  put(d + "/frame_0005.png", "stale");
+  r = run_command(animate("--frames 4 --frame-range 3 -o " + d));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  names.clear();
+  for (const auto& [name, bytes] : contents(d)) names.push_back(name);
+  EXPECT_EQ(names, (std::vector<std::string>{"frame_0000.png", "frame_0001.png", "frame_0002.png",
+                                             "frame_0003.png", "frame_12.png", "notes.txt"}));
+}
+
+TEST(HostileOutputs, AnInterruptedAnimationLeavesTheDirectoryAsItWas) {
+  const std::string root = fresh_dir("hostile-animate-signal");
+  const std::string d = root + "/frames";
+  auto r = run_command(animate("--frames 3 -o " + d));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // Interrupted once some of its 400 frames are staged: the old 3 frames, byte for byte.
+  std::vector<std::string> args = kAnimate;
+  for (const std::string& a : {"--frames", "400", "-o"}) args.push_back(a);
+  args.push_back(d);
+  const auto staged = [&] { return has_temp_file(d); };
+  for (const int sig : {SIGINT, SIGTERM}) expect_interrupted_cleanly(d, args, sig, staged);
+  // A directory the run made is removed again.
+  const std::string fresh = root + "/new/frames";
+  args.back() = fresh;
+  fs::create_directories(root + "/new");
+  expect_interrupted_cleanly(root + "/new", args, SIGTERM, [&] { return has_temp_file(fresh); });
+  EXPECT_FALSE(fs::exists(fresh));
+}
+
+}  // namespace
+}  // namespace zeroset
