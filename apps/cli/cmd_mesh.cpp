@@ -1,7 +1,5 @@
 // zeroset mesh: marching cubes cut at the clip, the spring–mass improver of Rösch, Ruhl &
 // Saupe (§4), mesh files, a picture and quality figures.
-#include <unistd.h>
-
 #include <fmt/core.h>
 
 #include <chrono>
@@ -68,34 +66,6 @@ MeshSettings settings_from(const MeshArgs& a, const Scene& scene) {
       },
       {{"cells", "--resolution"}, {"improve", "--improve"}, {"boundary", "--boundary"}});
   return m;
-}
-
-double physical_memory_bytes() {
-  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
-  return pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page) : 0.0;
-}
-
-// Refuses a resolution whose estimated memory exceeds what the machine has, and says which
-// resolution would fit.
-void check_memory(const Surface& surface, PolygonizeOptions po) {
-  const double have = physical_memory_bytes();
-  if (have <= 0) return;
-  const double limit = 0.75 * have;
-  auto need = [&surface, po](int cells) mutable {
-    po.cells = cells;
-    return plan_grid(surface, po).estimated_bytes;
-  };
-  const double needed = need(po.cells);
-  if (needed <= limit) return;
-  int lo = 1, hi = po.cells;
-  while (hi - lo > 1) {
-    const int mid = lo + (hi - lo) / 2;
-    (need(mid) <= limit ? lo : hi) = mid;
-  }
-  throw InvalidArgument("--resolution", std::to_string(po.cells),
-                        fmt::format("would need about {:.1f} GB of memory and this machine has "
-                                    "{:.1f} GB; use --resolution {} or less",
-                                    needed / 1e9, have / 1e9, lo));
 }
 
 nlohmann::json vec_json(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
@@ -190,7 +160,7 @@ void run_mesh(const MeshArgs& a) {
   io.find_singular_points = !a.no_find_singular;
   io.threads = global_flags().threads;
   const int max_steps = settings.improve ? settings.max_improve_steps.value_or(io.max_steps) : 0;
-  check_memory(surface, po);
+  check_grid_memory(surface, po, "--resolution");
 
   // Searched for --stats as well: it costs milliseconds, next to the mesh's seconds.
   std::optional<SingularSet> singular;

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "zeroset/expr/field.h"
 #include "zeroset/surface/catalog.h"
 
 namespace zeroset::viewer {
@@ -24,6 +25,17 @@ constexpr std::array<RadiusAdapt, 4> kAdaptModes = {RadiusAdapt::kWitkinHeckbert
 constexpr std::array<const char*, 4> kAdaptLabels = {
     "Witkin-Heckbert (one sigma_max)", "curvature (alpha)", "singularity (beta)",
     "mixed alpha/3 + 2 beta/3 (paper)"};
+
+// ImGui aborts on slider bounds beyond ±DBL_MAX/2 (±FLT_MAX/2 for floats), and computes
+// max − min: every bound is clamped to a finite span first, those of doubles to the parameter
+// limit, those of floats well inside the float range.
+double slider_bound(double v) {
+  return std::isnan(v) ? 0.0 : std::clamp(v, -kMaxParameterMagnitude, kMaxParameterMagnitude);
+}
+float slider_bound_float(double v) {
+  constexpr double kFloatBound = 1e30;
+  return static_cast<float>(std::isnan(v) ? 0.0 : std::clamp(v, -kFloatBound, kFloatBound));
+}
 
 void help_marker(const char* text) {
   ImGui::SameLine();
@@ -91,8 +103,12 @@ void surface_section(ViewerState& state, PanelState& panel) {
   for (size_t i = 0; i < ranges.size(); ++i) {
     const ParamSpec& r = ranges[i];  // one per parameter, in the field's order
     ImGui::PushID(r.name.c_str());
+    // A value typed into the slider (Ctrl+click) or the range fields goes to the state as it
+    // is: one beyond the parameter limit is refused there, with the reason in the status line.
     double v = values[i], lo = r.min, hi = r.max;
-    if (ImGui::SliderScalar(r.name.c_str(), ImGuiDataType_Double, &v, &lo, &hi, "%.5g"))
+    const double slider_lo = slider_bound(lo), slider_hi = slider_bound(hi);
+    if (ImGui::SliderScalar(r.name.c_str(), ImGuiDataType_Double, &v, &slider_lo, &slider_hi,
+                            "%.5g"))
       state.set_parameter(r.name, v);
     if (ImGui::TreeNode("range")) {
       ImGui::SetNextItemWidth(ImGui::GetContentRegionAvail().x * 0.4f);
@@ -156,7 +172,7 @@ void floaters_settings(ViewerState& state) {
     changed = true;
   }
   double radius = o.radius;
-  const double radius_max = state.surface().scene_radius() / 4;
+  const double radius_max = slider_bound(state.surface().scene_radius() / 4);
   const double zero = 0;
   if (ImGui::SliderScalar("Density", ImGuiDataType_Double, &radius, &zero, &radius_max,
                           radius == 0 ? "auto" : "%.4f")) {
@@ -326,7 +342,7 @@ void clip_section(ViewerState& state) {
   if (!ImGui::CollapsingHeader("Clip")) return;
   Clip clip = state.surface().clip;
   bool changed = false;
-  const float reach = static_cast<float>(3 * state.surface().scene_radius());
+  const float reach = slider_bound_float(3 * state.surface().scene_radius());
   for (size_t i = 0; i < clip.spheres.size(); ++i) {
     ImGui::PushID(static_cast<int>(i));
     SphereClip& s = clip.spheres[i];
@@ -341,15 +357,23 @@ void clip_section(ViewerState& state) {
     float r = static_cast<float>(s.radius);
     ImGui::SliderFloat("radius", &r, 0.01f, reach, "%.3f");
     if (ImGui::IsItemDeactivatedAfterEdit()) {
-      s.radius = r;
-      changed = true;
+      if (std::isfinite(r) && r > 0) {
+        s.radius = r;
+        changed = true;
+      } else {
+        state.set_status("clip: a sphere's radius must be a positive finite number", true);
+      }
     }
     float c[3] = {static_cast<float>(s.center.x()), static_cast<float>(s.center.y()),
                   static_cast<float>(s.center.z())};
     ImGui::InputFloat3("center", c, "%.3f");
     if (ImGui::IsItemDeactivatedAfterEdit()) {
-      s.center = Vec3(c[0], c[1], c[2]);
-      changed = true;
+      if (Vec3(c[0], c[1], c[2]).allFinite()) {
+        s.center = Vec3(c[0], c[1], c[2]);
+        changed = true;
+      } else {
+        state.set_status("clip: a sphere's centre must be finite", true);
+      }
     }
     ImGui::PopID();
   }
@@ -369,7 +393,7 @@ void clip_section(ViewerState& state) {
     ImGui::InputFloat3("n", n, "%.3f");
     if (ImGui::IsItemDeactivatedAfterEdit()) {
       const Vec3 v(n[0], n[1], n[2]);
-      if (v.norm() > 0) {
+      if (v.allFinite() && v.norm() > 0) {
         p.normal = v.normalized();
         changed = true;
       } else {
@@ -378,7 +402,7 @@ void clip_section(ViewerState& state) {
     }
     float d = static_cast<float>(p.offset);
     ImGui::SliderFloat("d", &d, -reach, reach, "%.3f");
-    if (ImGui::IsItemDeactivatedAfterEdit()) {
+    if (ImGui::IsItemDeactivatedAfterEdit() && std::isfinite(d)) {
       p.offset = d;
       changed = true;
     }

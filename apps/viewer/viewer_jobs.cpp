@@ -208,7 +208,7 @@ void ViewerState::start_floater_job() {
       options_version = control->options_version;
       reset_version = control->reset_version;
     }
-    FloaterSystem system(surface, options);
+    FloaterSystem system(surface, options, stop);
     RateMeter rate;
     std::vector<double> next;
     while (!stop.stop_requested()) {
@@ -307,6 +307,9 @@ void ViewerState::start_mesh_job() {
   wants_frame->store(true);
   const int threads = threads_;
   worker_.submit([=](std::stop_token stop) {
+    // A resolution whose grid would not fit in memory is refused (the message goes to the
+    // panel) instead of taking the viewer down.
+    check_grid_memory(surface, options, "cells");
     PolygonizeStats polygonize_stats;
     Mesh mesh = polygonize(surface, options, &polygonize_stats, stop);
     if (stop.stop_requested()) return;

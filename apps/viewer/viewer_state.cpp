@@ -232,6 +232,8 @@ bool ViewerState::set_parameter_range(std::string_view name, double min, double 
     if (!(std::isfinite(min) && std::isfinite(max) && min < max))
       throw InvalidArgument(fmt::format("range of {}: needs finite min < max, got {} .. {}",
                                         name, min, max));
+    check_parameter_value(name, min);
+    check_parameter_value(name, max);
     ParamSpec& r = surface_.ranges[index];
     r.min = min;
     r.max = max;

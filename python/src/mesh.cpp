@@ -1,7 +1,5 @@
 // Surface.mesh: the steps of `zeroset mesh` (apps/cli/cmd_mesh.cpp) in the same order with the
 // same options: polygonize, crossings, the improver until at rest or its step limit, finish.
-#include <unistd.h>
-
 #include <chrono>
 #include <optional>
 
@@ -48,20 +46,6 @@ MeshSettings settings_from(const MeshArgs& a, const PySurface& s) {
   if (a.boundary) m.boundary = parse_boundary(*a.boundary);
   validate_settings(m);
   return m;
-}
-
-// The grid's estimated memory against what the machine has, so that a resolution far too
-// large is refused instead of exhausting the memory.
-void check_memory(const Surface& surface, const PolygonizeOptions& po) {
-  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
-  if (pages <= 0 || page <= 0) return;
-  const double have = static_cast<double>(pages) * static_cast<double>(page);
-  const double needed = plan_grid(surface, po).estimated_bytes;
-  if (needed > 0.75 * have)
-    throw InvalidArgument("resolution", std::to_string(po.cells),
-                          "would need about " + std::to_string(needed / 1e9).substr(0, 6) +
-                              " GB of memory and this machine has " +
-                              std::to_string(have / 1e9).substr(0, 6) + " GB");
 }
 
 py::dict polygonize_dict(const PolygonizeStats& ps, int resolution, const Mesh& mesh) {
@@ -134,7 +118,7 @@ py::tuple make_mesh(const PySurface& s, const MeshArgs& a) {
   io.find_singular_points = a.find_singular;
   io.threads = a.threads;
   const int max_steps = settings.improve ? settings.max_improve_steps.value_or(io.max_steps) : 0;
-  check_memory(surface, po);
+  check_grid_memory(surface, po, "resolution");
 
   Mesh mesh;
   PolygonizeStats ps;

@@ -13,6 +13,7 @@
 #include <limits>
 #include <optional>
 #include <span>
+#include <stop_token>
 #include <tuple>
 #include <vector>
 
@@ -186,6 +187,8 @@ struct PairScratch {
 struct FloaterState {
   Surface surface;
   FloaterOptions opt;
+  // Cuts the long set-up work short (area estimate, singular set search) once requested.
+  std::stop_token stop;
   double sigma_hat = 1;       // σ̂ in use
   double singular_scale = 1;  // γ_s in use
   double scene_radius = 1;
@@ -280,11 +283,13 @@ inline double desired_energy(const FloaterState& sys) {
 template <class Body>
 void parallel_chunks(FloaterState& sys, std::size_t n, Body&& body) {
   const auto chunks = static_cast<std::int64_t>((n + kChunk - 1) / kChunk);
+  ExceptionTrap trap;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(sys.threads) if (n >= kParallelMin)
-  for (std::int64_t c = 0; c < chunks; ++c) {
+  for (std::int64_t c = 0; c < chunks; ++c) trap.run([&] {
     const std::size_t b = static_cast<std::size_t>(c) * kChunk;
     body(b, std::min(n, b + kChunk), sys.evaluators[worker_index()]);
-  }
+  });
+  trap.rethrow();
 }
 
 // ---- storage and field evaluation (state.cpp) ----------------------------------------------

@@ -157,17 +157,19 @@ const std::vector<Vec3>& drawn_normals(const FloaterState& sys) {
 
 // The system is its plain state; the parts of a step are free functions on it.
 struct FloaterSystem::Impl : detail::FloaterState {
-  Impl(const Surface& s, const FloaterOptions& o) {
+  Impl(const Surface& s, const FloaterOptions& o, std::stop_token st) {
     validate_settings(o);
     opt = o;
+    stop = std::move(st);
     detail::adopt_surface(*this, s);
     detail::insert_random(*this, detail::initial_count(*this));
     detail::evaluate_all(*this);
   }
 };
 
-FloaterSystem::FloaterSystem(const Surface& surface, const FloaterOptions& options)
-    : impl_(std::make_unique<Impl>(surface, options)) {}
+FloaterSystem::FloaterSystem(const Surface& surface, const FloaterOptions& options,
+                             std::stop_token stop)
+    : impl_(std::make_unique<Impl>(surface, options, std::move(stop))) {}
 FloaterSystem::~FloaterSystem() = default;
 FloaterSystem::FloaterSystem(FloaterSystem&&) noexcept = default;
 FloaterSystem& FloaterSystem::operator=(FloaterSystem&&) noexcept = default;

@@ -32,14 +32,18 @@ ReferenceSampling reference_sampling(const Surface& surface, const ReferenceOpti
   detail::EvaluatorPool evs(surface.field, workers);
   std::size_t in_shell = 0;
 
-  while (out.points.size() < options.count && out.candidates < budget) {
+  // Rounds of kBlock candidates: the stop token is looked at between them (a clip of many parts
+  // makes each candidate costly).
+  while (out.points.size() < options.count && out.candidates < budget &&
+         !options.stop.stop_requested()) {
     const std::size_t base = out.candidates;
     const std::size_t m = std::min(kBlock, budget - base);
     const auto chunks = static_cast<std::int64_t>((m + kChunk - 1) / kChunk);
     std::vector<std::vector<Vec3>> found(static_cast<std::size_t>(chunks));
     std::vector<std::size_t> shell_hits(static_cast<std::size_t>(chunks), 0);
+    detail::ExceptionTrap trap;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(workers)
-    for (std::int64_t c = 0; c < chunks; ++c) {
+    for (std::int64_t c = 0; c < chunks; ++c) trap.run([&] {
       Evaluator& ev = evs.local();
       const std::size_t b = static_cast<std::size_t>(c) * kChunk;
       const std::size_t e = std::min(m, b + kChunk);
@@ -67,7 +71,8 @@ ReferenceSampling reference_sampling(const Surface& surface, const ReferenceOpti
             surface.clip.contains(p, tolerance))
           found[static_cast<std::size_t>(c)].push_back(p);
       }
-    }
+    });
+    trap.rethrow();
     // Appending in chunk order (and stopping at `count`) keeps the result thread-independent.
     for (std::size_t c = 0; c < found.size(); ++c) {
       in_shell += shell_hits[c];
@@ -83,10 +88,11 @@ ReferenceSampling reference_sampling(const Surface& surface, const ReferenceOpti
   return out;
 }
 
-double estimate_area(const Surface& surface, std::uint64_t seed) {
+double estimate_area(const Surface& surface, std::uint64_t seed, std::stop_token stop) {
   ReferenceOptions o;
   o.count = 3000;
   o.seed = seed;
+  o.stop = std::move(stop);
   o.max_candidates = 400'000;
   return reference_sampling(surface, o).area;
 }

@@ -199,24 +199,25 @@ void repulsion_and_move(FloaterState& sys) {
   const auto runs = sys.hash.runs();
   const auto order = sys.hash.order();
   const std::span<PairSums> sums(sys.pair_sums);
+  ExceptionTrap trap;  // every loop body runs through it: all threads meet every barrier
 #pragma omp parallel num_threads(sys.threads) if (n >= kParallelMin)
   {
     PairScratch& c = sys.scratch[static_cast<std::size_t>(worker_index())];
     Evaluator& ev = sys.evaluators[static_cast<std::size_t>(worker_index())];
 #pragma omp for schedule(static)
-    for (std::int64_t slot = 0; slot < static_cast<std::int64_t>(n); ++slot) {
+    for (std::int64_t slot = 0; slot < static_cast<std::int64_t>(n); ++slot) trap.run([&] {
       const auto s = static_cast<std::size_t>(slot);
       pack_slot(sys, s);
       sums[s] = {0, 0, 0, 0, 0, sys.mu[order[s]] * sigma_max(sys)};
-    }
+    });
     const auto layers = sys.hash.layers();
     const auto layer_runs = sys.hash.layer_runs();
     SpatialHash::ForwardWalk walk(sys.hash);
     for (std::int64_t parity = 0; parity < 2; ++parity) {
 #pragma omp for schedule(dynamic, 1)
-      for (std::int64_t l = 0; l < static_cast<std::int64_t>(layers.size()); ++l) {
+      for (std::int64_t l = 0; l < static_cast<std::int64_t>(layers.size()); ++l) trap.run([&] {
         const auto& layer = layers[static_cast<std::size_t>(l)];
-        if ((layer.layer & 1) != parity) continue;
+        if ((layer.layer & 1) != parity) return;
         for (std::uint32_t r = layer.first; r < layer.last; ++r) {
           const auto& run = runs[layer_runs[r]];
           const std::uint32_t candidates = gather_block(sys, run, walk, c);
@@ -231,18 +232,18 @@ void repulsion_and_move(FloaterState& sys) {
           }
         }
         accumulate_pairs(sys, c.batch, pk);  // the layer's pairs are all in the sums
-      }
+      });
     }
 #pragma omp for schedule(dynamic, 256)
-    for (std::int64_t slot = 0; slot < static_cast<std::int64_t>(n); ++slot) {
+    for (std::int64_t slot = 0; slot < static_cast<std::int64_t>(n); ++slot) trap.run([&] {
       const auto s = static_cast<std::size_t>(slot);
       const std::uint32_t i = order[s];
       sys.graded[i] = sums[s].limit;
       move_one(sys, i, sums[s], ev, k);
-    }
+    });
     // Summed per chunk in index order: the same on any number of threads.
 #pragma omp for schedule(static)
-    for (std::int64_t chunk = 0; chunk < static_cast<std::int64_t>(chunks); ++chunk) {
+    for (std::int64_t chunk = 0; chunk < static_cast<std::int64_t>(chunks); ++chunk) trap.run([&] {
       const std::size_t b = static_cast<std::size_t>(chunk) * kChunk;
       double sq = 0;
       std::size_t near = 0;
@@ -252,8 +253,9 @@ void repulsion_and_move(FloaterState& sys) {
       }
       sys.chunk_speed[static_cast<std::size_t>(chunk)] = sq;
       sys.chunk_near[static_cast<std::size_t>(chunk)] = near;
-    }
+    });
   }
+  trap.rethrow();
   sys.smax.swap(sys.graded);
 }
 

@@ -30,7 +30,7 @@ void resolve_lengths(FloaterState& sys) {
     // radii whose squares underflow), so σ̂ is kept inside them.
     sys.sigma_hat = std::clamp(sys.opt.radius, kMinNominal * sys.scene_radius, sys.scene_radius);
   } else {
-    const double area = estimate_area(sys.surface);
+    const double area = estimate_area(sys.surface, 1, sys.stop);
     const double target = std::max<double>(1, static_cast<double>(sys.opt.max_count) / 3);
     sys.sigma_hat = area > 0 ? std::sqrt(area / (kAreaPerFloater * target)) : sys.scene_radius / 10;
     sys.sigma_hat = std::clamp(sys.sigma_hat, 1e-4 * sys.scene_radius, sys.scene_radius);

@@ -250,7 +250,7 @@ void find_singular(FloaterState& sys) {
     index_set(sys);
     return;
   }
-  sys.singular = find_singular_set(sys.surface);
+  sys.singular = find_singular_set(sys.surface, {}, sys.stop);
   for (const SingularCurve& curve : sys.singular.curves) {
     RailCurve c;
     c.points = curve.points;

@@ -69,84 +69,101 @@ void SpatialHash::build(std::span<const Vec3> points, const Box3& region, double
   // over (bucket, part), so each thread places its part at cursors of its own, in input order:
   // stable, and the same slots whatever the team. Floaters come kept in cell order, so the
   // counting and placing walk the buckets almost in order and the buckets come out almost
-  // sorted. All in one parallel region (its threads wake once).
+  // sorted. All in one parallel region (its threads wake once). Each phase between barriers
+  // runs through the trap, so that every thread meets every barrier even after a failure.
+  detail::ExceptionTrap trap;
 #pragma omp parallel num_threads(team)
   {
     const auto part = static_cast<std::size_t>(detail::worker_index());
     const auto parts = static_cast<std::size_t>(detail::team_size());
 #pragma omp single
-    {
+    trap.run([&] {
       cursor_.assign(parts * buckets, 0);
       part_sums_.assign(parts + 1, 0);
       part_runs_.resize(parts);
-    }
+    });
     // This thread's part of the input, and of the buckets.
     const std::size_t first = n * part / parts, last = n * (part + 1) / parts;
     const std::size_t bucket_first = buckets * part / parts;
     const std::size_t bucket_last = buckets * (part + 1) / parts;
-    std::uint32_t* cursor = cursor_.data() + part * buckets;
     const CellOf cell_of(*this);
-    with_density([&](auto dense) {
-      for (std::size_t i = first; i < last; ++i) {
-        const std::uint64_t key = cell_of.key(points[i]);
-        key_in_[i] = key;
-        ++cursor[bucket_index<dense()>(key)];
+    trap.run([&] {
+      std::uint32_t* cursor = cursor_.data() + part * buckets;
+      with_density([&](auto dense) {
+        for (std::size_t i = first; i < last; ++i) {
+          const std::uint64_t key = cell_of.key(points[i]);
+          key_in_[i] = key;
+          ++cursor[bucket_index<dense()>(key)];
+        }
+      });
+    });
+#pragma omp barrier
+    trap.run([&] {
+      std::uint32_t sum = 0;
+      for (std::size_t b = bucket_first; b < bucket_last; ++b)
+        for (std::size_t u = 0; u < parts; ++u) sum += cursor_[u * buckets + b];
+      part_sums_[part + 1] = sum;
+    });
+#pragma omp barrier
+    trap.run([&] {
+      std::uint32_t offset = 0;
+      for (std::size_t k = 0; k <= part; ++k) offset += part_sums_[k];
+      for (std::size_t b = bucket_first; b < bucket_last; ++b) {
+        start_[b] = offset;
+        for (std::size_t u = 0; u < parts; ++u) {
+          const std::uint32_t count = cursor_[u * buckets + b];
+          cursor_[u * buckets + b] = offset;
+          offset += count;
+        }
       }
     });
 #pragma omp barrier
-    std::uint32_t sum = 0;
-    for (std::size_t b = bucket_first; b < bucket_last; ++b)
-      for (std::size_t u = 0; u < parts; ++u) sum += cursor_[u * buckets + b];
-    part_sums_[part + 1] = sum;
-#pragma omp barrier
-    std::uint32_t offset = 0;
-    for (std::size_t k = 0; k <= part; ++k) offset += part_sums_[k];
-    for (std::size_t b = bucket_first; b < bucket_last; ++b) {
-      start_[b] = offset;
-      for (std::size_t u = 0; u < parts; ++u) {
-        const std::uint32_t count = cursor_[u * buckets + b];
-        cursor_[u * buckets + b] = offset;
-        offset += count;
-      }
-    }
-#pragma omp barrier
-    with_density([&](auto dense) {
-      for (std::size_t i = first; i < last; ++i) {
-        const std::uint64_t key = key_in_[i];
-        const std::uint32_t slot = cursor[bucket_index<dense()>(key)]++;
-        order_[slot] = static_cast<std::uint32_t>(i);
-        keys_[slot] = key;
-      }
+    trap.run([&] {
+      std::uint32_t* cursor = cursor_.data() + part * buckets;
+      with_density([&](auto dense) {
+        for (std::size_t i = first; i < last; ++i) {
+          const std::uint64_t key = key_in_[i];
+          const std::uint32_t slot = cursor[bucket_index<dense()>(key)]++;
+          order_[slot] = static_cast<std::uint32_t>(i);
+          keys_[slot] = key;
+        }
+      });
+      start_[buckets] = static_cast<std::uint32_t>(n);
     });
-    start_[buckets] = static_cast<std::uint32_t>(n);
 #pragma omp barrier
     // Each bucket sorted by key (a row's cells in order; a hashed bucket's rows apart), and its
     // runs listed by this thread, then copied to runs_ after the runs of the parts before.
-    std::vector<Run>& runs = part_runs_[part];
-    runs.clear();
-    for (std::size_t b = bucket_first; b < bucket_last; ++b) {
-      const std::uint32_t begin = start_[b], end = start_[b + 1];
-      sort_slots(begin, end);
-      bucket_run_[b] = static_cast<std::uint32_t>(runs.size());
-      for (std::uint32_t s = begin; s < end;) {
-        std::uint32_t e = s + 1;
-        while (e < end && keys_[e] == keys_[s]) ++e;
-        runs.push_back({keys_[s], s, e});
-        s = e;
+    trap.run([&] {
+      std::vector<Run>& runs = part_runs_[part];
+      runs.clear();
+      for (std::size_t b = bucket_first; b < bucket_last; ++b) {
+        const std::uint32_t begin = start_[b], end = start_[b + 1];
+        sort_slots(begin, end);
+        bucket_run_[b] = static_cast<std::uint32_t>(runs.size());
+        for (std::uint32_t s = begin; s < end;) {
+          std::uint32_t e = s + 1;
+          while (e < end && keys_[e] == keys_[s]) ++e;
+          runs.push_back({keys_[s], s, e});
+          s = e;
+        }
       }
-    }
-    part_sums_[part + 1] = static_cast<std::uint32_t>(runs.size());
+      part_sums_[part + 1] = static_cast<std::uint32_t>(runs.size());
+    });
 #pragma omp barrier
 #pragma omp single
-    {
+    trap.run([&] {
       for (std::size_t k = 0; k < parts; ++k) part_sums_[k + 1] += part_sums_[k];
       runs_.resize(part_sums_[parts]);
       bucket_run_[buckets] = part_sums_[parts];
-    }
-    const std::uint32_t run_offset = part_sums_[part];
-    for (std::size_t b = bucket_first; b < bucket_last; ++b) bucket_run_[b] += run_offset;
-    std::copy(runs.begin(), runs.end(), runs_.begin() + run_offset);
+    });
+    trap.run([&] {
+      const std::vector<Run>& runs = part_runs_[part];
+      const std::uint32_t run_offset = part_sums_[part];
+      for (std::size_t b = bucket_first; b < bucket_last; ++b) bucket_run_[b] += run_offset;
+      std::copy(runs.begin(), runs.end(), runs_.begin() + run_offset);
+    });
   }
+  trap.rethrow();
   // The runs by layer: a dense grid's come in key order, hence in layer order, already.
   layer_runs_.resize(runs_.size());
   for (std::uint32_t r = 0; r < runs_.size(); ++r) layer_runs_[r] = r;

@@ -48,6 +48,8 @@ auto state_arrays(FloaterState& sys) {
 template <class T>
 void permute_into(const std::vector<T>& v, std::vector<T>& out,
                   std::span<const std::uint32_t> order) {
+  // No ExceptionTrap: copies of numbers and fixed-size vectors into arrays already sized
+  // cannot throw.
 #pragma omp for schedule(static) nowait
   for (std::int64_t s = 0; s < static_cast<std::int64_t>(order.size()); ++s)
     out[static_cast<std::size_t>(s)] = v[order[static_cast<std::size_t>(s)]];

@@ -380,6 +380,7 @@ ExtractedMesh extract_dense(const Surface& surface, const Grid& g, const Polygon
   // slab is a quarter of the grid or more, run on one worker).
   workers = static_cast<int>(std::clamp<long long>(slabs / 4, 1, workers));
   std::vector<Slab> out(static_cast<size_t>(slabs));
+  ExceptionTrap trap;
   {
     std::vector<std::unique_ptr<RowSampler>> samplers(static_cast<size_t>(workers));
     for (auto& s : samplers) s = std::make_unique<RowSampler>(surface.field, g, poly);
@@ -387,12 +388,13 @@ ExtractedMesh extract_dense(const Surface& surface, const Grid& g, const Polygon
     for (auto& p : placers) p = std::make_unique<VertexPlacer>(surface.field, g, poly, o.refine_steps);
     std::vector<SlabScratch> scratch(static_cast<size_t>(workers));
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
-    for (long long s = 0; s < slabs; ++s) {
-      if (stop.stop_requested()) continue;
+    for (long long s = 0; s < slabs; ++s) trap.run([&] {
+      if (stop.stop_requested()) return;
       const auto w = static_cast<size_t>(worker_index());
       extract_slab(*samplers[w], *placers[w], scratch[w], g, s * layers, layers,
                    out[static_cast<size_t>(s)]);
-    }
+    });
+    trap.rethrow();
   }
   if (stop.stop_requested()) return {};
 
@@ -410,7 +412,7 @@ ExtractedMesh extract_dense(const Surface& surface, const Grid& g, const Polygon
   res.positions.resize(base.back());
   res.triangles.resize(tri_base.back());
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
-  for (long long s = 0; s < slabs; ++s) {
+  for (long long s = 0; s < slabs; ++s) trap.run([&] {
     Slab& slab = out[static_cast<size_t>(s)];
     const auto b = static_cast<std::uint32_t>(base[static_cast<size_t>(s)]);
     std::copy(slab.positions.begin(), slab.positions.end(),
@@ -419,7 +421,8 @@ ExtractedMesh extract_dense(const Surface& surface, const Grid& g, const Polygon
     for (const Triangle& t : slab.triangles) *dst++ = {t[0] + b, t[1] + b, t[2] + b};
     std::vector<Vec3>().swap(slab.positions);
     ScratchVector<Triangle>().swap(slab.triangles);
-  }
+  });
+  trap.rethrow();
 
   // The slabs ran on all workers: count their sampling and refinement shares of the wall time.
   double sampling = 0, refinement = 0;

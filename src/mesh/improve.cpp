@@ -186,8 +186,9 @@ struct MeshImprover::State {
     const long long blocks = (n + kBlock - 1) / kBlock;
     std::vector<double> block_sum(static_cast<size_t>(blocks), 0.0);
     std::vector<long long> block_count(static_cast<size_t>(blocks), 0);
+    detail::ExceptionTrap trap;
 #pragma omp parallel for num_threads(workers) schedule(static)
-    for (long long b = 0; b < blocks; ++b) {
+    for (long long b = 0; b < blocks; ++b) trap.run([&] {
       double sum = 0;
       long long count = 0;
       for (long long v = b * kBlock; v < std::min(n, (b + 1) * kBlock); ++v) {
@@ -200,7 +201,8 @@ struct MeshImprover::State {
       }
       block_sum[static_cast<size_t>(b)] = sum;
       block_count[static_cast<size_t>(b)] = count;
-    }
+    });
+    trap.rethrow();
     double sum = 0;
     long long count = 0;
     for (long long b = 0; b < blocks; ++b)
@@ -214,13 +216,15 @@ struct MeshImprover::State {
     beta.assign(nv(), 1.0);
     step_to_critical.assign(nv(), std::numeric_limits<double>::infinity());
     const double gamma = opt.singularity_scale * mean_edge;
+    detail::ExceptionTrap trap;
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 256)
-    for (long long v = 0; v < n; ++v) {
+    for (long long v = 0; v < n; ++v) trap.run([&] {
       const FieldSample s = pool.local().sample(mesh.positions[static_cast<size_t>(v)], true, false);
       const double r = pseudo_inverse_step(s.gradient, s.hessian).norm();
       step_to_critical[static_cast<size_t>(v)] = r;
       beta[static_cast<size_t>(v)] = gamma > 0 && std::isfinite(r) ? std::min(r / gamma, 1.0) : 1.0;
-    }
+    });
+    trap.rethrow();
   }
 
   // Newton on ∇F = 0 from vertices whose step to a critical point is shorter than an edge.
@@ -231,20 +235,22 @@ struct MeshImprover::State {
     const long long nc = static_cast<long long>(cand.size());
     std::vector<Vec3> found(cand.size());
     std::vector<std::uint8_t> ok(cand.size(), 0);
+    detail::ExceptionTrap trap;
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 4)
-    for (long long c = 0; c < nc; ++c) {
+    for (long long c = 0; c < nc; ++c) trap.run([&] {
       // Any critical point, singular curves too (min_conditioning 0).
       const auto x = find_critical_point(
           pool.local(), mesh.positions[cand[static_cast<size_t>(c)]],
           {.iterations = 30, .reach = 2 * mean_edge, .tolerance = 1e-13, .length = 1});
-      if (!x) continue;
+      if (!x) return;
       if (x->gradient.norm() <= 1e-8 * grad_ref &&
           std::abs(x->value) <= 1e-8 * grad_ref * mean_edge &&
           (surface.clip.is_empty_spec() || surface.clip.contains(x->point))) {
         found[static_cast<size_t>(c)] = x->point;
         ok[static_cast<size_t>(c)] = 1;
       }
-    }
+    });
+    trap.rethrow();
     const double same = 1e-3 * mean_edge;
     for (size_t c = 0; c < cand.size(); ++c) {
       if (!ok[c]) continue;
@@ -333,8 +339,11 @@ struct MeshImprover::State {
     // Where each vertex would go, kept up to date as moves are shortened (each triangle
     // check would otherwise recompute three of them).
     std::vector<Vec3> dest(nv());
+    detail::ExceptionTrap trap;
 #pragma omp parallel for num_threads(workers) schedule(static)
-    for (long long v = 0; v < n; ++v) dest[static_cast<size_t>(v)] = target(static_cast<std::uint32_t>(v));
+    for (long long v = 0; v < n; ++v)
+      trap.run([&] { dest[static_cast<size_t>(v)] = target(static_cast<std::uint32_t>(v)); });
+    trap.rethrow();
     for (int round = 0; !check.empty(); ++round) {
       std::vector<std::uint32_t> bad;
       const long long nc = static_cast<long long>(check.size());
@@ -342,15 +351,16 @@ struct MeshImprover::State {
       {
         std::vector<std::uint32_t> local;
 #pragma omp for schedule(static) nowait
-        for (long long c = 0; c < nc; ++c) {
+        for (long long c = 0; c < nc; ++c) trap.run([&] {
           const std::uint32_t t = check[static_cast<size_t>(c)];
           const auto& tri = mesh.triangles[t];
           const Vec3 to[3] = {dest[tri[0]], dest[tri[1]], dest[tri[2]]};
           if (triangle_bad(t, to)) local.push_back(t);
-        }
+        });
 #pragma omp critical
-        bad.insert(bad.end(), local.begin(), local.end());
+        trap.run([&] { bad.insert(bad.end(), local.begin(), local.end()); });
       }
+      trap.rethrow();
       if (bad.empty()) break;
       std::sort(bad.begin(), bad.end());  // the same result whatever the thread timing
       const bool cancel = round >= 6;
@@ -380,11 +390,12 @@ struct MeshImprover::State {
     double max_move = 0;
     std::vector<Vec3> next(nv());
 #pragma omp parallel for num_threads(workers) schedule(static) reduction(max : max_move)
-    for (long long v = 0; v < n; ++v) {
+    for (long long v = 0; v < n; ++v) trap.run([&] {
       const std::uint32_t u = static_cast<std::uint32_t>(v);
       next[u] = scale[u] > 0 ? dest[u] : mesh.positions[u];
       max_move = std::max(max_move, (next[u] - mesh.positions[u]).norm());
-    }
+    });
+    trap.rethrow();
     mesh.positions.swap(next);
     return max_move;
   }
@@ -395,10 +406,11 @@ struct MeshImprover::State {
     move.assign(nv(), Vec3::Zero());
     const double eps2 = 1e-6 * grad_ref * grad_ref;
     const double phi = opt.feedback;
+    detail::ExceptionTrap trap;
 #pragma omp parallel for num_threads(workers) schedule(static)
-    for (long long vv = 0; vv < n; ++vv) {
+    for (long long vv = 0; vv < n; ++vv) trap.run([&] {
       const std::uint32_t v = static_cast<std::uint32_t>(vv);
-      if (mode[v] == kHeld || nbr_count[v] == 0) continue;
+      if (mode[v] == kHeld || nbr_count[v] == 0) return;
       const Vec3& p = mesh.positions[v];
       double wsum = 0, shortest = std::numeric_limits<double>::infinity();
       Vec3 wp = Vec3::Zero();
@@ -429,11 +441,11 @@ struct MeshImprover::State {
       const Vec3 P = opt.relaxation * (wp / wsum - p);
       const Vec3& g = grad[v];
       Vec3 vel;
-      if (!std::isfinite(f[v]) || !g.allFinite()) continue;
+      if (!std::isfinite(f[v]) || !g.allFinite()) return;
       // A sheet's vertex that has come onto a singular curve (∇F all but zero, as at a pinch
       // point, where the sheets close up on the curve) has no tangent plane to slide in: the
       // springs alone would push it to and fro along the curve. It stays where it is.
-      if (near_curve[v] && g.squaredNorm() < kOnSingularCurve * grad_ref * grad_ref) continue;
+      if (near_curve[v] && g.squaredNorm() < kOnSingularCurve * grad_ref * grad_ref) return;
       if (mode[v] == kFree) {
         vel = P - ((g.dot(P) + phi * f[v]) / (g.dot(g) + eps2)) * g;
       } else {  // on the clip curve: both constraints (paper §4.2)
@@ -453,7 +465,8 @@ struct MeshImprover::State {
       const double len = vel.norm(), limit = opt.max_move_fraction * shortest;
       if (len > limit) vel *= limit / len;
       if (vel.allFinite()) move[v] = vel;
-    }
+    });
+    trap.rethrow();
   }
 
   // Delaunay flips between nearly coplanar triangles (serial; keeps the connectivity arrays).
@@ -544,13 +557,15 @@ struct MeshImprover::State {
   void count_flipped() {
     long long flipped = 0;
     const long long nt = static_cast<long long>(mesh.triangles.size());
+    detail::ExceptionTrap trap;
 #pragma omp parallel for num_threads(workers) schedule(static) reduction(+ : flipped)
-    for (long long t = 0; t < nt; ++t) {
+    for (long long t = 0; t < nt; ++t) trap.run([&] {
       const auto& tri = mesh.triangles[static_cast<size_t>(t)];
       const Vec3 n = detail::area_normal(mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]]);
       const Vec3 ref = unit[tri[0]] + unit[tri[1]] + unit[tri[2]];
       if (ref.squaredNorm() > 0 && n.dot(ref) < 0) ++flipped;
-    }
+    });
+    trap.rethrow();
     stats.flipped_triangles = flipped;
   }
 };
@@ -613,10 +628,11 @@ void MeshImprover::finish() {
     const long long n = static_cast<long long>(s.nv());
     s.move.assign(s.nv(), Vec3::Zero());
     const double tiny = 1e-6 * s.grad_ref;
+    detail::ExceptionTrap trap;
 #pragma omp parallel for num_threads(s.workers) schedule(static)
-    for (long long vv = 0; vv < n; ++vv) {
+    for (long long vv = 0; vv < n; ++vv) trap.run([&] {
       const std::uint32_t v = static_cast<std::uint32_t>(vv);
-      if (s.mode[v] == kHeld || !std::isfinite(s.f[v])) continue;
+      if (s.mode[v] == kHeld || !std::isfinite(s.f[v])) return;
       double shortest = std::numeric_limits<double>::infinity();
       for (std::uint32_t k = 0; k < s.nbr_count[v]; ++k)
         shortest = std::min(shortest, (s.mesh.positions[s.nb(v)[k]] - s.mesh.positions[v]).norm());
@@ -626,13 +642,14 @@ void MeshImprover::finish() {
                                             0.5 * shortest) - s.mesh.positions[v];
       } else {
         const Vec3& g = s.grad[v];
-        if (!(g.norm() > tiny)) continue;
+        if (!(g.norm() > tiny)) return;
         d = surface_newton_step(s.f[v], g);
       }
       const double len = d.norm(), limit = 0.25 * shortest;
       if (len > limit) d *= limit / len;
       if (d.allFinite()) s.move[v] = d;
-    }
+    });
+    trap.rethrow();
     s.apply_moves();
   }
   s.evaluate_field();

@@ -9,6 +9,7 @@
 #include "polygonize_detail.h"
 #include "zeroset/detail/parallel.h"
 #include "zeroset/error.h"
+#include "zeroset/io/memory.h"
 
 namespace zeroset {
 namespace detail {
@@ -106,6 +107,28 @@ GridPlan plan_grid(const Surface& surface, const PolygonizeOptions& options) {
                            mesh_bytes;
   }
   return plan;
+}
+
+void check_grid_memory(const Surface& surface, PolygonizeOptions options,
+                       const std::string& option) {
+  const MemoryLimit have = available_memory();
+  if (!have.known) return;
+  const double limit = have.budget();
+  const int cells = options.cells;
+  auto need = [&](int n) {
+    options.cells = n;
+    return plan_grid(surface, options).estimated_bytes;
+  };
+  const double needed = need(cells);
+  if (needed <= limit) return;
+  int lo = 1, hi = cells;  // need(lo) fits (or nothing does), need(hi) does not
+  while (hi - lo > 1) {
+    const int mid = lo + (hi - lo) / 2;
+    (need(mid) <= limit ? lo : hi) = mid;
+  }
+  throw InvalidArgument(option, std::to_string(cells),
+                        fmt::format("{}; use {} {} or less", memory_shortfall(needed, have),
+                                    option, lo));
 }
 
 }  // namespace zeroset

@@ -61,12 +61,13 @@ MeshQuality measure_quality(const Mesh& mesh, const Surface& surface, const Qual
   double edge_sum = 0, angle_sum = 0, ratio_sum = 0;
   double smallest = 180, min_ratio = 1;
   std::array<long long, 12> hist{};
+  detail::ExceptionTrap trap;
 #pragma omp parallel num_threads(workers)
   {
     std::array<long long, 12> local{};
 #pragma omp for schedule(static) reduction(+ : edge_sum, angle_sum, ratio_sum) \
     reduction(min : smallest, min_ratio)
-    for (long long t = 0; t < nt; ++t) {
+    for (long long t = 0; t < nt; ++t) trap.run([&] {
       const auto& tri = mesh.triangles[static_cast<size_t>(t)];
       const Vec3 &a = P[tri[0]], &b = P[tri[1]], &c = P[tri[2]];
       edge_sum += (b - a).norm() + (c - b).norm() + (a - c).norm();
@@ -77,10 +78,11 @@ MeshQuality measure_quality(const Mesh& mesh, const Surface& surface, const Qual
       smallest = std::min(smallest, ang);
       min_ratio = std::min(min_ratio, ratio);
       ++local[static_cast<size_t>(std::clamp(static_cast<int>(ang / 5), 0, 11))];
-    }
+    });
 #pragma omp critical
     for (size_t k = 0; k < 12; ++k) hist[k] += local[k];
   }
+  trap.rethrow();
   q.min_angle_histogram = hist;
   const DegenerateCount degenerate = count_degenerate(mesh);
   q.zero_area_triangles = degenerate.zero_area_triangles;

@@ -44,12 +44,13 @@ ExtractedMesh extract_sparse(const Surface& surface, const Grid& g, const Polygo
   std::vector<double> corner_value(static_cast<size_t>(nc[0] * nc[1] * nc[2]));
   std::vector<double> centre_value(static_cast<size_t>(bricks)), centre_slope(centre_value.size());
   EvaluatorPool pool(surface.field, workers);
+  ExceptionTrap trap;
 #pragma omp parallel num_threads(workers)
   {
     std::vector<double> x, y, z, f, gx, gy, gz;
     Evaluator& ev = pool.local();
 #pragma omp for schedule(static)
-    for (long long r = 0; r < nc[1] * nc[2]; ++r) {
+    for (long long r = 0; r < nc[1] * nc[2]; ++r) trap.run([&] {
       const long long bj = r % nc[1], bk = r / nc[1];
       const size_t n = static_cast<size_t>(nc[0]);
       x.resize(n), y.assign(n, g.coord(1, corner_index(1, bj))),
@@ -57,9 +58,9 @@ ExtractedMesh extract_sparse(const Surface& surface, const Grid& g, const Polygo
       for (long long bi = 0; bi < nc[0]; ++bi) x[static_cast<size_t>(bi)] = g.coord(0, corner_index(0, bi));
       ev.values(x, y, z, f);
       std::copy(f.begin(), f.end(), corner_value.begin() + r * nc[0]);
-    }
+    });
 #pragma omp for schedule(static)
-    for (long long r = 0; r < nb[1] * nb[2]; ++r) {
+    for (long long r = 0; r < nb[1] * nb[2]; ++r) trap.run([&] {
       const long long bj = r % nb[1], bk = r / nb[1];
       const size_t n = static_cast<size_t>(nb[0]);
       x.resize(n), y.resize(n), z.resize(n), f.resize(n), gx.resize(n), gy.resize(n), gz.resize(n);
@@ -74,8 +75,9 @@ ExtractedMesh extract_sparse(const Surface& surface, const Grid& g, const Polygo
         centre_slope[static_cast<size_t>(r * nb[0]) + bi] =
             std::sqrt(gx[bi] * gx[bi] + gy[bi] * gy[bi] + gz[bi] * gz[bi]);
       }
-    }
+    });
   }
+  trap.rethrow();
   st.grid_samples += static_cast<long long>(corner_value.size() + centre_value.size());
   std::vector<long long> kept;
   for (long long b = 0; b < bricks; ++b) {
@@ -121,8 +123,8 @@ ExtractedMesh extract_sparse(const Surface& surface, const Grid& g, const Polygo
     for (auto& s : samplers) s = std::make_unique<RowSampler>(surface.field, g, poly);
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 8) \
     reduction(+ : active_cells, ambiguous, samples, nan_count, sampling_seconds)
-    for (long long q = 0; q < static_cast<long long>(kept.size()); ++q) {
-      if (stop.stop_requested()) continue;
+    for (long long q = 0; q < static_cast<long long>(kept.size()); ++q) trap.run([&] {
+      if (stop.stop_requested()) return;
       const long long b = kept[static_cast<size_t>(q)];
       const long long bi = b % nb[0], bj = (b / nb[0]) % nb[1], bk = b / (nb[0] * nb[1]);
       const long long i0 = bi * B, j0 = bj * B, k0 = bk * B;
@@ -177,7 +179,8 @@ ExtractedMesh extract_sparse(const Surface& surface, const Grid& g, const Polygo
                                 return l.key == r.key;
                               }),
                   out_c.end());
-    }
+    });
+    trap.rethrow();
   }
   if (stop.stop_requested()) return {};
   st.grid_samples += samples;
@@ -229,12 +232,13 @@ ExtractedMesh extract_sparse(const Surface& surface, const Grid& g, const Polygo
     return static_cast<std::uint32_t>(std::lower_bound(keys.begin(), keys.end(), key) - keys.begin());
   };
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 16)
-  for (long long q = 0; q < static_cast<long long>(tris.size()); ++q) {
+  for (long long q = 0; q < static_cast<long long>(tris.size()); ++q) trap.run([&] {
     const auto& src = tris[static_cast<size_t>(q)];
     for (size_t t = 0; t < src.size(); ++t)
       res.triangles[start[static_cast<size_t>(q)] + t] = {id_of(src[t][0]), id_of(src[t][1]),
                                                           id_of(src[t][2])};
-  }
+  });
+  trap.rethrow();
   st.active_cells += active_cells;
   st.ambiguous_faces += ambiguous;
   st.edge_vertices += static_cast<long long>(keys.size());

@@ -262,13 +262,15 @@ void place_vertices_parallel(std::vector<std::unique_ptr<VertexPlacer>>& placers
   constexpr size_t kChunk = 4096;
   const long long chunks = static_cast<long long>((in.size() + kChunk - 1) / kChunk);
   long long evals = 0;
+  detail::ExceptionTrap trap;
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 1) reduction(+ : evals)
-  for (long long c = 0; c < chunks; ++c) {
-    if (stop.stop_requested()) continue;
+  for (long long c = 0; c < chunks; ++c) trap.run([&] {
+    if (stop.stop_requested()) return;
     const size_t b = static_cast<size_t>(c) * kChunk, e = std::min(in.size(), b + kChunk);
     placers[static_cast<size_t>(worker_index())]->place(
         std::span<const Crossing>(in.data() + b, e - b), out + b, evals);
-  }
+  });
+  trap.rethrow();
   evaluations += evals;
 }
 

@@ -14,6 +14,7 @@
 #endif
 
 #include "render_detail.h"
+#include "zeroset/detail/parallel.h"
 #include "zeroset/error.h"
 
 namespace zeroset::detail {
@@ -147,13 +148,11 @@ bool for_each_tile(int width, int height, int tile_width, int tile_height, int t
   const int ty = (height + tile_height - 1) / tile_height;
   const int tiles = tx * ty;
   std::atomic<int> next{0}, done{0};
-  std::atomic<bool> failed{false};
-  std::exception_ptr error;
+  detail::ExceptionTrap trap;
   std::mutex mutex;
   auto work = [&](int worker) {
-    try {
-      for (int t = next++; t < tiles; t = next++) {
-        if (failed || stop.stop_requested()) return;
+    for (int t = next++; t < tiles && !trap.failed() && !stop.stop_requested(); t = next++)
+      trap.run([&] {
         const int x0 = (t % tx) * tile_width, y0 = (t / tx) * tile_height;
         body(x0, y0, std::min(width, x0 + tile_width), std::min(height, y0 + tile_height),
              worker);
@@ -162,19 +161,17 @@ bool for_each_tile(int width, int height, int tile_width, int tile_height, int t
           std::unique_lock lock(mutex, std::try_to_lock);
           if (lock) progress(static_cast<double>(d) / tiles);
         }
-      }
-    } catch (...) {
-      std::lock_guard lock(mutex);
-      if (!error) error = std::current_exception();
-      failed = true;
-    }
+      });
   };
   threads = std::clamp(threads, 1, std::max(1, tiles));
-  std::vector<std::thread> pool;
-  for (int w = 1; w < threads; ++w) pool.emplace_back(work, w);
-  work(0);
-  for (auto& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
+  {
+    // jthreads: when starting one fails (no memory for its stack), those started are joined
+    // before the exception leaves, instead of std::terminate for a joinable std::thread.
+    std::vector<std::jthread> pool;
+    for (int w = 1; w < threads; ++w) pool.emplace_back(work, w);
+    work(0);
+  }
+  trap.rethrow();
   if (stop.stop_requested()) return false;
   if (progress) progress(1.0);
   return true;

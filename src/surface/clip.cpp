@@ -78,6 +78,12 @@ void Clip::add(std::string_view spec) {
   if (colon == std::string_view::npos) throw InvalidArgument("--clip", s, kClipHelp);
   const std::string_view kind = spec.substr(0, colon);
   std::string_view rest = spec.substr(colon + 1);
+  const std::size_t adds = kind == "box" ? 6 : 1;
+  if (spheres.size() + planes.size() + adds > kMaxClipParts)
+    throw InvalidArgument("--clip", s,
+                          fmt::format("a clip has at most {} parts (a sphere or plane is one, a "
+                                      "box six)",
+                                      kMaxClipParts));
   if (kind == "sphere") {
     Vec3 center = Vec3::Zero();
     const size_t at = rest.find('@');

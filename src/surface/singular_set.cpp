@@ -36,7 +36,8 @@ struct GridSamples {
   }
 };
 
-GridSamples sample_grid(const Field& field, const Box3& box, int cells) {
+// Stops after the row in which `stop` is requested (the samples are then incomplete).
+GridSamples sample_grid(const Field& field, const Box3& box, int cells, const std::stop_token& stop) {
   GridSamples gs;
   gs.cell = box.size().maxCoeff() / cells;
   for (int a = 0; a < 3; ++a)
@@ -52,7 +53,7 @@ GridSamples sample_grid(const Field& field, const Box3& box, int cells) {
   std::vector<double> x(nx), y(nx), z(nx), f(nx), gx(nx), gy(nx), gz(nx);
   std::array<std::vector<double>, 6> hv;
   for (auto& v : hv) v.resize(nx);
-  for (size_t row = 0; row < total / nx; ++row) {
+  for (size_t row = 0; row < total / nx && !stop.stop_requested(); ++row) {
     for (size_t i = 0; i < nx; ++i) {
       const Vec3 p = gs.point(row * nx + i);
       x[i] = p.x(), y[i] = p.y(), z[i] = p.z();
@@ -333,8 +334,9 @@ SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& 
                           "must be between 4 and 1024");
   const Box3 box = surface.bounds();
   const double radius = surface.scene_radius();
-  const GridSamples grid = sample_grid(surface.field, box, options.cells);
+  const GridSamples grid = sample_grid(surface.field, box, options.cells, stop);
   const Clip& clip = surface.clip;
+  if (stop.stop_requested()) return {};
 
   SingularScales s;
   s.radius = radius;
@@ -422,6 +424,7 @@ SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& 
     out.points.clear();
     return out;
   }
+  if (stop.stop_requested()) return out;
 
   // Triple points: where curves meet. Each becomes a vertex of every curve through it.
   std::vector<Vec3> triples;

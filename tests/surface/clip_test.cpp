@@ -107,5 +107,24 @@ TEST(Clip, UnboundedClipHasNoBoundsAndSaysHowToFixIt) {
   EXPECT_TRUE(Clip::box(Box3::cube(1)).is_bounded());
 }
 
+// A clip has at most kMaxClipParts parts; a box counts six. Beyond, the spec is refused with
+// the limit named (every stage tests every part at every point it looks at).
+TEST(Clip, PartsAreLimited) {
+  Clip c;
+  for (std::size_t k = 0; k + 6 < kMaxClipParts; ++k) c.add("sphere:2");
+  c.add("box:1");
+  EXPECT_EQ(c.spheres.size() + c.planes.size(), kMaxClipParts);
+  try {
+    c.add("plane:0,0,1,0");
+    FAIL() << "the part beyond the limit was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("at most 256 parts"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(c.spheres.size() + c.planes.size(), kMaxClipParts);  // unchanged
+  Clip d;
+  for (std::size_t k = 0; k + 5 < kMaxClipParts; ++k) d.add("sphere:2");
+  EXPECT_THROW(d.add("box:1"), InvalidArgument);
+}
+
 }  // namespace
 }  // namespace zeroset

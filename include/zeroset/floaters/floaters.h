@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <stop_token>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -160,7 +161,11 @@ class FloaterSystem {
   /// Seeds `seed_count` random floaters in the surface's clip volume. With options.radius = 0
   /// the surface's area is estimated first (tens of milliseconds). Throws BadInput when the
   /// clip is unbounded or a parameter has no value, InvalidArgument for a bad option (named).
-  FloaterSystem(const Surface& surface, const FloaterOptions& options = {});
+  /// Once `stop` is requested, the area estimate and the singular set search (here and in
+  /// later calls) end early with what they have: a system stopped so is only fit to be
+  /// discarded, as a background job does when it is cancelled.
+  FloaterSystem(const Surface& surface, const FloaterOptions& options = {},
+                std::stop_token stop = {});
   ~FloaterSystem();
   FloaterSystem(FloaterSystem&&) noexcept;
   FloaterSystem& operator=(FloaterSystem&&) noexcept;

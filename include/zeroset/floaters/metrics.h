@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <stop_token>
 #include <vector>
 
 #include "zeroset/surface/analysis.h"
@@ -23,6 +24,9 @@ struct ReferenceOptions {
   /// Uniform candidates tried at most (the budget when the surface is small or empty).
   /// 0: 400·count.
   std::size_t max_candidates = 0;
+  /// Once requested, no further round of candidates is drawn: the result holds what was found
+  /// (and the area estimated from the candidates drawn so far).
+  std::stop_token stop = {};
 };
 
 /// A dense reference sampling of F = 0 inside the clip.
@@ -42,8 +46,9 @@ struct ReferenceSampling {
 /// Throws BadInput when the clip is unbounded.
 ReferenceSampling reference_sampling(const Surface& surface, const ReferenceOptions& options = {});
 
-/// Area of F = 0 inside the clip (reference_sampling with a coarser budget). 0 when empty.
-double estimate_area(const Surface& surface, std::uint64_t seed = 1);
+/// Area of F = 0 inside the clip (reference_sampling with a coarser budget). 0 when empty; a
+/// rough figure when `stop` was requested during the estimate.
+double estimate_area(const Surface& surface, std::uint64_t seed = 1, std::stop_token stop = {});
 
 // singular_distance(), which the band density uses, is in zeroset/surface/analysis.h.
 

@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <optional>
 #include <stop_token>
+#include <string>
 
 #include "zeroset/mesh/mesh.h"
 #include "zeroset/surface/surface.h"
@@ -103,5 +104,13 @@ struct GridPlan {
   double estimated_bytes = 0;
 };
 GridPlan plan_grid(const Surface& surface, const PolygonizeOptions& options = {});
+
+/// Refuses options whose grid (plan_grid's estimate) would not fit in the memory this process
+/// may still take (available_memory in zeroset/io/memory.h: RAM, ulimit -v, the cgroup's
+/// limit): throws InvalidArgument naming `option` (what the front end calls the resolution),
+/// the limit that applies and the largest resolution that fits. For front ends, before a
+/// long run; polygonize itself does not call it.
+void check_grid_memory(const Surface& surface, PolygonizeOptions options,
+                       const std::string& option);
 
 }  // namespace zeroset

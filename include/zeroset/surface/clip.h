@@ -1,5 +1,6 @@
 #pragma once
 /// Clip volumes (docs/algorithms.md A.6; paper §3.2): an intersection of spheres and half spaces.
+#include <cstddef>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -20,6 +21,11 @@ struct HalfSpaceClip {
   double offset = 0;
 };
 
+/// Most parts (spheres and half spaces) of one clip. Every stage tests the clip at every point
+/// it looks at, so the cost of a test grows with the parts; a handful is the use, and this
+/// bound keeps a clip of absurd length (a million specs in a scene file) from stalling work.
+inline constexpr std::size_t kMaxClipParts = 256;
+
 /// An intersection of spheres and half spaces; empty lists mean "no clip" (all of space).
 /// The signed clip function G is negative inside, zero on the boundary and positive outside:
 /// G(x) = max over parts of (|x - c| - r) and (n·x - d).
@@ -33,7 +39,8 @@ struct Clip {
   /// Parses one clip spec and intersects it into this clip. Specs:
   ///   sphere:R  sphere:R@cx,cy,cz  box:H (cube [-H,H]^3)  box:x0,y0,z0,x1,y1,z1
   ///   plane:nx,ny,nz,d (keeps n·x ≤ d; n is normalised)
-  /// Throws InvalidArgument naming the spec and what is wrong.
+  /// Throws InvalidArgument naming the spec and what is wrong, and when the clip would have
+  /// more than kMaxClipParts parts.
   void add(std::string_view spec);
 
   bool is_empty_spec() const { return spheres.empty() && planes.empty(); }

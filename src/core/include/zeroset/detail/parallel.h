@@ -2,6 +2,8 @@
 // OpenMP helpers with a serial fallback, and one field evaluator per worker thread: the one
 // place where the modules ask OpenMP how many workers there are and which one is running.
 #include <algorithm>
+#include <atomic>
+#include <exception>
 #include <span>
 #include <vector>
 
@@ -40,6 +42,33 @@ inline int team_size() {
 #endif
 }
 
+// An exception must not leave an OpenMP region or work-sharing loop, nor a std::thread's
+// function: either calls std::terminate (std::bad_alloc would abort instead of exiting with a
+// message). Each piece of parallel work runs through `run`, which keeps the first exception
+// and makes later pieces return at once; after the region, `rethrow` throws it on the calling
+// thread. `run` is a template, so the body is inlined: no call through a pointer per piece.
+class ExceptionTrap {
+ public:
+  template <class Body>
+  void run(Body&& body) noexcept {
+    if (failed_.load(std::memory_order_relaxed)) return;
+    try {
+      body();
+    } catch (...) {
+      if (!failed_.exchange(true)) error_ = std::current_exception();
+    }
+  }
+  bool failed() const { return failed_.load(std::memory_order_relaxed); }
+  /// After the region (its closing barrier or the threads' join orders the writes).
+  void rethrow() const {
+    if (error_) std::rethrow_exception(error_);
+  }
+
+ private:
+  std::atomic<bool> failed_{false};
+  std::exception_ptr error_;
+};
+
 // Evaluators own scratch memory and must not be shared, so each worker gets its own.
 class EvaluatorPool {
  public:
@@ -63,11 +92,12 @@ inline void values_gradients(EvaluatorPool& pool, int workers, std::span<const V
   g.resize(pts.size());
   constexpr long long kChunk = 1024;
   const long long chunks = (n + kChunk - 1) / kChunk;
+  ExceptionTrap trap;
 #pragma omp parallel num_threads(workers)
   {
     std::vector<double> x, y, z, fv, gx, gy, gz;
 #pragma omp for schedule(static)
-    for (long long c = 0; c < chunks; ++c) {
+    for (long long c = 0; c < chunks; ++c) trap.run([&] {
       const long long b = c * kChunk, e = std::min(n, b + kChunk);
       const size_t m = static_cast<size_t>(e - b);
       x.resize(m), y.resize(m), z.resize(m), fv.resize(m), gx.resize(m), gy.resize(m), gz.resize(m);
@@ -80,8 +110,9 @@ inline void values_gradients(EvaluatorPool& pool, int workers, std::span<const V
         f[static_cast<size_t>(b) + q] = fv[q];
         g[static_cast<size_t>(b) + q] = Vec3(gx[q], gy[q], gz[q]);
       }
-    }
+    });
   }
+  trap.rethrow();
 }
 
 }  // namespace zeroset::detail

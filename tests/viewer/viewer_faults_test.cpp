@@ -1,0 +1,116 @@
+// The viewer against hostile scenes: a clip of a million parts is refused at once, a clip at
+// the limit does not keep the viewer from closing (its jobs are cancelled at a coarse grain).
+// Runs the `zeroset` binary in a virtual X server (xvfb-run) with Mesa's software OpenGL.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "support/run_command.h"
+#include "zeroset/surface/clip.h"
+
+namespace zeroset {
+namespace {
+
+using test::run_command;
+
+bool has_xvfb() { return std::system("command -v xvfb-run > /dev/null 2>&1") == 0; }
+
+std::string temp_path(const std::string& name) {
+  const auto d = std::filesystem::temp_directory_path() / "zeroset_viewer_faults_test";
+  std::filesystem::create_directories(d);
+  return (d / name).string();
+}
+
+std::string write_file(const std::string& name, const std::string& text) {
+  const std::string path = temp_path(name);
+  std::ofstream(path) << text;
+  return path;
+}
+
+// A scene of the Kummer surface whose clip lists `parts` balls (all reaching past the scene).
+std::string clip_scene(const std::string& name, std::size_t parts) {
+  std::string clips;
+  clips.reserve(parts * 16);
+  for (std::size_t k = 0; k < parts; ++k)
+    clips += (k ? ",\"sphere:" : "\"sphere:") + std::to_string(3 + k % 1000) + "\"";
+  return write_file(name, "{\"zeroset_scene\": 1, \"name\": \"kummer\", \"clip\": [" + clips +
+                              "]}");
+}
+
+struct Timed {
+  test::CommandResult result;
+  double seconds = 0;
+};
+
+Timed view(const std::string& args) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Timed t;
+  t.result = run_command("LIBGL_ALWAYS_SOFTWARE=1 xvfb-run -a -s '-screen 0 1024x768x24' " +
+                         std::string(ZEROSET_BINARY) + " view " + args);
+  t.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return t;
+}
+
+TEST(ViewerFaults, AMillionClipsOnTheCommandLineAreRefusedBeforeTheWindow) {
+  const std::string scene = clip_scene("million.json", 1'000'000);
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto r = run_command(std::string(ZEROSET_BINARY) + " view " + scene + " --frames 1");
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("/clip/" + std::to_string(kMaxClipParts)), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("at most 256 parts"), std::string::npos) << r.output;
+  EXPECT_LT(s, 10) << r.output;
+}
+
+TEST(ViewerFaults, LoadingAMillionClipsThenQuitIsPrompt) {
+  if (!has_xvfb()) GTEST_SKIP() << "xvfb-run is not installed";
+  const std::string scene = clip_scene("million-load.json", 1'000'000);
+  const std::string script =
+      write_file("load-million.txt", "frames 2\nload " + scene + "\nexpect-error at most\nquit\n");
+  const Timed t = view("kummer --size 400x300 --script " + script);
+  EXPECT_EQ(t.result.exit_code, 0) << t.result.output;
+  EXPECT_NE(t.result.output.find("failed as expected"), std::string::npos) << t.result.output;
+  // Minutes before the clip limit and the cancellable set-up; the rest is the X server.
+  EXPECT_LT(t.seconds, 20) << t.result.output;
+}
+
+// At the clip limit in floaters mode, where the set-up tests every part at every point: the
+// viewer still closes at once when the script ends.
+TEST(ViewerFaults, AClipAtTheLimitDoesNotHoldTheExit) {
+  if (!has_xvfb()) GTEST_SKIP() << "xvfb-run is not installed";
+  const std::string scene = clip_scene("at-limit.json", kMaxClipParts);
+  for (const char* mode : {"floaters", "mesh", "raytrace"}) {
+    const std::string script =
+        write_file(std::string("at-limit-") + mode + ".txt",
+                   std::string("mode ") + mode + "\nsingular on\nframes 3\nquit\n");
+    const Timed t = view(scene + " --size 400x300 --script " + script);
+    EXPECT_EQ(t.result.exit_code, 0) << mode << "\n" << t.result.output;
+    EXPECT_LT(t.seconds, 20) << mode << "\n" << t.result.output;
+  }
+}
+
+// ImGui's slider aborts for bounds beyond ±DBL_MAX/2: the panel clamps every range it draws. A
+// scene with the range ±1e308 (should a reader let it through) is drawn, not an abort.
+TEST(ViewerFaults, ExtremeParameterRangesDoNotAbortTheSlider) {
+  if (!has_xvfb()) GTEST_SKIP() << "xvfb-run is not installed";
+  const std::string scene = write_file(
+      "huge-range.json",
+      "{\"zeroset_scene\": 1, \"equation\": \"a*x^2 + y^2 + z^2 - 1\", \"clip\": "
+      "[\"sphere:2\"], \"parameters\": {\"a\": {\"value\": 1, \"min\": -1e308, "
+      "\"max\": 1e308}}}");
+  const std::string script = write_file(
+      "huge-range.txt", "load " + scene + "\nframes 3\nrange a -1e300 1e300\nframes 3\nquit\n");
+  const Timed t = view("sphere --size 640x480 --script " + script);
+  // 1: a command refused (the range beyond the parameter limit), as it must be.
+  EXPECT_TRUE(t.result.exit_code == 0 || t.result.exit_code == 1) << t.result.output;
+  EXPECT_EQ(t.result.output.find("Assertion"), std::string::npos) << t.result.output;
+  EXPECT_NE(t.result.output.find(":5: quit"), std::string::npos) << t.result.output;
+}
+
+}  // namespace
+}  // namespace zeroset
