@@ -286,9 +286,10 @@ Scene scene_from_json(json j, const std::string& origin) {
         fail(origin, where, "expected a number or {\"value\", \"min\", \"max\"}");
       }
       // Values and range ends within the one parameter limit, reported at their pointer.
+      const std::string& parameter = name;  // a structured binding cannot be captured (clang)
       const auto check = [&](double v, const std::string& at) {
         try {
-          check_parameter_value(name, v);
+          check_parameter_value(parameter, v);
         } catch (const InvalidArgument& e) {
           fail(origin, at, e.what());
         }
