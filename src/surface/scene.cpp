@@ -207,12 +207,21 @@ Scene resolve_scene(const std::string& spec, const SurfaceOverrides& overrides) 
   return scene;
 }
 
+namespace {
+// Text from a .jsurf file or the command line may hold bytes that are not UTF-8 (in a comment
+// of the equation); a JSON document cannot, so they become U+FFFD instead of failing the save.
+std::string valid_utf8(const std::string& s) {
+  return json::parse(json(s).dump(-1, ' ', false, json::error_handler_t::replace))
+      .get<std::string>();
+}
+}  // namespace
+
 json scene_to_json(const Scene& scene) {
   const Surface& s = scene.surface;
   json j = scene.settings.is_object() ? scene.settings : json::object();
   j["zeroset_scene"] = 1;
-  if (!s.name.empty()) j["name"] = s.name;
-  j["equation"] = s.field.source();
+  if (!s.name.empty()) j["name"] = valid_utf8(s.name);
+  j["equation"] = valid_utf8(s.field.source());
   json params = json::object();
   for (const auto& r : s.ranges) {
     json p = {{"min", r.min}, {"max", r.max}};
