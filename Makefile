@@ -31,15 +31,19 @@ test-asan: deps
 	cd $(ASAN_BUILD) && LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 \
 	      ctest --output-on-failure -j $(JOBS) --timeout 1200
 
-# Runs the parser fuzz target (libFuzzer, clang) for FUZZ_SECONDS.
+# Runs the fuzz targets (libFuzzer, clang) for FUZZ_SECONDS each: the surface language's
+# parser, then scene files (JSON and SURFER's .jsurf).
 FUZZ_SECONDS ?= 60
 fuzz: deps
 	CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -DZEROSET_BUILD_FUZZ=ON -DZEROSET_BUILD_TESTS=OFF \
 	      -DZEROSET_BUILD_BENCH=OFF -DZEROSET_BUILD_VIEWER=OFF
-	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target parse_fuzz
+	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target parse_fuzz scene_fuzz
 	mkdir -p $(FUZZ_BUILD)/corpus && cp tests/fuzz/corpus/* $(FUZZ_BUILD)/corpus/
 	$(FUZZ_BUILD)/tests/fuzz/parse_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=5 -max_len=512 \
 	      -print_final_stats=1 $(FUZZ_BUILD)/corpus
+	mkdir -p $(FUZZ_BUILD)/scene_corpus && cp tests/fuzz/scene_corpus/* $(FUZZ_BUILD)/scene_corpus/
+	$(FUZZ_BUILD)/tests/fuzz/scene_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=5 -max_len=4096 \
+	      -rss_limit_mb=2048 -print_final_stats=1 $(FUZZ_BUILD)/scene_corpus
 
 # Peer comparisons (installs the peer tools) and micro-benchmarks; writes docs/benchmarks.md.
 bench: build

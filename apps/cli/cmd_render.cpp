@@ -192,6 +192,8 @@ struct Animation {
 /// InvalidArgument for a flag that the keyframes make meaningless, or nothing to animate.
 Animation resolve_animation(const SurfaceArgs& args, const LookArgs& look, double orbit_deg,
                             int frames) {
+  // Within the camera's angle limit, so azimuth + orbit stays a valid camera.
+  check_flag_range("--orbit", orbit_deg, -kMaxCameraAngleDeg / 2, kMaxCameraAngleDeg / 2);
   SurfaceOverrides overrides;
   overrides.clip_specs = args.clips;
   std::vector<ParamRange> ranges;
@@ -199,10 +201,10 @@ Animation resolve_animation(const SurfaceArgs& args, const LookArgs& look, doubl
     const size_t eq = p.find('=');
     if (eq != std::string::npos && p.find(':', eq) != std::string::npos) {
       ranges.push_back(parse_range(p, "--param"));
-      overrides.params[ranges.back().name] = ranges.back().from;
+      add_parameter_override(overrides, ranges.back().name, ranges.back().from, "--param", p);
     } else {
       const auto [name, value] = parse_assignment(p, "--param");
-      overrides.params[name] = value;
+      add_parameter_override(overrides, name, value, "--param", p);
     }
   }
   const Scene scene = resolve_scene(args.spec, overrides);
@@ -284,6 +286,7 @@ void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArg
   if (a.frame_range_opt->count() > 0 && a.frame_range.empty())
     throw InvalidArgument("--frame-range", "''", "expected FIRST-LAST, e.g. 0-9");
   const FrameRange range = parse_frame_range(a.frame_range, a.frames, "--frame-range");
+  check_flag_range("--fps", a.fps, 1, 240);  // CLI::Range lets NaN through
   // A part of the animation makes no video; the frames are joined once all parts are done.
   const bool whole = range.count() == a.frames;
   if (!whole && !a.video.empty())

@@ -137,8 +137,11 @@ void run_sample(const SampleArgs& a) {
     throw InvalidArgument("--stats", a.stats, "use a .json name");
   if (!(a.disk_scale > 0) || !std::isfinite(a.disk_scale))
     throw InvalidArgument("--disk-scale", fmt::format("{}", a.disk_scale), "must be positive");
-  if (a.band < 0 || !std::isfinite(a.band))
-    throw InvalidArgument("--band", fmt::format("{}", a.band), "must not be negative");
+  check_flag_range("--disk-scale", a.disk_scale, 0, 100);
+  check_flag_range("--band", a.band, 0, kMaxFloaterRadius);
+  check_flag_range("--steps", static_cast<double>(a.steps), 0, kMaxFloaterSteps);
+  check_flag_range("--max-steps", static_cast<double>(a.max_steps), 0, kMaxFloaterSteps);
+  check_flag_range("--settle-steps", static_cast<double>(a.settle_steps), 0, kMaxFloaterSteps);
   const auto [width, height] = parse_size(a.size, "--size");
   std::optional<ParamRange> anim;
   if (!a.animate.empty()) {

@@ -77,7 +77,7 @@ SurfaceOverrides SurfaceArgs::overrides() const {
   SurfaceOverrides o;
   for (const auto& p : params) {
     auto [name, value] = parse_assignment(p, "--param");
-    o.params[name] = value;
+    add_parameter_override(o, name, value, "--param", p);
   }
   o.clip_specs = clips;
   return o;
@@ -103,6 +103,13 @@ std::pair<std::string, double> parse_assignment(const std::string& text, const s
   return {text.substr(0, eq), parse_finite(text.substr(eq + 1), flag, text)};
 }
 
+void add_parameter_override(SurfaceOverrides& o, const std::string& name, double value,
+                            const std::string& flag, const std::string& text) {
+  // Keeping the last of two values would hide a mistake in a long command line.
+  if (!o.params.emplace(name, value).second)
+    throw InvalidArgument(flag, text, fmt::format("parameter '{}' is given more than once", name));
+}
+
 ParamRange parse_range(const std::string& text, const std::string& flag) {
   const size_t eq = text.find('=');
   const size_t colon = text.find(':', eq == std::string::npos ? 0 : eq);
@@ -112,11 +119,19 @@ ParamRange parse_range(const std::string& text, const std::string& flag) {
   r.name = text.substr(0, eq);
   r.from = parse_finite(text.substr(eq + 1, colon - eq - 1), flag, text);
   r.to = parse_finite(text.substr(colon + 1), flag, text);
+  // A parameter's range ends obey the parameter values' limit (zeroset/expr/field.h).
+  for (double end : {r.from, r.to}) {
+    try {
+      check_parameter_value(r.name, end);
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument(flag, text, e.what());
+    }
+  }
   return r;
 }
 
 FrameRange parse_frame_range(const std::string& text, int frames, const std::string& flag) {
-  if (frames < 1) throw InvalidArgument("--frames", std::to_string(frames), "must be ≥ 1");
+  check_flag_range("--frames", frames, 1, kMaxFrames);
   if (text.empty()) return {0, frames - 1};
   // Digits only: a sign, a decimal point or an exponent is refused, not rounded.
   const auto frame_number = [&](const std::string& part) {
@@ -139,6 +154,12 @@ FrameRange parse_frame_range(const std::string& text, int frames, const std::str
                           fmt::format("the animation has {} frames, numbered 0 to {}", frames,
                                       frames - 1));
   return r;
+}
+
+void check_flag_range(const std::string& flag, double value, double lo, double hi) {
+  if (!(value >= lo && value <= hi))
+    throw InvalidArgument(flag, fmt::format("{}", value),
+                          fmt::format("must lie in [{:g}, {:g}]", lo, hi));
 }
 
 std::pair<int, int> parse_size(const std::string& text, const std::string& flag) {

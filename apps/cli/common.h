@@ -31,7 +31,12 @@ struct SurfaceArgs {
 
 /// Parses "name=value" (value a finite number). Throws InvalidArgument saying which and why.
 std::pair<std::string, double> parse_assignment(const std::string& text, const std::string& flag);
-/// Parses "name=a:b" (a range). Throws InvalidArgument.
+/// Adds --param NAME=VALUE to `o`; a parameter given twice is an InvalidArgument naming it
+/// (`text` is the flag's whole value).
+void add_parameter_override(SurfaceOverrides& o, const std::string& name, double value,
+                            const std::string& flag, const std::string& text);
+/// Parses "name=a:b" (a parameter's range, both ends within check_parameter_value's limit).
+/// Throws InvalidArgument.
 struct ParamRange {
   std::string name;
   double from = 0, to = 0;
@@ -43,9 +48,17 @@ struct FrameRange {
   int first = 0, last = 0;
   int count() const { return last - first + 1; }
 };
-/// Parses --frame-range "A-B" (or "A", one frame) for an animation of `frames` frames: whole
-/// numbers with 0 ≤ A ≤ B < frames. Empty `text`: every frame. Throws InvalidArgument.
+/// Parses --frame-range "A-B" (or "A", one frame) for an animation of `frames` frames (1 to
+/// kMaxFrames): whole numbers with 0 ≤ A ≤ B < frames. Empty `text`: every frame. Throws
+/// InvalidArgument.
 FrameRange parse_frame_range(const std::string& text, int frames, const std::string& flag);
+/// The most frames an animation (animate, export --animate) or a viewer run may have.
+inline constexpr int kMaxFrames = 1'000'000;
+/// The most floater steps a run may ask for (the viewer's `steps` command has the same limit).
+inline constexpr double kMaxFloaterSteps = 1e8;
+/// Throws InvalidArgument naming `flag` unless lo ≤ value ≤ hi (NaN never is): the check of
+/// a numeric flag that no settings validator covers.
+void check_flag_range(const std::string& flag, double value, double lo, double hi);
 /// Parses "WxH" (whole numbers within validate_image_size's limits). Throws InvalidArgument.
 std::pair<int, int> parse_size(const std::string& text, const std::string& flag);
 

@@ -7,13 +7,15 @@
 #include <charconv>
 #include <cmath>
 #include <limits>
+#include <tuple>
 
 #include "viewer_state.h"
 #include "viewer_state_detail.h"
 #include "zeroset/error.h"
-#include "zeroset/surface/settings.h"
+#include "zeroset/expr/field.h"
 #include "zeroset/floaters/floaters.h"
 #include "zeroset/mesh/settings.h"
+#include "zeroset/surface/settings.h"
 
 namespace zeroset::viewer {
 
@@ -33,15 +35,26 @@ void run_catalog(ViewerState& s, const CommandLine& c) { require(s.select_catalo
 void run_load(ViewerState& s, const CommandLine& c) { require(s.load_scene(c.args[0])); }
 
 void run_param(ViewerState& s, const CommandLine& c) {
-  require(s.set_parameter(c.args[0], parse_number(c.args[1], c.args[0])));
+  const double value = parse_number(c.args[1], c.args[0]);
+  check_parameter_value(c.args[0], value);
+  require(s.set_parameter(c.args[0], value));
 }
 
 void run_range(ViewerState& s, const CommandLine& c) {
   const Args& a = c.args;
-  require(s.set_parameter_range(a[0], parse_number(a[1], "min"), parse_number(a[2], "max")));
+  const double min = parse_number(a[1], "min"), max = parse_number(a[2], "max");
+  // Both ends within the parameter values' limit, so the slider's span stays finite.
+  check_parameter_value(a[0] + " min", min);
+  check_parameter_value(a[0] + " max", max);
+  require(s.set_parameter_range(a[0], min, max));
 }
 
-void run_clip(ViewerState& s, const CommandLine& c) { require(s.set_clip_specs(c.args)); }
+void run_clip(ViewerState& s, const CommandLine& c) {
+  Clip whole;  // the clip limits of the volume as a whole, as for --clip
+  for (const auto& spec : c.args) whole.add(spec);
+  whole.check_extent();
+  require(s.set_clip_specs(c.args));
+}
 void run_mode(ViewerState& s, const CommandLine& c) { s.set_mode(parse_mode(c.args[0])); }
 
 void run_play(ViewerState& s, const CommandLine& c) {
@@ -196,19 +209,33 @@ void run_camera(ViewerState& s, const CommandLine& c) {
 
 void run_orbit(ViewerState& s, const CommandLine& c) {
   Camera cam = s.camera();
-  cam.azimuth_deg += parse_number(c.args[0], "azimuth change");
-  cam.elevation_deg += parse_number(c.args[1], "elevation change");
+  const double d_az = parse_number(c.args[0], "azimuth change");
+  const double d_el = parse_number(c.args[1], "elevation change");
+  if (!(std::abs(d_az) <= 360))
+    throw InvalidArgument("azimuth change", c.args[0], "must lie in [-360, 360]");
+  if (!(std::abs(d_el) <= 180))
+    throw InvalidArgument("elevation change", c.args[1], "must lie in [-180, 180]");
+  // Kept in (-360, 360): many orbits must not add up to an azimuth validate_camera refuses.
+  cam.azimuth_deg = std::fmod(cam.azimuth_deg + d_az, 360.0);
+  cam.elevation_deg += d_el;
   require(s.set_camera(cam));
 }
 
 void run_zoom(ViewerState& s, const CommandLine& c) {
   const double f = parse_number(c.args[0], "zoom");
-  if (!(f > 0)) throw InvalidArgument("zoom", c.args[0], "must be positive");
+  // The distance is clamped to [0.05, 50] scene radii anyway; 1/f must stay finite.
+  if (!(f >= 1e-6 && f <= 1e6)) throw InvalidArgument("zoom", c.args[0], "must lie in [1e-6, 1e6]");
   s.zoom(1 / f);
 }
 
 void run_pan(ViewerState& s, const CommandLine& c) {
-  s.pan(parse_number(c.args[0], "dx"), parse_number(c.args[1], "dy"));
+  // In pixels: more than a few screens' width moves the target out of any useful place (and
+  // far enough would make it overflow).
+  const double dx = parse_number(c.args[0], "dx"), dy = parse_number(c.args[1], "dy");
+  for (const auto& [what, v, text] :
+       {std::tuple{"dx", dx, c.args[0]}, std::tuple{"dy", dy, c.args[1]}})
+    if (!(std::abs(v) <= 1e5)) throw InvalidArgument(what, text, "must lie in [-1e5, 1e5] pixels");
+  s.pan(dx, dy);
 }
 
 void run_reset_view(ViewerState& s, const CommandLine&) { s.reset_view(); }

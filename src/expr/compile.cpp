@@ -311,6 +311,8 @@ std::shared_ptr<const Tape> compile(const ProgramAst& program, std::string_view 
   auto tape = std::make_shared<Tape>();
   tape->source = std::string(source);
   tape->parameters = program.parameters;
+  for (std::size_t k = 0; k < program.parameters.size(); ++k)
+    tape->parameter_indices.emplace(program.parameters[k], static_cast<int>(k));
   // Substituted definitions read better than the source unless they blow it up.
   tape->expression = print_expression(program, 3 * source.size() + 80);
   if (tape->expression.empty()) {
@@ -334,8 +336,8 @@ std::shared_ptr<const Tape> compile(const ProgramAst& program, std::string_view 
                            graph.derivative(fy, graph.coordinate(1)),
                            graph.derivative(fy, graph.coordinate(2)),
                            graph.derivative(fz, graph.coordinate(2))};
-  for (std::size_t k = 0; k < program.parameters.size(); ++k)
-    full.push_back(graph.derivative(f, graph.parameter(static_cast<int>(k))));
+  for (const int dq : graph.parameter_derivatives(f, static_cast<int>(program.parameters.size())))
+    full.push_back(dq);
 
   Emitter emitter(graph, *tape);
   const int value_root[] = {f};

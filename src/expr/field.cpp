@@ -192,9 +192,8 @@ Field::Field(std::shared_ptr<const detail::Tape> tape)
 const std::vector<std::string>& Field::parameter_names() const { return tape_->parameters; }
 
 int Field::parameter_index(std::string_view name) const {
-  const auto& names = tape_->parameters;
-  const auto it = std::find(names.begin(), names.end(), name);
-  return it == names.end() ? -1 : static_cast<int>(it - names.begin());
+  const auto it = tape_->parameter_indices.find(std::string(name));
+  return it == tape_->parameter_indices.end() ? -1 : it->second;
 }
 
 void check_parameter_value(std::string_view name, double value) {

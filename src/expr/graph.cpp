@@ -212,6 +212,95 @@ int Graph::derivative(int root, int wrt) {
   return d[count - 1];
 }
 
+std::vector<int> Graph::parameter_derivatives(int root, int count) {
+  const auto n = static_cast<std::size_t>(root) + 1;
+  // Which nodes depend on some parameter: adjoints flow only through them.
+  std::vector<char> dep(n, 0);
+  for (std::size_t id = 0; id < n; ++id) {
+    const Node& nd = nodes_[id];
+    if (nd.op == Op::kParam)
+      dep[id] = 1;
+    else if (nd.op != Op::kConst && nd.a >= 0)
+      dep[id] =
+          dep[static_cast<std::size_t>(nd.a)] || (nd.b >= 0 && dep[static_cast<std::size_t>(nd.b)]);
+  }
+  const int zero = constant(0);
+  std::vector<int> adj(n, -1);  // ∂root/∂node as a node, -1 while nothing flowed in
+  if (dep[n - 1]) adj[n - 1] = constant(1);
+  const auto flow = [&](int to, int contribution) {
+    const auto t = static_cast<std::size_t>(to);
+    if (!dep[t]) return;
+    adj[t] = adj[t] < 0 ? contribution : binary(Op::kAdd, adj[t], contribution);
+  };
+  // Ids are a topological order, so a node's adjoint is complete when the sweep reaches it.
+  for (std::size_t i = n; i-- > 0;) {
+    if (adj[i] < 0 || nodes_[i].op == Op::kParam) continue;
+    const Node nd = nodes_[i];  // a copy: creating nodes may reallocate nodes_
+    const int id = static_cast<int>(i), a = nd.a, b = nd.b, g = adj[i];
+    switch (nd.op) {
+      case Op::kNeg:
+        flow(a, unary(Op::kNeg, g));
+        break;
+      case Op::kSquare:
+        flow(a, binary(Op::kMul, binary(Op::kMul, constant(2), a), g));
+        break;
+      case Op::kSqrt:
+        flow(a, binary(Op::kDiv, g, binary(Op::kMul, constant(2), id)));
+        break;
+      case Op::kExp:
+        flow(a, binary(Op::kMul, id, g));
+        break;
+      case Op::kLog:
+        flow(a, binary(Op::kDiv, g, a));
+        break;
+      case Op::kSin:
+        flow(a, binary(Op::kMul, unary(Op::kCos, a), g));
+        break;
+      case Op::kCos:
+        flow(a, unary(Op::kNeg, binary(Op::kMul, unary(Op::kSin, a), g)));
+        break;
+      case Op::kTan:
+        flow(a, binary(Op::kMul, binary(Op::kAdd, constant(1), unary(Op::kSquare, id)), g));
+        break;
+      case Op::kAbs:
+        flow(a, binary(Op::kMul, unary(Op::kSign, a), g));
+        break;
+      case Op::kAdd:
+        flow(a, g);
+        flow(b, g);
+        break;
+      case Op::kSub:
+        flow(a, g);
+        flow(b, unary(Op::kNeg, g));
+        break;
+      case Op::kMul:
+        flow(a, binary(Op::kMul, g, b));
+        flow(b, binary(Op::kMul, a, g));
+        break;
+      case Op::kDiv:  // ∂(a/b)/∂b = -(a/b)/b
+        flow(a, binary(Op::kDiv, g, b));
+        flow(b, unary(Op::kNeg, binary(Op::kDiv, binary(Op::kMul, id, g), b)));
+        break;
+      case Op::kPow:  // as in derivative_rule
+        flow(a,
+             binary(Op::kMul, binary(Op::kMul, b, power(a, binary(Op::kSub, b, constant(1)))), g));
+        if (dep[static_cast<std::size_t>(b)])
+          flow(b, binary(Op::kMul, binary(Op::kMul, id, unary(Op::kLog, a)), g));
+        break;
+      default:  // kSign (derivative 0), constants, coordinates
+        break;
+    }
+  }
+  std::vector<int> out(static_cast<std::size_t>(count), zero);
+  for (int k = 0; k < count; ++k) {
+    const auto it = index_.find(Key{Op::kParam, k, -1, std::bit_cast<std::uint64_t>(0.0)});
+    if (it != index_.end() && static_cast<std::size_t>(it->second) < n &&
+        adj[static_cast<std::size_t>(it->second)] >= 0)
+      out[static_cast<std::size_t>(k)] = adj[static_cast<std::size_t>(it->second)];
+  }
+  return out;
+}
+
 int Graph::derivative_rule(int id, std::span<const int> d) {
   // A copy: creating nodes below may reallocate nodes_.
   const Node n = node(id);

@@ -43,6 +43,10 @@ class Graph {
 
   /// ∂root/∂wrt where wrt is a coordinate or parameter node.
   int derivative(int root, int wrt);
+  /// ∂root/∂q_k for the parameters k = 0 .. count-1, all from one backward sweep (reverse
+  /// mode): the work is the graph's size once, where `derivative` per parameter would take it
+  /// once per parameter (quadratic for p1*x + ... + pn*x).
+  std::vector<int> parameter_derivatives(int root, int count);
 
  private:
   struct Key {

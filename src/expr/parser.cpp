@@ -439,10 +439,12 @@ class Parser {
       node.kind = AstKind::kLocal;
       node.index = locals_.at(name);
     } else {
-      const auto [it, is_new] = parameter_uses_.emplace(name, t);
+      parameter_uses_.emplace(name, t);
+      // By a hash, not a search of the list: an equation with many parameters stays linear.
+      const auto [it, is_new] =
+          parameter_indices_.emplace(name, static_cast<int>(program_.parameters.size()));
       if (is_new) program_.parameters.emplace_back(name);
-      const auto found = std::find(program_.parameters.begin(), program_.parameters.end(), name);
-      node.index = static_cast<int>(found - program_.parameters.begin());
+      node.index = it->second;
     }
     return add(std::move(node));
   }
@@ -479,6 +481,7 @@ class Parser {
   std::string_view defining_;  ///< name of the definition being parsed, to catch recursion
   std::unordered_map<std::string_view, int> locals_;
   std::unordered_map<std::string_view, Token> parameter_uses_;  ///< first use of each name
+  std::unordered_map<std::string_view, int> parameter_indices_;  ///< in program_.parameters
 };
 
 /// Precedence levels for printing: a child with a lower level than its context needs ().

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 namespace zeroset::detail {
@@ -179,6 +180,9 @@ struct Tape {
   std::string source;
   std::string expression;               ///< readable final expression (Field::expression_string)
   std::vector<std::string> parameters;  ///< in order of first appearance
+  /// Index of each name in `parameters` (Field::parameter_index: constant time, so looking up
+  /// every parameter of an equation with thousands stays linear).
+  std::unordered_map<std::string, int> parameter_indices;
   std::vector<UniformInstr> uniforms;   ///< registers used by the three programs
   Program value;                        ///< outputs: F
   Program gradient;                     ///< outputs: F, Fx, Fy, Fz

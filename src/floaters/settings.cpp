@@ -24,16 +24,18 @@ void check(bool ok, const char* key, const std::string& value, const std::string
 }  // namespace
 
 void validate_settings(const FloaterOptions& o) {
-  check(std::isfinite(o.radius) && o.radius >= 0, "radius", fmt::format("{}", o.radius),
-        "must be a finite length ≥ 0 (0: chosen from the surface's area)");
+  check(o.radius >= 0 && o.radius <= kMaxFloaterRadius, "radius", fmt::format("{}", o.radius),
+        fmt::format("must be a length in [0, {:g}] (0: chosen from the surface's area)",
+                    kMaxFloaterRadius));
   check(o.max_count >= 1 && o.max_count <= kMaxFloaterCount, "max_count",
         std::to_string(o.max_count), fmt::format("must lie in [1, {}]", kMaxFloaterCount));
   check(o.seed_count <= kMaxFloaterCount, "seed_count", std::to_string(o.seed_count),
         fmt::format("must lie in [0, {}] (0: min(max_count, 200))", kMaxFloaterCount));
   check(o.seed <= kMaxFloaterSeed, "seed", std::to_string(o.seed),
         fmt::format("must lie in [0, {}]", kMaxFloaterSeed));
-  check(std::isfinite(o.radius_grading) && o.radius_grading >= 0, "radius_grading",
-        fmt::format("{}", o.radius_grading), "must be finite and ≥ 0 (0: off)");
+  check(o.radius_grading >= 0 && o.radius_grading <= kMaxRadiusGrading, "radius_grading",
+        fmt::format("{}", o.radius_grading),
+        fmt::format("must lie in [0, {:g}] (0: off)", kMaxRadiusGrading));
   // The dynamics' constants (library options; the command line and scene files do not set
   // them).
   auto finite = [](double v) { return std::isfinite(v); };
@@ -83,7 +85,7 @@ void apply_floater_settings(const json& floaters, FloaterOptions& options,
   // The types here; the ranges are validate_settings' (the same for every entry point).
   const double most = 1e19;  // any whole number a std::uint64_t holds
   for (const auto& [key, value] : floaters.items()) {
-    const std::string p = base + "/" + key;
+    const std::string p = base + "/" + json_read::pointer_token(key);
     if (key == "max_count")
       o.max_count = whole(value, origin, p, 0, most);
     else if (key == "seed_count")

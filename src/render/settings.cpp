@@ -100,7 +100,9 @@ void validate_settings(const RenderOptions& o) {
   for (size_t i = 0; i < o.lights.size(); ++i) {
     const std::string key = "lights/" + std::to_string(i);
     const Light& l = o.lights[i];
-    check(l.direction.allFinite() && l.direction.norm() > 0, key + "/direction",
+    // Its length finite and not zero too: (1e300, 0, 0) would normalise to zero.
+    const double len = l.direction.norm();
+    check(l.direction.allFinite() && len > 0 && std::isfinite(len), key + "/direction",
           text(l.direction), "must be finite and not zero");
     check_color(l.color, key + "/color");
   }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 
 #include "zeroset/error.h"
@@ -48,6 +49,31 @@ Box3 raw_bounds(const Clip& clip) {
     }
   }
   return b;
+}
+
+// The smallest size allowed for a part whose coordinates reach `magnitude`.
+double min_size(double magnitude) { return kMinClipRelativeSize * std::max(1.0, magnitude); }
+
+void check_coordinates(std::initializer_list<double> values, const std::string& spec) {
+  for (double v : values)
+    if (!(std::abs(v) <= kMaxClipCoordinate))
+      throw InvalidArgument("--clip", spec,
+                            fmt::format("{:g} is beyond the clip coordinates' range [-{:g}, {:g}]",
+                                        v, kMaxClipCoordinate, kMaxClipCoordinate));
+}
+
+// A box's sides (also the bounding box of a whole clip): at least min_size of its corners.
+void check_box(const Box3& b, const std::string& spec, const char* what) {
+  const double magnitude = std::max(b.lo.cwiseAbs().maxCoeff(), b.hi.cwiseAbs().maxCoeff());
+  const double side = (b.hi - b.lo).minCoeff();
+  if (!(side >= min_size(magnitude)))
+    throw InvalidArgument(
+        "--clip", spec,
+        side < 0 ? fmt::format("{} is empty", what)
+                 : fmt::format("{}'s sides must be at least {:g} times max(1, its largest "
+                               "coordinate), here {:g}; the side {:g} is too small to hold "
+                               "distinct points",
+                               what, kMinClipRelativeSize, min_size(magnitude), side));
 }
 
 constexpr const char* kClipHelp =
@@ -96,6 +122,14 @@ void Clip::add(std::string_view spec) {
     auto r = parse_numbers(rest, spec);
     if (r.size() != 1 || r[0] <= 0)
       throw InvalidArgument("--clip", s, "a sphere needs one positive radius");
+    // Refused, not rescaled: see kMinClipRelativeSize and kMaxClipCoordinate.
+    check_coordinates({r[0], center.x(), center.y(), center.z()}, s);
+    const double smallest = min_size(center.cwiseAbs().maxCoeff());
+    if (r[0] < smallest)
+      throw InvalidArgument("--clip", s,
+                            fmt::format("the radius must be at least {:g} times max(1, the "
+                                        "centre's largest coordinate), here {:g}",
+                                        kMinClipRelativeSize, smallest));
     spheres.push_back({center, r[0]});
   } else if (kind == "box") {
     auto v = parse_numbers(rest, spec);
@@ -109,17 +143,45 @@ void Clip::add(std::string_view spec) {
     } else {
       throw InvalidArgument("--clip", s, "a box needs one positive half size or six numbers");
     }
+    check_coordinates({b.lo.x(), b.lo.y(), b.lo.z(), b.hi.x(), b.hi.y(), b.hi.z()}, s);
+    check_box(b, s, "the box");
     Clip c = Clip::box(b);
     planes.insert(planes.end(), c.planes.begin(), c.planes.end());
   } else if (kind == "plane") {
     auto v = parse_numbers(rest, spec);
     if (v.size() != 4) throw InvalidArgument("--clip", s, "a plane needs nx,ny,nz,d");
     Vec3 n(v[0], v[1], v[2]);
+    // Scaled to its largest component first, so that neither 1e-300 nor 1e300 components
+    // under- or overflow the length.
+    const double largest = n.cwiseAbs().maxCoeff();
+    if (!(largest > 0)) throw InvalidArgument("--clip", s, "the plane normal must not be zero");
+    n /= largest;
     const double len = n.norm();
-    if (!(len > 0)) throw InvalidArgument("--clip", s, "the plane normal must not be zero");
-    planes.push_back({n / len, v[3] / len});
+    const double offset = v[3] / largest / len;
+    check_coordinates({offset}, s);
+    planes.push_back({n / len, offset});
   } else {
     throw InvalidArgument("--clip", s, kClipHelp);
+  }
+}
+
+void Clip::check_extent() const {
+  Box3 b = raw_bounds(*this);
+  // Only the bounded directions: an axis left open by oblique planes has no side to check.
+  for (int k = 0; k < 3; ++k)
+    if (!std::isfinite(b.lo[k]) || !std::isfinite(b.hi[k])) b.lo[k] = 0, b.hi[k] = 1;
+  try {
+    check_box(b, "", "the clip volume");
+  } catch (const InvalidArgument&) {
+    std::string all;  // the specs, shortened: a scene may hold very many
+    for (const auto& spec : to_specs()) {
+      if (all.size() > 200) {
+        all += " ...";
+        break;
+      }
+      all += (all.empty() ? "" : " ") + spec;
+    }
+    check_box(b, all, "the clip volume");
   }
 }
 

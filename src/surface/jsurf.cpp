@@ -16,6 +16,7 @@
 #include "zeroset/error.h"
 #include "zeroset/expr/parse.h"
 #include "zeroset/io/atomic_file.h"
+#include "zeroset/surface/json_read.h"
 #include "zeroset/surface/settings.h"
 
 namespace zeroset {
@@ -187,8 +188,13 @@ Scene jsurf_to_scene(std::string_view text, const std::string& origin) {
     if (key.rfind(prefix, 0) != 0) continue;
     const double v = r.number(key);
     // SURFER saves all four sliders; those the equation does not use are ignored.
-    if (s.field.parameter_index(key.substr(prefix.size())) >= 0)
-      s.field.set_parameter(key.substr(prefix.size()), v);
+    if (s.field.parameter_index(key.substr(prefix.size())) >= 0) {
+      try {
+        s.field.set_parameter(key.substr(prefix.size()), v);
+      } catch (const InvalidArgument& e) {  // beyond the parameter values' limit
+        r.fail(key, e.what());
+      }
+    }
   }
   if (r.has("surface_name")) s.title = r.find("surface_name")->value;
 
@@ -208,7 +214,13 @@ Scene jsurf_to_scene(std::string_view text, const std::string& origin) {
            "the clip sphere's transform is not a rotation with a uniform scale");
   // Without a surface transform the radius is 10^scale_factor itself, not its cube root's cube.
   const double radius = r.has("surface_transform_matrix") ? clip->scale : scale;
-  s.clip = Clip::sphere(radius, clip->translation);
+  s.clip = {};
+  try {  // through its spec (exact: the shortest round trip), so the clip limits apply
+    s.clip.add(Clip::sphere(radius, clip->translation).to_specs().front());
+  } catch (const InvalidArgument& e) {
+    r.fail(r.has("surface_transform_matrix") ? "surface_transform_matrix" : "scale_factor",
+           e.what());
+  }
 
   const bool has_camera = r.has("camera_transform");
   Mat4 C = r.matrix_or_identity("camera_transform");
@@ -305,6 +317,8 @@ Scene jsurf_to_scene(std::string_view text, const std::string& origin) {
   return scene;
 }
 
-Scene read_jsurf(const std::string& path) { return jsurf_to_scene(read_text_file(path), path); }
+Scene read_jsurf(const std::string& path) {
+  return jsurf_to_scene(json_read::read_file(path), path);
+}
 
 }  // namespace zeroset

@@ -143,10 +143,16 @@ Keyframes read_keyframes(const json& settings, const Surface& surface, int frame
       const json& ps = k["params"];
       if (!ps.is_object()) fail(origin, where + "/params", "expected an object {name: value}");
       for (const auto& [name, v] : ps.items()) {
-        const std::string at = where + "/params/" + name;
+        const std::string at = where + "/params/" + json_read::pointer_token(name);
         if (surface.field.parameter_index(name) < 0)
           fail(origin, at, "the surface has no parameter '" + name + "'");
-        add(out.params, name, number(v, origin, at));
+        const double value = number(v, origin, at);
+        try {
+          check_parameter_value(name, value);
+        } catch (const InvalidArgument& e) {
+          fail(origin, at, e.what());
+        }
+        add(out.params, name, value);
       }
     }
     if (k.contains("camera")) {

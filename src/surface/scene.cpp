@@ -7,6 +7,8 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <set>
+#include <string_view>
 
 #include "zeroset/error.h"
 #include "zeroset/expr/parse.h"
@@ -27,11 +29,30 @@ using json_read::known_keys;
 using json_read::number;
 using json_read::vec3;
 
+// An identifier (letters, digits, '_'; not a coordinate): what catalog names look like. Anything
+// with an operator, even x-x, is an equation.
 bool is_bare_name(const std::string& s) {
   if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
   for (char c : s)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-')) return false;
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) return false;
   return s != "x" && s != "y" && s != "z";
+}
+
+// Identifiers joined by '-' ("dupin-cyclide"): an equation, but perhaps meant as a name.
+bool is_hyphenated_name(const std::string& s) {
+  if (s.find('-') == std::string::npos) return false;
+  size_t start = 0;
+  while (start <= s.size()) {
+    size_t dash = s.find('-', start);
+    if (dash == std::string::npos) dash = s.size();
+    const std::string part = s.substr(start, dash - start);
+    if (part.empty() || !(std::isalpha(static_cast<unsigned char>(part[0])) || part[0] == '_'))
+      return false;
+    for (char c : part)
+      if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) return false;
+    start = dash + 1;
+  }
+  return true;
 }
 
 size_t edit_distance(const std::string& a, const std::string& b) {
@@ -109,9 +130,11 @@ Clip default_clip(const Field& field) {
     for (int k = 0; k < d; ++k) rest += l1[k] * std::pow(R, k);
     return m * std::pow(R, d) > rest;
   };
+  // The sphere stays within kMaxClipCoordinate, so a saved scene can be read again.
+  const double largest = kMaxClipCoordinate / 1.1;
   double R = 1e-3;
-  while (!separated(R) && R < 1e6) R *= 1.05;
-  if (R >= 1e6) return {};
+  while (!separated(R) && R < largest) R *= 1.05;
+  if (R >= largest) return {};
   return Clip::sphere(1.1 * R);
 }
 
@@ -141,6 +164,7 @@ void apply_overrides(Scene& scene, const SurfaceOverrides& o) {
   if (!o.clip_specs.empty()) {
     Clip c;
     for (const auto& spec : o.clip_specs) c.add(spec);
+    c.check_extent();
     s.clip = c;
   }
   s.fit_ranges();  // a typed equation comes without ranges
@@ -166,7 +190,15 @@ Scene resolve_scene(const std::string& spec, const SurfaceOverrides& overrides) 
     scene.surface.field = *r.field;
     scene.surface.ranges.clear();
     apply_overrides(scene, overrides);
-    scene.surface.field.require_parameters();
+    try {
+      scene.surface.field.require_parameters();
+    } catch (const InvalidArgument& e) {
+      if (!is_hyphenated_name(spec)) throw;
+      throw InvalidArgument(
+          fmt::format("{} ('{}' is read as an equation: it is not a catalog "
+                      "surface{}; `zeroset list` shows them all)",
+                      e.what(), spec, suggestion(spec)));
+    }
     if (scene.surface.clip.is_empty_spec()) scene.surface.clip = default_clip(scene.surface.field);
     return scene;
   }
@@ -175,12 +207,21 @@ Scene resolve_scene(const std::string& spec, const SurfaceOverrides& overrides) 
   return scene;
 }
 
+namespace {
+// Text from a .jsurf file or the command line may hold bytes that are not UTF-8 (in a comment
+// of the equation); a JSON document cannot, so they become U+FFFD instead of failing the save.
+std::string valid_utf8(const std::string& s) {
+  return json::parse(json(s).dump(-1, ' ', false, json::error_handler_t::replace))
+      .get<std::string>();
+}
+}  // namespace
+
 json scene_to_json(const Scene& scene) {
   const Surface& s = scene.surface;
   json j = scene.settings.is_object() ? scene.settings : json::object();
   j["zeroset_scene"] = 1;
-  if (!s.name.empty()) j["name"] = s.name;
-  j["equation"] = s.field.source();
+  if (!s.name.empty()) j["name"] = valid_utf8(s.name);
+  j["equation"] = valid_utf8(s.field.source());
   json params = json::object();
   for (const auto& r : s.ranges) {
     json p = {{"min", r.min}, {"max", r.max}};
@@ -201,8 +242,15 @@ json scene_to_json(const Scene& scene) {
   return j;
 }
 
-Scene scene_from_json(const json& j, const std::string& origin) {
+Scene scene_from_json(json j, const std::string& origin) {
   if (!j.is_object()) fail(origin, "/", "a scene file is a JSON object");
+  if (j.contains("zeroset_scene")) {
+    const json& v = j["zeroset_scene"];
+    if (!(v.is_number_integer() && v.get<long long>() == kSceneVersion))
+      fail(origin, "/zeroset_scene",
+           fmt::format("unknown scene format version {} (this zeroset reads version {})",
+                       v.dump().substr(0, 40), kSceneVersion));
+  }
   Scene scene;
   Surface& s = scene.surface;
   const CatalogEntry* entry = nullptr;
@@ -227,8 +275,9 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   if (j.contains("parameters")) {
     const json& ps = j["parameters"];
     if (!ps.is_object()) fail(origin, "/parameters", "expected an object");
+    std::vector<ParamSpec> given;
     for (const auto& [name, p] : ps.items()) {
-      const std::string where = "/parameters/" + name;
+      const std::string where = "/parameters/" + json_read::pointer_token(name);
       if (s.field.parameter_index(name) < 0)
         fail(origin, where, "the equation has no parameter '" + name + "'");
       ParamSpec spec{name, 0, 1};
@@ -245,10 +294,31 @@ Scene scene_from_json(const json& j, const std::string& origin) {
       } else {
         fail(origin, where, "expected a number or {\"value\", \"min\", \"max\"}");
       }
-      if (std::isfinite(value)) s.field.set_parameter(name, value);
-      std::erase_if(s.ranges, [&](const ParamSpec& r) { return r.name == name; });
-      s.ranges.push_back(spec);
+      // Values and range ends within the one parameter limit, reported at their pointer.
+      const std::string& parameter = name;  // a structured binding cannot be captured (clang)
+      const auto check = [&](double v, const std::string& at) {
+        try {
+          check_parameter_value(parameter, v);
+        } catch (const InvalidArgument& e) {
+          fail(origin, at, e.what());
+        }
+      };
+      if (p.is_object()) {
+        if (p.contains("min")) check(spec.min, where + "/min");
+        if (p.contains("max")) check(spec.max, where + "/max");
+      }
+      if (std::isfinite(value)) {
+        check(value, p.is_object() ? where + "/value" : where);
+        s.field.set_parameter(name, value);
+      }
+      given.push_back(spec);
     }
+    // The file's ranges replace the catalog's of the same names (by a set: a file may give
+    // thousands of parameters).
+    std::set<std::string_view> names;
+    for (const ParamSpec& r : given) names.insert(r.name);
+    std::erase_if(s.ranges, [&](const ParamSpec& r) { return names.count(r.name) != 0; });
+    s.ranges.insert(s.ranges.end(), given.begin(), given.end());
   }
   if (j.contains("clip")) {
     const json& cj = j["clip"];
@@ -261,6 +331,11 @@ Scene scene_from_json(const json& j, const std::string& origin) {
       } catch (const BadInput& e) {
         fail(origin, fmt::format("/clip/{}", i), e.what());
       }
+    }
+    try {
+      c.check_extent();
+    } catch (const BadInput& e) {
+      fail(origin, "/clip", e.what());
     }
     s.clip = c;
   }
@@ -285,23 +360,19 @@ Scene scene_from_json(const json& j, const std::string& origin) {
     }
   }
   s.fit_ranges();
-  for (const auto& [key, value] : j.items())
+  // Moved, not copied: a scene's other entries can be large.
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string& key = it.key();
     if (key != "zeroset_scene" && key != "name" && key != "equation" && key != "parameters" &&
         key != "clip" && key != "camera")
-      scene.settings[key] = value;
+      scene.settings[key] = std::move(it.value());
+  }
   return scene;
 }
 
 Scene read_scene(const std::string& path) {
   if (file_extension(path) == "jsurf") return read_jsurf(path);
-  const std::string text = read_text_file(path);
-  json j;
-  try {
-    j = json::parse(text);
-  } catch (const json::exception& e) {  // a syntax error, or a number beyond double's range
-    throw BadInput(fmt::format("{}: not valid JSON: {}", path, e.what()));
-  }
-  return scene_from_json(j, path);
+  return scene_from_json(json_read::parse(json_read::read_file(path), path), path);
 }
 
 void write_scene(const Scene& scene, const std::string& path) {

@@ -13,16 +13,20 @@ void validate_camera(const Camera& c) {
   auto check = [](bool ok, const char* key, double value, const std::string& why) {
     if (!ok) throw SettingError(key, fmt::format("{}", value), why);
   };
-  check(std::isfinite(c.azimuth_deg), "azimuth_deg", c.azimuth_deg, "must be finite");
+  const std::string angle =
+      fmt::format("must lie in [-{:g}, {:g}] degrees", kMaxCameraAngleDeg, kMaxCameraAngleDeg);
+  const std::string length =
+      fmt::format("must lie in [-{:g}, {:g}]", kMaxCameraLength, kMaxCameraLength);
+  check(std::abs(c.azimuth_deg) <= kMaxCameraAngleDeg, "azimuth_deg", c.azimuth_deg, angle);
   check(std::abs(c.elevation_deg) <= 90, "elevation_deg", c.elevation_deg,
         "must lie in [-90, 90] degrees");
-  check(std::isfinite(c.distance) && c.distance >= 0, "distance", c.distance,
-        "must be finite and ≥ 0 (0: fit the clip volume)");
+  check(c.distance >= 0 && c.distance <= kMaxCameraLength, "distance", c.distance,
+        fmt::format("must lie in [0, {:g}] (0: fit the clip volume)", kMaxCameraLength));
   check(c.fov_deg >= kMinFovDeg && c.fov_deg <= kMaxFovDeg, "fov_deg", c.fov_deg,
         fmt::format("must lie in [{}, {}] degrees", kMinFovDeg, kMaxFovDeg));
-  check(std::isfinite(c.roll_deg), "roll_deg", c.roll_deg, "must be finite");
+  check(std::abs(c.roll_deg) <= kMaxCameraAngleDeg, "roll_deg", c.roll_deg, angle);
   for (int a = 0; a < 3; ++a)
-    check(std::isfinite(c.target[a]), "target", c.target[a], "must be finite");
+    check(std::abs(c.target[a]) <= kMaxCameraLength, "target", c.target[a], length);
 }
 
 }  // namespace zeroset

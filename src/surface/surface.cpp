@@ -77,6 +77,14 @@ double Surface::scene_radius() const {
 }
 
 void Surface::fit_ranges() {
+  // The given ranges by name (the last of a name wins, as before), so that many parameters
+  // cost n log n, not n². Ends beyond kMaxParameterMagnitude are not kept: between them a
+  // slider's span max - min would not be finite.
+  std::map<std::string_view, const ParamSpec*> given;
+  for (const auto& r : ranges)
+    if (r.min < r.max && std::abs(r.min) <= kMaxParameterMagnitude &&
+        std::abs(r.max) <= kMaxParameterMagnitude)
+      given[r.name] = &r;
   std::vector<ParamSpec> out;
   const auto& names = field.parameter_names();
   const auto& values = field.parameter_values();
@@ -84,8 +92,7 @@ void Surface::fit_ranges() {
     const double value = std::isfinite(values[i]) ? values[i] : 0.0;
     const double span = std::max(1.0, std::abs(value));
     ParamSpec spec{names[i], value - span, value + span};
-    for (const auto& r : ranges)
-      if (r.name == names[i] && r.min < r.max) spec = r;
+    if (const auto it = given.find(names[i]); it != given.end()) spec = *it->second;
     out.push_back(spec);
   }
   ranges = std::move(out);

@@ -24,12 +24,19 @@ inline constexpr std::size_t kMaxFloaterCount = 100'000'000;
 /// Largest random seed: scene files are JSON, whose numbers hold every whole number up to 2^53.
 inline constexpr std::uint64_t kMaxFloaterSeed = std::uint64_t{1} << 53;
 
-/// Checks the settings a user gives: radius finite and ≥ 0 (0: chosen from the surface's
-/// area), max_count in [1, kMaxFloaterCount], seed_count in [0, kMaxFloaterCount], seed in
-/// [0, kMaxFloaterSeed], radius_grading finite and ≥ 0; and the dynamics' constants that only
-/// the library sets (dt, repulsion, the estimators' and convergence settings). The one check
-/// of FloaterOptions: FloaterSystem runs it too. Throws SettingError naming the key as the
-/// scene file does.
+/// The largest floater radius a user may give: the diameter of the largest clip volume
+/// (kMaxClipCoordinate); the run keeps the radius within the scene radius anyway.
+inline constexpr double kMaxFloaterRadius = 2e6;
+/// The largest radius grading (the growth of the fission radius per neighbour distance; 0.1
+/// by default): beyond a few units it no longer limits anything.
+inline constexpr double kMaxRadiusGrading = 1000;
+
+/// Checks the settings a user gives: radius in [0, kMaxFloaterRadius] (0: chosen from the
+/// surface's area), max_count in [1, kMaxFloaterCount], seed_count in [0, kMaxFloaterCount],
+/// seed in [0, kMaxFloaterSeed], radius_grading in [0, kMaxRadiusGrading]; and the dynamics'
+/// constants that only the library sets (dt, repulsion, the estimators' and convergence settings).
+/// The one check of FloaterOptions: FloaterSystem runs it too. Throws SettingError naming the key
+/// as the scene file does.
 void validate_settings(const FloaterOptions& options);
 
 /// Applies `floaters` (the object above) to `options`, then validates them. Throws BadInput

@@ -9,6 +9,17 @@
 
 namespace zeroset {
 
+/// The largest magnitude of a clip coordinate: a sphere's radius and centre coordinates, a box's
+/// corner coordinates, a plane's distance from the origin. Far beyond any surface of interest,
+/// and small enough that polynomials of moderate degree stay finite anywhere in the volume.
+inline constexpr double kMaxClipCoordinate = 1e6;
+/// The smallest size of a clip part relative to where it lies: a sphere's radius, a box's
+/// sides and the clip's bounding box sides are at least kMinClipRelativeSize·max(1, |x|) for
+/// its largest coordinate |x|. Points in a smaller volume far from the origin differ only in
+/// their last bits (sphere:1e-300@1,0,0 holds one double), and the absolute tolerances of the
+/// algorithms (1e-9 and below) would swallow a tiny volume at the origin.
+inline constexpr double kMinClipRelativeSize = 1e-6;
+
 /// The ball |x - center| ≤ radius.
 struct SphereClip {
   Vec3 center = Vec3::Zero();
@@ -39,9 +50,14 @@ struct Clip {
   /// Parses one clip spec and intersects it into this clip. Specs:
   ///   sphere:R  sphere:R@cx,cy,cz  box:H (cube [-H,H]^3)  box:x0,y0,z0,x1,y1,z1
   ///   plane:nx,ny,nz,d (keeps n·x ≤ d; n is normalised)
-  /// Throws InvalidArgument naming the spec and what is wrong, and when the clip would have
-  /// more than kMaxClipParts parts.
+  /// Throws InvalidArgument naming the spec and what is wrong, including numbers beyond
+  /// kMaxClipCoordinate, parts smaller than kMinClipRelativeSize allows, and a clip of more
+  /// than kMaxClipParts parts.
   void add(std::string_view spec);
+  /// Checks the whole volume once its parts are added: its bounding box (as far as it is
+  /// bounded) must not be empty or thinner than kMinClipRelativeSize allows. Throws
+  /// InvalidArgument.
+  void check_extent() const;
 
   bool is_empty_spec() const { return spheres.empty() && planes.empty(); }
   /// True when the clip volume has a finite bounding box (a sphere, or axis-aligned planes

@@ -3,14 +3,33 @@
 /// and viewer objects): each function checks one entry and throws BadInput
 /// "ORIGIN: /json/pointer: what is wrong" (e.g. "scene.json: /floaters/seed: expected a whole
 /// number from 0 to 9007199254740992"), so every reader reports a bad entry the same way.
+#include <cstddef>
 #include <cstdint>
 #include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <string_view>
 
 #include "zeroset/types.h"
 
 namespace zeroset::json_read {
+
+/// The deepest nesting of objects and arrays a scene file may have (the top object is level 1;
+/// a keyframe's camera is at level 5). Deeper documents are refused while they are parsed,
+/// before anything deeper is built.
+inline constexpr int kMaxDepth = 16;
+/// The largest scene file read (32 MiB: room for a million clip specs).
+inline constexpr std::size_t kMaxBytes = std::size_t{32} << 20;
+
+/// Parses a scene file's text. Throws BadInput "origin: /pointer: what" for a syntax error or a
+/// number beyond double's range (with the byte position), nesting deeper than kMaxDepth, a key
+/// repeated in one object, a NUL byte anywhere, or more than kMaxBytes.
+nlohmann::json parse(std::string_view text, const std::string& origin);
+/// The text of the file at `path`, refused (BadInput) when longer than kMaxBytes without
+/// reading further; IoError when it cannot be read.
+std::string read_file(const std::string& path);
+/// `key` as one token of a JSON pointer ("~" becomes "~0", "/" becomes "~1").
+std::string pointer_token(std::string_view key);
 
 /// Throws BadInput "origin: where: what".
 [[noreturn]] void fail(const std::string& origin, const std::string& where,

@@ -38,9 +38,14 @@ inline Surface resolve_surface(const std::string& spec, const SurfaceOverrides& 
 Surface surface_from_equation(const std::string& equation);
 
 nlohmann::json scene_to_json(const Scene& scene);
-/// Throws BadInput with the JSON path of the offending entry.
-Scene scene_from_json(const nlohmann::json& j, const std::string& origin);
+/// The scene format's version, the value of "zeroset_scene" (optional in a file; other values
+/// are refused).
+inline constexpr int kSceneVersion = 1;
+/// Throws BadInput with the JSON path of the offending entry. Top-level keys it does not know
+/// are moved (not copied) into Scene::settings.
+Scene scene_from_json(nlohmann::json j, const std::string& origin);
 /// Reads a scene file: JSON, or a SURFER .jsurf file (by its extension; zeroset/surface/jsurf.h).
+/// JSON is read within json_read's limits (size, depth, no repeated keys, no NUL byte).
 Scene read_scene(const std::string& path);
 /// Written atomically (temporary file + rename).
 void write_scene(const Scene& scene, const std::string& path);

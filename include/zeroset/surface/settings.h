@@ -9,10 +9,18 @@ namespace zeroset {
 inline constexpr double kMinFovDeg = 1;
 inline constexpr double kMaxFovDeg = 170;
 
-/// The one check of a Camera: azimuth, roll and target finite, elevation in [-90, 90] degrees,
-/// distance finite and ≥ 0 (0: fit the clip), fov_deg in [kMinFovDeg, kMaxFovDeg]. Throws
-/// SettingError naming the field (azimuth_deg, elevation_deg, distance, fov_deg, target, roll_deg) as
-/// scene files do.
+/// The largest magnitude of an angle (azimuth, roll) in degrees: any turn is reached well
+/// within it, and cos and sin still tell its degrees apart.
+inline constexpr double kMaxCameraAngleDeg = 1e6;
+/// The largest camera distance and target coordinate: far beyond the clip volumes
+/// (kMaxClipCoordinate), yet squared distances between them stay finite.
+inline constexpr double kMaxCameraLength = 1e12;
+
+/// The one check of a Camera: azimuth and roll within ±kMaxCameraAngleDeg, elevation in
+/// [-90, 90] degrees, distance in [0, kMaxCameraLength] (0: fit the clip), target coordinates
+/// within ±kMaxCameraLength, fov_deg in [kMinFovDeg, kMaxFovDeg]. Throws
+/// SettingError naming the field (azimuth_deg, elevation_deg, distance, fov_deg, target, roll_deg)
+/// as scene files do.
 void validate_camera(const Camera& camera);
 
 }  // namespace zeroset

@@ -75,8 +75,9 @@ struct Surface {
   SingularPointsFn singular_points_fn;
 
   /// Makes `ranges` one per parameter of `field`, in its order: a range given for the name
-  /// (with min < max) is kept, a missing one spans value ± max(1, |value|) (0 ± 1 for a
-  /// parameter without a value).
+  /// (with min < max, both within ±kMaxParameterMagnitude) is kept, a missing one spans
+  /// value ± max(1, |value|) (0 ± 1 for a parameter without a value). Every span max - min is
+  /// finite. Cost n log n for n parameters.
   void fit_ranges();
 
   /// Known singular points for the current parameter values, inside the clip.
