@@ -85,9 +85,9 @@ def odd_scene_files(directory):
     put("array.json", "[]")
     put("garbage.json", b"\x00\xff\xfe{\"surface\"", "wb")
     sphere = {"zeroset_scene": 1, "equation": "x^2 + y^2 + z^2 - 1", "clip": ["sphere:2"]}
-    # Deep, but within what the scene reader's depth limit may refuse with a message: 10^5
-    # levels overflow the stack of any recursive JSON copy (the scene reader's own test).
-    put("deep.json", json.dumps(sphere)[:-1] + ', "x": ' + "[" * 2000 + "]" * 2000 + "}")
+    # 10^5 levels: the scene reader's depth limit refuses it with a message, before building
+    # anything that deep (a recursive copy of it would overflow the stack).
+    put("deep.json", json.dumps(sphere)[:-1] + ', "x": ' + "[" * 100000 + "]" * 100000 + "}")
     put("many-clips.json", json.dumps(dict(sphere, clip=["sphere:2"] * 1000000)))
     put("clips-at-limit.json", json.dumps(
         {"zeroset_scene": 1, "name": "kummer", "clip": ["sphere:%g" % (2 + k * 1e-3)
