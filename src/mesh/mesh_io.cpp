@@ -369,6 +369,11 @@ void write_mesh(const Mesh& mesh, const std::string& path) {
     for (std::uint32_t v : t)
       if (v >= mesh.positions.size())
         throw InvalidArgument("mesh", path, fmt::format("a triangle refers to vertex {} of {}", v, mesh.positions.size()));
+  // Readers cannot parse nan or inf: a mesh with such a number is refused, not written.
+  for (size_t v = 0; v < mesh.positions.size(); ++v)
+    if (!mesh.positions[v].allFinite() || (v < mesh.normals.size() && !mesh.normals[v].allFinite()))
+      throw BadInput(fmt::format("{}: vertex {} of the mesh has a coordinate or normal that is "
+                                 "not finite; nothing written", path, v));
   if (ext == "ply") {
     write_ply_mesh(mesh, path);
     return;
