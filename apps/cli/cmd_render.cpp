@@ -16,6 +16,7 @@
 #include "zeroset/io/atomic_file.h"
 #include "zeroset/io/image.h"
 #include "zeroset/render/pov_export.h"
+#include "zeroset/render/raycast.h"
 #include "zeroset/render/render.h"
 #include "zeroset/render/settings.h"
 #include "zeroset/surface/jsurf.h"
@@ -133,6 +134,7 @@ void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string
   std::optional<SingularSet> singular;
   if (show_singular || !stats_path.empty()) singular = singular_set_if_bounded(surface);
   if (show_singular && singular) o.singular_overlay = SingularOverlay{.set = *singular};
+  const FieldSurvey survey = survey_and_warn(surface);
   Progress progress("render", global_flags().quiet);
   o.progress = [&](double f) { progress.update(f); };
   RenderStats stats;
@@ -140,6 +142,11 @@ void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string
   progress.finish();
   write_image(image, output);
   const char* method = stats.exact ? "polynomial roots" : "interval arithmetic";
+  if (stats.abandoned_rays > 0)
+    warn(fmt::format("{}: {} of {} rays gave up after {} interval evaluations each (F undefined "
+                     "or unbounded along them) and are drawn as misses",
+                     surface.label(), stats.abandoned_rays, stats.rays,
+                     RaycastOptions{}.interval_budget));
   say(fmt::format("wrote {} ({}x{}, {} rays, {:.2f} s, {})", output, o.width, o.height,
                   stats.rays, stats.seconds, method));
   if (!stats_path.empty())
@@ -153,6 +160,8 @@ void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string
                 {"rays", stats.rays},
                 {"hits", stats.hits},
                 {"singular_normals", stats.singular_normals},
+                {"abandoned_rays", stats.abandoned_rays},
+                {"field", survey_json(survey)},
                 {"singular_set", singular_stats(singular)}},
                stats_path);
 }
