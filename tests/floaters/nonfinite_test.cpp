@@ -5,18 +5,14 @@
 
 #include <cmath>
 
+#include "support/equation.h"
 #include "zeroset/expr/field.h"
 #include "zeroset/floaters/floaters.h"
-#include "zeroset/surface/scene.h"
 
 namespace zeroset {
 namespace {
 
-Surface equation(const char* text, const Clip& clip) {
-  Surface s = surface_from_equation(text);
-  s.clip = clip;
-  return s;
-}
+using test::equation;
 
 // sqrt(x) + y² + z² − 1 is NaN for x < 0: floaters that step there are removed, and after
 // every step each floater lies where F and ∇F are finite, inside the clip.

@@ -3,23 +3,18 @@
 // refused exports.
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 
+#include "support/equation.h"
 #include "zeroset/error.h"
 #include "zeroset/render/pov_export.h"
 #include "zeroset/render/raycast.h"
 #include "zeroset/render/render.h"
-#include "zeroset/surface/scene.h"
 
 namespace zeroset {
 namespace {
 
-Surface equation(const char* text, const Clip& clip) {
-  Surface s = surface_from_equation(text);
-  s.clip = clip;
-  return s;
-}
+using test::equation;
 
 // NaN everywhere: intervals exclude nothing, so each ray would visit every leaf of its
 // subdivision. The budget ends it as a counted miss.
