@@ -1,8 +1,5 @@
 #include "zeroset/floaters/ply.h"
 
-#include <cmath>
-#include <string>
-
 #include "zeroset/error.h"
 
 namespace zeroset {
@@ -10,12 +7,6 @@ namespace zeroset {
 void write_points_ply(const std::string& path, std::span<const Vec3> positions,
                       std::span<const Vec3> normals, std::span<const double> radii,
                       PlyFormat format) {
-  // Readers cannot parse nan or inf: a point set with such a number is refused, not written.
-  for (size_t i = 0; i < positions.size(); ++i)
-    if (!positions[i].allFinite() || (i < normals.size() && !normals[i].allFinite()) ||
-        (i < radii.size() && !std::isfinite(radii[i])))
-      throw BadInput(path + ": floater " + std::to_string(i) +
-                     " has a position, normal or radius that is not finite; nothing written");
   PlyContent c;
   c.comment = "zeroset floaters";
   c.positions = positions;
