@@ -87,6 +87,7 @@ nlohmann::json quality_json(const MeshQuality& q) {
   j["residual"] = {{"max", q.max_residual},
                    {"rms", q.rms_residual},
                    {"vertices", q.residual_vertices},
+                   {"undefined_vertices", q.undefined_vertices},
                    {"excluded_radius_around_singular_points", q.singular_radius}};
   j["normal_deviation_deg"] = {{"mean", q.mean_normal_deviation_deg},
                                {"max", q.max_normal_deviation_deg},
@@ -167,6 +168,7 @@ void run_mesh(const MeshArgs& a) {
   if (a.show_singular || !a.stats.empty()) singular = singular_set_if_bounded(surface);
   const SingularSet* overlay = a.show_singular && singular ? &*singular : nullptr;
 
+  const FieldSurvey survey = survey_and_warn(surface);
   const auto t0 = std::chrono::steady_clock::now();
   PolygonizeStats ps;
   Mesh mesh = polygonize(surface, po, &ps);
@@ -178,6 +180,7 @@ void run_mesh(const MeshArgs& a) {
   stats["parameters"] = params;
   stats["clip"] = surface.clip.to_specs();
   stats["singular_set"] = singular_stats(singular);
+  stats["field"] = survey_json(survey);
   stats["polygonize"] = {
       {"resolution", resolution},
       {"cells", ps.cells},
@@ -188,6 +191,9 @@ void run_mesh(const MeshArgs& a) {
       {"grid_samples", ps.grid_samples},
       {"refine_evaluations", ps.refine_evaluations},
       {"nan_samples", ps.nan_samples},
+      {"undefined_edges", ps.undefined_edges},
+      {"pole_edges", ps.pole_edges},
+      {"undefined_triangles", ps.undefined_triangles},
       {"active_cells", ps.active_cells},
       {"ambiguous_faces", ps.ambiguous_faces},
       {"edge_vertices", ps.edge_vertices},
@@ -202,9 +208,10 @@ void run_mesh(const MeshArgs& a) {
                    {"total", ps.seconds_total}}},
       {"vertices", mesh.vertex_count()},
       {"triangles", mesh.triangle_count()}};
-  if (mesh.empty())
+  if (mesh.empty() && !survey.vanishes_identically())  // that was said
     say(fmt::format("{}: the grid of {} cells found no surface inside the clip", surface.label(), resolution));
-  warn_if_singular_sheet(surface, singular);
+  // F ≡ 0 was warned about; its "sheet" of vanishing ∇F is the whole clip, nothing to add.
+  if (!survey.vanishes_identically()) warn_if_singular_sheet(surface, singular);
   if (!a.no_crossings && !mesh.empty()) {
     const CrossingStats cs = mesh_crossings(mesh, surface, ps.cell_size);
     stats["crossings"] = {{"crossing_curves", cs.crossing_curves},
@@ -255,6 +262,8 @@ void run_mesh(const MeshArgs& a) {
                         {"flipped_triangles", is.flipped_triangles},
                         {"singular_points_found", found},
                         {"max_residual", is.max_residual},
+                        {"refused_moves", is.refused_moves},
+                        {"undefined_vertices", is.undefined_vertices},
                         {"boundary", std::string(to_string(settings.boundary))},
                         {"curvature", io.use_curvature},
                         {"singularity", io.use_singularity},
@@ -274,6 +283,13 @@ void run_mesh(const MeshArgs& a) {
     warn(fmt::format("{}: the mesh has {} triangles of zero area and {} vertices on top of "
                      "others; please report this surface and these options",
                      surface.label(), d.zero_area_triangles, d.coincident_vertices));
+  // The polygonizer and the improver keep vertices where F is finite; if one ever is not, say so.
+  if (const long long undefined = after ? static_cast<long long>(after->undefined_vertices)
+                                        : is.undefined_vertices;
+      undefined > 0)
+    warn(fmt::format("{}: {} vertices lie where F is undefined (NaN or infinite); please "
+                     "report this surface and these options",
+                     surface.label(), undefined));
   if (!a.output.empty()) write_mesh(mesh, a.output);
   if (!a.png.empty())
     write_picture(surface, mesh, a.png, width, height, a.wireframe, overlay);

@@ -17,6 +17,7 @@
 #include "zeroset/io/image.h"
 #include "zeroset/io/output_transaction.h"
 #include "zeroset/render/pov_export.h"
+#include "zeroset/render/raycast.h"
 #include "zeroset/render/render.h"
 #include "zeroset/render/settings.h"
 #include "zeroset/surface/jsurf.h"
@@ -135,6 +136,7 @@ void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string
   std::optional<SingularSet> singular;
   if (show_singular || !stats_path.empty()) singular = singular_set_if_bounded(surface);
   if (show_singular && singular) o.singular_overlay = SingularOverlay{.set = *singular};
+  const FieldSurvey survey = survey_and_warn(surface);
   Progress progress("render", global_flags().quiet);
   o.progress = [&](double f) { progress.update(f); };
   RenderStats stats;
@@ -142,6 +144,11 @@ void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string
   progress.finish();
   write_image(image, output);
   const char* method = stats.exact ? "polynomial roots" : "interval arithmetic";
+  if (stats.abandoned_rays > 0)
+    warn(fmt::format("{}: {} of {} rays gave up after {} interval evaluations each (F undefined "
+                     "or unbounded along them) and are drawn as misses",
+                     surface.label(), stats.abandoned_rays, stats.rays,
+                     RaycastOptions{}.interval_budget));
   if (!stats_path.empty())
     write_json({{"surface", surface.label()},
                 {"width", o.width},
@@ -153,6 +160,8 @@ void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string
                 {"rays", stats.rays},
                 {"hits", stats.hits},
                 {"singular_normals", stats.singular_normals},
+                {"abandoned_rays", stats.abandoned_rays},
+                {"field", survey_json(survey)},
                 {"singular_set", singular_stats(singular)}},
                stats_path);
   outputs.commit();

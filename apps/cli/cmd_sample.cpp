@@ -125,6 +125,26 @@ nlohmann::json options_json(const FloaterOptions& o, double sigma_hat) {
           {"radius_adapt", std::string(to_string(o.radius_adapt))}};
 }
 
+// The outputs of a run that has no surface to sample (F vanishes identically): a point set
+// without points, its (empty) picture and the survey in --stats.
+void write_empty_sample(const SampleArgs& a, const Surface& surface, const Camera& camera,
+                        const FieldSurvey& survey, int width, int height) {
+  if (!a.output.empty())
+    write_points_ply(a.output, {}, {}, {}, a.ascii ? PlyFormat::kAscii : PlyFormat::kBinaryLittleEndian);
+  if (!a.png.empty()) {
+    RenderOptions ro;
+    ro.width = width;
+    ro.height = height;
+    ro.threads = global_flags().threads;
+    ro.camera = camera;
+    write_png(render_points(surface, {}, {}, {}, ro), a.png);
+  }
+  if (!a.stats.empty())
+    write_json({{"surface", surface.label()}, {"floaters", 0}, {"field", survey_json(survey)}},
+               a.stats);
+  say(fmt::format("{}: 0 floaters (no surface)", surface.label()));
+}
+
 void run_sample(const SampleArgs& a) {
   if (a.output.empty() && a.png.empty() && a.stats.empty())
     throw InvalidArgument(
@@ -167,6 +187,12 @@ void run_sample(const SampleArgs& a) {
   }
   const FloaterOptions options = options_from(a, scene);
   const Camera camera = with_camera_flag(surface.camera, a.camera);
+  const FieldSurvey survey = survey_and_warn(surface);
+  if (survey.vanishes_identically()) {
+    // Every point is on F = 0 (warned): no floaters, as `mesh` gives no triangles.
+    write_empty_sample(a, surface, camera, survey, width, height);
+    return;
+  }
   FloaterSystem sys(surface, options);
   if (options.radius > 0 && sys.nominal_radius() != options.radius)
     warn(fmt::format("radius {:g} is outside [1e-9, 1] times the scene radius ({:g}); using "
@@ -176,13 +202,14 @@ void run_sample(const SampleArgs& a) {
   Progress progress("sampling", global_flags().quiet);
   nlohmann::json stats;
   double seconds = 0;
-  std::size_t updates = 0;
+  std::size_t updates = 0, undefined_removed = 0;
   std::optional<std::size_t> converged_at;
   StepStats last;
   auto run = [&](const StepStats& st) {
     last = st;
     seconds += st.seconds;
     updates += st.count;
+    undefined_removed += st.undefined_removed;
     if (st.converged && !converged_at) converged_at = st.step;
     return st;
   };
@@ -265,6 +292,9 @@ void run_sample(const SampleArgs& a) {
     stats["updates_per_second"] = seconds > 0 ? static_cast<double>(updates) / seconds : 0;
     stats["metrics"] = metrics_json(m, band);
     stats["singular_set"] = singular_stats(singular);
+    stats["field"] = survey_json(survey);
+    // Floaters removed where F or ∇F was not finite or outside the clip, over the run.
+    stats["undefined_removed"] = undefined_removed;
     if (singular) {
       // Each special point's and curve's coverage in local spacings (docs/algorithms.md B.7).
       const SingularSetCoverage c = measure_singular_coverage(*singular, sys.positions());

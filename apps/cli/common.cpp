@@ -54,6 +54,19 @@ void warn_if_singular_sheet(const Surface& surface, const std::optional<Singular
                    surface.label(), p.x(), p.y(), p.z()));
 }
 
+FieldSurvey survey_and_warn(const Surface& surface) {
+  const FieldSurvey survey = survey_field(surface);
+  if (const auto line = survey_warning(surface, survey)) warn(*line);
+  return survey;
+}
+
+nlohmann::json survey_json(const FieldSurvey& survey) {
+  return {{"samples", survey.samples},
+          {"undefined_samples", survey.undefined},
+          {"undefined_fraction", survey.undefined_fraction()},
+          {"vanishes_identically", survey.vanishes_identically()}};
+}
+
 nlohmann::json singular_stats(const std::optional<SingularSet>& set) {
   return set ? singular_set_json(*set, false) : nlohmann::json();
 }

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "zeroset/surface/field_survey.h"
 #include "zeroset/surface/scene.h"
 #include "zeroset/surface/singular_set.h"
 
@@ -119,6 +120,13 @@ void warn(const std::string& line);
 /// there and floaters settle on a surface where the normal is undefined. Uses `known` when given,
 /// else a quick search on a coarse grid (bounded clips only).
 void warn_if_singular_sheet(const Surface& surface, const std::optional<SingularSet>& known);
+
+/// Surveys F over the clip (survey_field) and warns once when F vanishes identically or is
+/// undefined (NaN or infinite) on part of the clip (survey_warning). Every stage command
+/// calls it once, so they all say the same.
+FieldSurvey survey_and_warn(const Surface& surface);
+/// The "field" entry of a --stats file: the survey's counts and fraction.
+nlohmann::json survey_json(const FieldSurvey& survey);
 
 void register_catalog_commands(CLI::App& app);  // list, info, eval
 void register_render_commands(CLI::App& app);   // render, animate, export

@@ -69,6 +69,10 @@ constexpr double kMaxRadius = 2.0;
 // One step moves a floater by at most this fraction of the scene radius, tangentially and
 // normally, so a near-critical point of F (tiny ∇F, F ≠ 0) cannot fling it away.
 constexpr double kMaxStepScene = 0.1;
+// A free floater whose |F|/|∇F| exceeds this fraction of its radius has its first-order pull
+// checked against the zero along its normal (far_normal_root in motion.cpp): settled floaters
+// lie far below it, so the check costs nothing once they are on the surface.
+constexpr double kCheckedResidual = 1e-4;
 // σ̂ chosen from the area assumes each floater covers about this many σ̂² at equilibrium
 // (hexagonal spacing between 1.25σ̂ and 1.78σ̂).
 constexpr double kAreaPerFloater = 2.0;
@@ -386,6 +390,9 @@ inline std::uint8_t judge_fate(const FloaterState& sys, std::size_t i, double e,
 FateCounts decide_fates(FloaterState& sys);
 // Removes the floaters at the increasing indices `holes`.
 void remove_floaters(FloaterState& sys, std::span<const std::uint32_t> holes);
+// Removes the floaters where F or ∇F is not finite, or that lie outside the clip (beyond
+// rounding), after evaluate_all(); returns how many (then evaluate_all() has run again).
+std::size_t remove_undefined(FloaterState& sys);
 
 // ---- convergence (convergence.cpp) ---------------------------------------------------------
 

@@ -88,12 +88,15 @@ StepStats advance(FloaterState& sys, std::span<const double> next_q) {
     ++sys.still_steps;
   }
   evaluate_all(sys);
+  // No floater stays where F or ∇F is not finite (it moved onto a pole or into a NaN region)
+  // or outside the clip: what a step leaves is always defined and inside.
+  st.undefined_removed = remove_undefined(sys);
 
   ++sys.step_count;
   st.step = sys.step_count;
   st.births = fates.births;
   st.deaths = fates.deaths;
-  st.removed = fates.removed + held_removed;
+  st.removed = fates.removed + held_removed + st.undefined_removed;
   st.count = floater_count(sys);
   st.converged = judge_convergence(sys, st);
   residual_stats(sys, st);

@@ -1,7 +1,43 @@
 // The pair pass over neighbours and the move of every floater.
 #include "floater_state_detail.h"
 
+#include <optional>
+
+#include "zeroset/detail/bracket.h"
+
 namespace zeroset::detail {
+namespace {
+
+// Where F = 0 lies along the normal line through p (F = value ≠ 0, ∇F = gradient, both finite,
+// ∇F ≠ 0), as the signed distance t along n = ∇F/|∇F| (the zero at p + t·n), when the first-
+// order estimate −F/|∇F| is unreliable; none when it is reliable or no zero lies within `reach`.
+// Far from a simple root of a field of high degree (F = r²ⁿ − 1, n large) a Newton step covers
+// about 1/(2n) of the way and |F|/|∇F| understates the distance as much, so the pull of A.4
+// would crawl and floaters would look settled off the surface. One evaluation decides: where
+// the full Newton step cuts |F| tenfold, first order is fine (near a simple root it cuts far
+// more). Else (for r²ⁿ each step only divides F by e) the zero is bracketed by doubling steps
+// and refined by the Illinois method (twenty evaluations or so).
+std::optional<double> far_normal_root(Evaluator& ev, const Vec3& p, double value,
+                                      const Vec3& gradient, double gnorm, double reach) {
+  const Vec3 n = gradient / gnorm;
+  const double towards = value > 0 ? -1.0 : 1.0;  // the side where F changes sign
+  auto f_at = [&](double t) { return ev.value(p + (towards * t) * n); };
+  double hi = std::min(std::abs(value) / gnorm, reach);
+  double f_hi = f_at(hi);
+  if (std::abs(f_hi) <= 0.1 * std::abs(value)) return std::nullopt;  // Newton converges
+  double lo = 0, f_lo = value;
+  while (std::isfinite(f_hi) && f_hi != 0 && (f_hi > 0) == (value > 0)) {
+    if (hi >= reach) return std::nullopt;
+    lo = hi, f_lo = f_hi;
+    hi = std::min(2 * hi, reach);
+    f_hi = f_at(hi);
+  }
+  if (!std::isfinite(f_hi)) return std::nullopt;  // undefined beyond: no reliable zero
+  if (f_hi == 0) return towards * hi;
+  return towards * refine_sign_change(f_at, lo, hi, f_lo, f_hi, 1e-12 * hi);
+}
+
+}  // namespace
 
 // Builds the hash over the current positions and sizes the neighbour data in slot order (it is
 // filled by pack_slot() in repulsion_and_move()'s parallel region).
@@ -150,6 +186,14 @@ void move_one(FloaterState& sys, std::size_t i, const PairSums& sum, Evaluator& 
     if (nrm.squaredNorm() > 0 && std::isfinite(sys.value[i])) {
       tangential -= nrm.dot(tangential) * nrm;
       double pull = -(sys.opt.feedback * sys.value[i] + sys.fq[i]) / sys.gnorm[i] * dt;
+      // Off the surface by more than rounding: the φF term's first-order distance is checked
+      // (far_normal_root) and replaced by the distance to the zero along the normal where it
+      // is unreliable, so the pull converges whatever the degree of F.
+      if (sys.value[i] != 0 && residual(sys.value[i], sys.gnorm[i]) > kCheckedResidual * s &&
+          sys.gnorm[i] > 0 && std::isfinite(sys.gnorm[i]))
+        if (const auto t = far_normal_root(ev, p, sys.value[i], sys.gnorm[i] * nrm,
+                                           sys.gnorm[i], 2 * s))
+          pull = sys.opt.feedback * dt * *t - sys.fq[i] / sys.gnorm[i] * dt;
       if (!std::isfinite(pull)) pull = std::copysign(max_scene_step, pull);
       normal_move = std::clamp(pull, -max_scene_step, max_scene_step) * nrm;
     }
@@ -164,6 +208,13 @@ void move_one(FloaterState& sys, std::size_t i, const PairSums& sum, Evaluator& 
     } else {
       outside = !sys.surface.clip.contains(p);
     }
+  }
+  // A move that is not finite (F or its derivatives overflowed) leaves the floater where it
+  // was and marks it a stray: no floater takes a non-finite position or radius.
+  if (!p.allFinite() || !std::isfinite(sys.new_sigma[i])) {
+    p = sys.pos[i];
+    sys.new_sigma[i] = s;
+    outside = true;
   }
   const double speed = (p - sys.pos[i]).norm() / dt;
   sys.new_pos[i] = p;

@@ -22,6 +22,22 @@ void remove_floaters(FloaterState& sys, std::span<const std::uint32_t> holes) {
   resize_state(sys, last);
 }
 
+std::size_t remove_undefined(FloaterState& sys) {
+  const std::size_t n = floater_count(sys);
+  const double tolerance = 1e-9 * sys.surface.scene_radius();
+  sys.gone.clear();
+  for (std::size_t i = 0; i < n; ++i)
+    if (!std::isfinite(sys.value[i]) || !std::isfinite(sys.gnorm[i]) || !sys.pos[i].allFinite() ||
+        !std::isfinite(sys.sigma[i]) || !sys.surface.clip.contains(sys.pos[i], tolerance))
+      sys.gone.push_back(static_cast<std::uint32_t>(i));
+  if (sys.gone.empty()) return 0;
+  const std::size_t removed = sys.gone.size();
+  remove_floaters(sys, sys.gone);
+  sys.gone.clear();
+  evaluate_all(sys);
+  return removed;
+}
+
 namespace {
 
 // Fission: both halves get σ/√2; the child starts at a random tangential offset of a quarter

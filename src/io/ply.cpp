@@ -4,7 +4,9 @@
 
 #include <bit>
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <sstream>
 #include <string_view>
 
@@ -43,6 +45,21 @@ void check_content(const PlyContent& c) {
       if (v >= n) throw InvalidArgument(fmt::format("write_ply: an edge refers to vertex {} of {}", v, n));
   if (!c.edge_kinds.empty() && c.edge_kinds.size() != c.edges.size())
     throw InvalidArgument(fmt::format("write_ply: {} edge kinds for {} edges", c.edge_kinds.size(), c.edges.size()));
+  // Every number is written as a float: one that is not finite, or does not fit (|v| above
+  // 3.4e38 becomes inf), is refused rather than written as a word no reader parses.
+  auto fits = [](double v) { return std::abs(v) <= std::numeric_limits<float>::max(); };
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool ok = fits(c.positions[i].x()) && fits(c.positions[i].y()) && fits(c.positions[i].z()) &&
+                    (c.normals.empty() || (fits(c.normals[i].x()) && fits(c.normals[i].y()) &&
+                                           fits(c.normals[i].z())));
+    if (!ok)
+      throw BadInput(fmt::format("write_ply: vertex {} has a coordinate or normal that is not "
+                                 "finite or beyond a float's range; nothing written", i));
+    for (const PlyProperty& p : c.properties)
+      if (p.type == PlyScalar::kFloat && !fits(p.values[i]))
+        throw BadInput(fmt::format("write_ply: the {} of vertex {} is not finite or beyond a "
+                                   "float's range ({}); nothing written", p.name, i, p.values[i]));
+  }
 }
 
 std::string header(const PlyContent& c, bool binary) {

@@ -125,6 +125,7 @@ struct Slab {
   ScratchVector<Triangle> triangles;
   std::uint64_t numbered = 0;   // vertices numbered, including the next slab's first layer
   long long active_cells = 0, ambiguous = 0, samples = 0, nan_samples = 0, evaluations = 0;
+  long long poles = 0;  // sign changes refused as poles or jumps (VertexPlacer::place)
   double seconds_sampling = 0, seconds_refinement = 0;
 };
 
@@ -136,6 +137,7 @@ struct SlabScratch {
   ScratchVector<std::uint32_t> first_id;
   std::vector<Crossing> crossings;
   ScratchVector<Vec3> linear;
+  std::vector<size_t> undefined;  // unrefined vertices on edges with a non-finite end (rare)
 };
 
 // Samples, numbers and triangulates the cells of layers [k0, k0 + layers), one node layer at
@@ -167,6 +169,7 @@ void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratc
   off.resize(C.size());
   linear.clear();
   crossings.clear();
+  scratch.undefined.clear();
   auto layer_values = [&](long long k) {  // F on node layer k, row j at j · nx
     return &V[static_cast<size_t>((k - k0) % 3 * ny * nx)];
   };
@@ -251,6 +254,7 @@ void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratc
             const double fa = row[i], fb = end[i];
             linear[n] = linear_point(grid, i, j, k, a, fa, fb);
             if (refine_own) crossings.push_back({i, j, k, a, fa, fb});
+            else if (!refine && !finite_ends(fa, fb)) scratch.undefined.push_back(n);
           }
       };
       along(std::integral_constant<int, 0>{});
@@ -362,8 +366,13 @@ void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratc
   // The vertices of the own layers: refined in one batch, or the linear points.
   const auto tr = Clock::now();
   slab.positions.resize(own_count);
-  if (refine) placer.place(crossings, slab.positions.data(), slab.evaluations);
-  else std::copy(linear.begin(), linear.begin() + static_cast<long>(own_count), slab.positions.begin());
+  if (refine) {
+    placer.place(crossings, slab.positions.data(), slab.evaluations, slab.poles);
+  } else {
+    std::copy(linear.begin(), linear.begin() + static_cast<long>(own_count), slab.positions.begin());
+    for (size_t n : scratch.undefined)
+      if (n < own_count) slab.positions[n] = no_vertex();
+  }
   slab.seconds_refinement += seconds_since(tr);
 }
 
@@ -431,6 +440,7 @@ ExtractedMesh extract_dense(const Surface& surface, const Grid& g, const Polygon
     st.ambiguous_faces += s.ambiguous;
     st.grid_samples += s.samples;
     st.nan_samples += s.nan_samples;
+    st.pole_edges += s.poles;
     st.refine_evaluations += s.evaluations;
     sampling += s.seconds_sampling;
     refinement += s.seconds_refinement;

@@ -91,6 +91,9 @@ struct MeshImprover::State {
   std::vector<Vec3> grad, unit;  // ∇F and ∇F/|∇F| (zero where ∇F vanishes)
   std::vector<Vec3> move;
   std::vector<double> scale;
+  // The positions before the last apply_moves: a vertex that went where F or ∇F is not finite
+  // goes back there (evaluate_field).
+  std::vector<Vec3> previous;
   double grad_ref = 1;  // median |∇F|
   double mean_edge = 0;
 
@@ -161,8 +164,27 @@ struct MeshImprover::State {
     }
   }
 
+  // Whether a move from `from` to `to` keeps the vertex in the clip: G may not grow beyond
+  // the boundary (vertices on the clip curve stay within rounding of it).
+  bool stays_inside(const Vec3& from, const Vec3& to) const {
+    if (!to.allFinite()) return false;
+    if (surface.clip.is_empty_spec()) return true;
+    const double g = surface.clip.value(to);
+    return g <= 0 || g <= std::max(surface.clip.value(from), 0.0) + 1e-12 * (1 + to.norm());
+  }
+
   void evaluate_field() {
     detail::values_gradients(pool, workers, mesh.positions, f, grad);
+    // A vertex that moved onto a point where F or ∇F is not finite (a pole, a NaN region)
+    // goes back to where it was: the move is refused. Rare, so serial.
+    if (previous.size() == nv())
+      for (size_t v = 0; v < nv(); ++v) {
+        if (std::isfinite(f[v]) && grad[v].allFinite()) continue;
+        if (previous[v] == mesh.positions[v]) continue;
+        mesh.positions[v] = previous[v];
+        f[v] = pool.local().value_gradient(mesh.positions[v], grad[v]);
+        ++stats.refused_moves;
+      }
     unit.resize(nv());
     for (size_t v = 0; v < nv(); ++v) {
       const double len = grad[v].norm();
@@ -316,6 +338,10 @@ struct MeshImprover::State {
         bad = triangle_bad(t, corners);
       }
       if (!bad) {
+        if (!stays_inside(from, to)) {
+          ++stats.refused_moves;
+          return false;
+        }
         mesh.positions[v] = to;
         return attempt == 0;
       }
@@ -388,15 +414,22 @@ struct MeshImprover::State {
       check.erase(std::unique(check.begin(), check.end()), check.end());
     }
     double max_move = 0;
+    long long outside = 0;
     std::vector<Vec3> next(nv());
-#pragma omp parallel for num_threads(workers) schedule(static) reduction(max : max_move)
+#pragma omp parallel for num_threads(workers) schedule(static) reduction(max : max_move) \
+    reduction(+ : outside)
     for (long long v = 0; v < n; ++v) trap.run([&] {
       const std::uint32_t u = static_cast<std::uint32_t>(v);
-      next[u] = scale[u] > 0 ? dest[u] : mesh.positions[u];
-      max_move = std::max(max_move, (next[u] - mesh.positions[u]).norm());
+      const Vec3& p = mesh.positions[u];
+      bool go = scale[u] > 0;
+      if (go && move[u].squaredNorm() > 0 && !stays_inside(p, dest[u])) go = false, ++outside;
+      next[u] = go ? dest[u] : p;
+      max_move = std::max(max_move, (next[u] - p).norm());
     });
     trap.rethrow();
-    mesh.positions.swap(next);
+    stats.refused_moves += outside;
+    previous = std::move(mesh.positions);
+    mesh.positions = std::move(next);
     return max_move;
   }
 
@@ -654,11 +687,21 @@ void MeshImprover::finish() {
   }
   s.evaluate_field();
   double worst = 0;
+  long long undefined = 0;
   for (size_t v = 0; v < s.nv(); ++v) {
-    if (s.mode[v] == kHeld && !s.mesh.is_boundary[v]) continue;  // singular points, held border
     const double g = s.grad[v].norm();
+    // A vertex where F is not finite is not on F = 0, held or not: a failure, which
+    // residual() makes the largest double. (Where only ∇F is infinite, as at the rim of
+    // sqrt(x), F may well be 0: has_residual leaves it out below.)
+    if (!std::isfinite(s.f[v])) {
+      ++undefined;
+      worst = residual(s.f[v], g);
+      continue;
+    }
+    if (s.mode[v] == kHeld && !s.mesh.is_boundary[v]) continue;  // singular points, held border
     if (has_residual(s.f[v], g)) worst = std::max(worst, residual(s.f[v], g));
   }
+  s.stats.undefined_vertices = undefined;
   s.stats.max_residual = worst;
   compute_field_normals(s.mesh, s.surface, s.opt.threads);
   s.count_flipped();

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -369,6 +370,15 @@ void write_mesh(const Mesh& mesh, const std::string& path) {
     for (std::uint32_t v : t)
       if (v >= mesh.positions.size())
         throw InvalidArgument("mesh", path, fmt::format("a triangle refers to vertex {} of {}", v, mesh.positions.size()));
+  // Readers cannot parse nan or inf, and STL, glb and PLY hold floats: a mesh with a number
+  // that is not finite or beyond a float's range is refused, not written.
+  auto fits = [](const Vec3& p) {
+    return (p.cwiseAbs().array() <= std::numeric_limits<float>::max()).all();
+  };
+  for (size_t v = 0; v < mesh.positions.size(); ++v)
+    if (!fits(mesh.positions[v]) || (v < mesh.normals.size() && !fits(mesh.normals[v])))
+      throw BadInput(fmt::format("{}: vertex {} of the mesh has a coordinate or normal that is "
+                                 "not finite or beyond a float's range; nothing written", path, v));
   if (ext == "ply") {
     write_ply_mesh(mesh, path);
     return;

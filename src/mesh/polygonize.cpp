@@ -80,6 +80,23 @@ long long weld_grid_nodes(Mesh& mesh, const detail::Grid& g) {
   return merged;
 }
 
+// Leaves out the triangles with a corner where no vertex could be placed (no_vertex(): an edge
+// with an end where F is not finite, or a pole); the vertices themselves go with the other
+// unreferenced ones, before the clean-up sees them. Returns the triangles removed and counts
+// those vertices.
+long long drop_undefined(Mesh& mesh, long long& undefined_vertices) {
+  std::vector<std::uint8_t> bad(mesh.positions.size(), 0);
+  long long count = 0;
+  for (size_t v = 0; v < mesh.positions.size(); ++v)
+    if (!mesh.positions[v].allFinite()) bad[v] = 1, ++count;
+  undefined_vertices = count;
+  if (count == 0) return 0;
+  const size_t before = mesh.triangles.size();
+  std::erase_if(mesh.triangles, [&](const auto& t) { return bad[t[0]] || bad[t[1]] || bad[t[2]]; });
+  remove_unreferenced_vertices(mesh);
+  return static_cast<long long>(before - mesh.triangles.size());
+}
+
 }  // namespace
 
 Mesh polygonize(const Surface& surface, const PolygonizeOptions& options, PolygonizeStats* stats,
@@ -110,6 +127,9 @@ Mesh polygonize(const Surface& surface, const PolygonizeOptions& options, Polygo
   Mesh mesh;
   mesh.positions = std::move(r.positions);
   mesh.triangles = std::move(r.triangles);
+  long long undefined_vertices = 0;
+  st.undefined_triangles = drop_undefined(mesh, undefined_vertices);
+  st.undefined_edges = undefined_vertices - st.pole_edges;
   st.welded_vertices = weld_grid_nodes(mesh, g);
   mesh.is_boundary.assign(mesh.positions.size(), 0);
   if (detail::clips(surface, options)) {

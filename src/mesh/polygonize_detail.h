@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <stop_token>
 #include <vector>
 
@@ -57,6 +58,26 @@ struct Crossing {
   int axis;
   double fa, fb;
 };
+
+// The position of a crossing that is not a zero of F: an edge with an end where F is not finite
+// (NaN or infinite is "no surface", not a sign), or a sign change across a pole or a jump,
+// where F does not get smaller towards the change. polygonize() drops the triangles on it.
+inline Vec3 no_vertex() { return Vec3::Constant(std::numeric_limits<double>::quiet_NaN()); }
+
+// Whether both end values of an edge are finite: only such an edge can hold a vertex.
+inline bool finite_ends(double fa, double fb) { return std::isfinite(fa) && std::isfinite(fb); }
+
+// Whether refinement on an edge with finite end values fa, fb of opposite signs clearly found a
+// zero of F: the smallest |F| met is 0 or well below both ends' (near a simple root it drops by
+// orders of magnitude; a pole or a jump makes |F| grow or stay towards the sign change). The
+// other cases (a pole; a jump; a zero within rounding of an end) are told apart by the
+// first-order distance |F|/|∇F| at the vertex (VertexPlacer::place_batched).
+inline bool clearly_refined(double fa, double fb, double smallest) {
+  return smallest == 0 || smallest < 0.5 * std::min(std::abs(fa), std::abs(fb));
+}
+// The largest |F|/|∇F| at a vertex, in cells, that an unclear refinement may leave (a zero
+// within rounding of an end has |F|/|∇F| at rounding level; a pole next to a node, one cell).
+inline constexpr double kMaxVertexResidual = 1e-6;
 
 // Where the sign changes on the edge by linear interpolation, as a fraction of the edge.
 inline double linear_fraction(double fa, double fb) {

@@ -120,8 +120,13 @@ MeshQuality measure_quality(const Mesh& mesh, const Surface& surface, const Qual
   evaluate(surface, P, workers, f, g);
   double sq = 0;
   for (size_t v = 0; v < P.size(); ++v) {
-    if (near_singular(P[v])) continue;
     const double gl = g[v].norm();
+    if (!std::isfinite(f[v])) {
+      ++q.undefined_vertices;
+      q.max_residual = residual(f[v], gl);  // the largest double
+      continue;
+    }
+    if (near_singular(P[v])) continue;
     if (!has_residual(f[v], gl)) continue;
     const double r = residual(f[v], gl);
     q.max_residual = std::max(q.max_residual, r);

@@ -17,7 +17,7 @@ namespace zeroset::detail {
 namespace {
 
 // Bit i of bits[i / 64] set where values[i] counts as positive (is_positive); returns how many
-// values are NaN. Four (AVX) or two (SSE2) values per compare where available.
+// values are not finite (NaN or infinite: v − v is NaN for both). Four (AVX) or two (SSE2) values per compare where available.
 long long sign_bits(const double* values, long long n, std::uint64_t* bits) {
   long long nans = 0;
   for (long long b = 0; b < n; b += 64) {
@@ -32,10 +32,11 @@ long long sign_bits(const double* values, long long n, std::uint64_t* bits) {
       const auto positive =
           static_cast<std::uint64_t>(_mm256_movemask_pd(_mm256_cmp_pd(v, _mm256_setzero_pd(), _CMP_NLT_UQ)));
       word |= positive << (i - b);
-      unordered = _mm256_or_pd(unordered, _mm256_cmp_pd(v, v, _CMP_UNORD_Q));
+      const __m256d d = _mm256_sub_pd(v, v);
+      unordered = _mm256_or_pd(unordered, _mm256_cmp_pd(d, d, _CMP_UNORD_Q));
     }
-    if (_mm256_movemask_pd(unordered))  // rare: count the NaNs one by one
-      for (long long q = b; q < i; ++q) nans += std::isnan(values[q]) ? 1 : 0;
+    if (_mm256_movemask_pd(unordered))  // rare: count them one by one
+      for (long long q = b; q < i; ++q) nans += std::isfinite(values[q]) ? 0 : 1;
 #elif defined(__SSE2__)
     const __m128d zero = _mm_setzero_pd();
     __m128d unordered = _mm_setzero_pd();
@@ -44,14 +45,15 @@ long long sign_bits(const double* values, long long n, std::uint64_t* bits) {
       // not (v < 0): NaN counts as positive
       const auto positive = static_cast<std::uint64_t>(~_mm_movemask_pd(_mm_cmplt_pd(v, zero)) & 3);
       word |= positive << (i - b);
-      unordered = _mm_or_pd(unordered, _mm_cmpunord_pd(v, v));
+      const __m128d d = _mm_sub_pd(v, v);
+      unordered = _mm_or_pd(unordered, _mm_cmpunord_pd(d, d));
     }
-    if (_mm_movemask_pd(unordered))  // rare: count the NaNs one by one
-      for (long long q = b; q < i; ++q) nans += std::isnan(values[q]) ? 1 : 0;
+    if (_mm_movemask_pd(unordered))  // rare: count them one by one
+      for (long long q = b; q < i; ++q) nans += std::isfinite(values[q]) ? 0 : 1;
 #endif
     for (; i < e; ++i) {
       word |= static_cast<std::uint64_t>(is_positive(values[i])) << (i - b);
-      nans += std::isnan(values[i]) ? 1 : 0;
+      nans += std::isfinite(values[i]) ? 0 : 1;
     }
     bits[b / 64] = word;
   }
@@ -104,11 +106,12 @@ long long RowSampler::sample(long long i0, long long count, long long j, long lo
         positive |= static_cast<std::uint64_t>(_mm256_movemask_pd(
                         _mm256_cmp_pd(acc[q], _mm256_setzero_pd(), _CMP_NLT_UQ)))
                     << (4 * q);
-        unordered = _mm256_or_pd(unordered, _mm256_cmp_pd(acc[q], acc[q], _CMP_UNORD_Q));
+        const __m256d d = _mm256_sub_pd(acc[q], acc[q]);  // NaN where not finite
+        unordered = _mm256_or_pd(unordered, _mm256_cmp_pd(d, d, _CMP_UNORD_Q));
       }
       bits[n / 64] |= positive << (n % 64);
-      if (_mm256_movemask_pd(unordered))  // rare: count the NaNs one by one
-        for (long long q = n; q < n + 16; ++q) nans += std::isnan(out[q]) ? 1 : 0;
+      if (_mm256_movemask_pd(unordered))  // rare (overflow): count them one by one
+        for (long long q = n; q < n + 16; ++q) nans += std::isfinite(out[q]) ? 0 : 1;
     }
     for (; n < count; ++n) {
       double v = c[degree];
@@ -116,7 +119,7 @@ long long RowSampler::sample(long long i0, long long count, long long j, long lo
       out[n] = v;
       if (!bits) continue;
       bits[n / 64] |= static_cast<std::uint64_t>(is_positive(v)) << (n % 64);
-      nans += std::isnan(v) ? 1 : 0;
+      nans += std::isfinite(v) ? 0 : 1;
     }
     return nans;
 #else

@@ -139,7 +139,7 @@ ExtractedMesh extract_sparse(const Surface& surface, const Grid& g, const Polygo
           sampler.sample(i0, sx, j0 + jj, k0 + kk, &v[static_cast<size_t>((kk * sy + jj) * sx)]);
       sampling_seconds += seconds_since(ts);
       samples += static_cast<long long>(v.size());
-      for (double val : v) nan_count += std::isnan(val) ? 1 : 0;
+      for (double val : v) nan_count += std::isfinite(val) ? 0 : 1;
       auto& out_t = tris[static_cast<size_t>(q)];
       auto& out_c = cross[static_cast<size_t>(q)];
       for (long long kk = 0; kk < mz; ++kk)
@@ -218,7 +218,7 @@ ExtractedMesh extract_sparse(const Surface& surface, const Grid& g, const Polygo
     std::vector<std::unique_ptr<VertexPlacer>> placers(static_cast<size_t>(workers));
     for (auto& p : placers) p = std::make_unique<VertexPlacer>(surface.field, g, poly, o.refine_steps);
     place_vertices_parallel(placers, workers, crossings, res.positions.data(),
-                            st.refine_evaluations, stop);
+                            st.refine_evaluations, st.pole_edges, stop);
   }
   st.seconds_refinement += seconds_since(t_ref);
   if (stop.stop_requested()) return {};

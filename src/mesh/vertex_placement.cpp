@@ -223,11 +223,12 @@ long long VertexPlacer::refine_block(size_t b, int lanes) {
 #endif
 
 void VertexPlacer::place_batched(std::span<const Crossing> in, Vec3* out,
-                                 long long& evaluations) {
+                                 long long& evaluations, long long& poles) {
   const size_t n = in.size();
   brackets_.clear();
   t_.resize(n);
   active_.resize(n);
+  smallest_.assign(n, std::numeric_limits<double>::infinity());
   for (size_t e = 0; e < n; ++e) {
     brackets_.emplace_back(in[e].fa, in[e].fb);
     t_[e] = linear_fraction(in[e].fa, in[e].fb);
@@ -245,6 +246,8 @@ void VertexPlacer::place_batched(std::span<const Crossing> in, Vec3* out,
     size_t kept = 0;
     for (size_t q = 0; q < m; ++q) {
       const size_t e = active_[q];
+      // NaN compares false: an undefined value never counts as small.
+      if (std::abs(f_[q]) < smallest_[e]) smallest_[e] = std::abs(f_[q]);
       if (f_[q] == 0) continue;  // exact root
       bool done = false;
       t_[e] = brackets_[e].next(t_[e], f_[q], done);
@@ -252,26 +255,40 @@ void VertexPlacer::place_batched(std::span<const Crossing> in, Vec3* out,
     }
     active_.resize(kept);
   }
-  for (size_t e = 0; e < n; ++e) out[e] = point(in[e], t_[e]);
+  for (size_t e = 0; e < n; ++e) {
+    out[e] = point(in[e], t_[e]);
+    // A sign change where |F| does not get smaller is a pole or a jump, not a zero (1/x − 1
+    // at x = 0); polynomials have none, so only this path looks. Where |F| did not clearly
+    // drop (rare), the vertex must be on F = 0 to first order.
+    if (steps_ <= 0 || !finite_ends(in[e].fa, in[e].fb) ||
+        clearly_refined(in[e].fa, in[e].fb, smallest_[e]))
+      continue;
+    Vec3 g;
+    const double f = eval_->value_gradient(out[e], g);
+    if (f == 0 || std::abs(f) <= kMaxVertexResidual * grid_.h * g.norm()) continue;  // NaN: no
+    out[e] = no_vertex();
+    ++poles;
+  }
 }
 
 // Places a batch of crossings split over the workers (chunks of a few thousand edges).
 void place_vertices_parallel(std::vector<std::unique_ptr<VertexPlacer>>& placers, int workers,
                              const std::vector<Crossing>& in, Vec3* out, long long& evaluations,
-                             const std::stop_token& stop) {
+                             long long& poles, const std::stop_token& stop) {
   constexpr size_t kChunk = 4096;
   const long long chunks = static_cast<long long>((in.size() + kChunk - 1) / kChunk);
-  long long evals = 0;
+  long long evals = 0, refused = 0;
   detail::ExceptionTrap trap;
-#pragma omp parallel for num_threads(workers) schedule(dynamic, 1) reduction(+ : evals)
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 1) reduction(+ : evals, refused)
   for (long long c = 0; c < chunks; ++c) trap.run([&] {
     if (stop.stop_requested()) return;
     const size_t b = static_cast<size_t>(c) * kChunk, e = std::min(in.size(), b + kChunk);
     placers[static_cast<size_t>(worker_index())]->place(
-        std::span<const Crossing>(in.data() + b, e - b), out + b, evals);
+        std::span<const Crossing>(in.data() + b, e - b), out + b, evals, refused);
   });
   trap.rethrow();
   evaluations += evals;
+  poles += refused;
 }
 
 }  // namespace zeroset::detail

@@ -42,9 +42,14 @@ class VertexPlacer {
   /// False when vertices stay at the linear interpolation (no refinement steps).
   bool refines() const { return steps_ > 0; }
 
-  void place(std::span<const Crossing> in, Vec3* out, long long& evaluations) {
+  /// Places the vertices of `in` into `out`; a crossing that is not a zero of F (an end where
+  /// F is not finite, or a pole: see clearly_refined) gets no_vertex(). Counts the refinement
+  /// evaluations, and the crossings refused for a pole or a jump in `poles`.
+  void place(std::span<const Crossing> in, Vec3* out, long long& evaluations, long long& poles) {
     if (lines_[0]) place_polynomial(in, out, evaluations);
-    else place_batched(in, out, evaluations);
+    else place_batched(in, out, evaluations, poles);
+    for (size_t n = 0; n < in.size(); ++n)
+      if (!finite_ends(in[n].fa, in[n].fb)) out[n] = no_vertex();
   }
 
  private:
@@ -65,7 +70,8 @@ class VertexPlacer {
   void place_polynomial(std::span<const Crossing> in, Vec3* out, long long& evaluations);
   void fill_chunk(std::span<const Crossing> in, const std::uint32_t* edge, size_t len);
   long long refine_block(size_t b, int lanes);
-  void place_batched(std::span<const Crossing> in, Vec3* out, long long& evaluations);
+  void place_batched(std::span<const Crossing> in, Vec3* out, long long& evaluations,
+                     long long& poles);
 
   std::optional<Evaluator> eval_;  // fields that are not polynomials
   const Grid& grid_;
@@ -82,13 +88,13 @@ class VertexPlacer {
   double t0_[kChunk + kLanes], fa_[kChunk + kLanes], fb_[kChunk + kLanes], s_[kChunk + kLanes];
   // Other fields.
   std::vector<IllinoisBracket> brackets_;
-  std::vector<double> t_, x_, y_, z_, f_;
+  std::vector<double> t_, x_, y_, z_, f_, smallest_;
   std::vector<size_t> active_;
 };
 
 // Places a batch of crossings split over the workers (chunks of a few thousand edges).
 void place_vertices_parallel(std::vector<std::unique_ptr<VertexPlacer>>& placers, int workers,
                              const std::vector<Crossing>& in, Vec3* out, long long& evaluations,
-                             const std::stop_token& stop);
+                             long long& poles, const std::stop_token& stop);
 
 }  // namespace zeroset::detail

@@ -25,7 +25,7 @@ using detail::pov_vec;
 /// The highest degree in the animated parameters that the coefficients' fit tries.
 constexpr int kMaxParamDegree = 8;
 
-std::string num(double v) { return fmt::format("{:.17g}", v); }
+std::string num(double v) { return detail::pov_number(v); }
 
 /// An ease of `s` (POV-Ray text in [0, 1]) as POV-Ray text: the formulas of ease().
 std::string pov_ease(Ease e, const std::string& s) {

@@ -8,7 +8,10 @@
 
 namespace zeroset::detail {
 
-/// <x, y, z> with every digit of a double.
+/// A number of the scene with every digit of a double. Throws BadInput when it is not finite:
+/// POV-Ray cannot parse nan or inf, and a scene with them would be written for nothing.
+std::string pov_number(double v);
+/// <x, y, z> with every digit of a double (pov_number's check for each).
 std::string pov_vec(const Vec3& v);
 /// The #version line, global settings and the background.
 std::string pov_preamble(const RenderOptions& options);
@@ -23,8 +26,9 @@ struct PovTerm {
 std::string pov_polynomial_object(int degree, const std::vector<PovTerm>& terms,
                                   const Surface& surface, const RenderOptions& options);
 /// The polynomial of `surface` (its current parameter values), checked for POV-Ray: throws
-/// BadInput when F is not a polynomial, above POV-Ray's degree 35, constant, or the clip is
-/// unbounded.
+/// BadInput when F is not a polynomial, above POV-Ray's degree 35, constant, has a
+/// coefficient that is not finite (named with its term: 0 divided by 0, the square root of a
+/// negative constant, an overflow of huge parameter values), or the clip is unbounded.
 Polynomial pov_polynomial(const Surface& surface);
 
 }  // namespace zeroset::detail

@@ -14,8 +14,15 @@
 namespace zeroset {
 namespace detail {
 
+std::string pov_number(double v) {
+  if (!std::isfinite(v))
+    throw BadInput(fmt::format("POV-Ray export: a number of the scene is not finite ({}); "
+                               "POV-Ray cannot read it", v));
+  return fmt::format("{:.17g}", v);
+}
+
 std::string pov_vec(const Vec3& v) {
-  return fmt::format("<{:.17g}, {:.17g}, {:.17g}>", v.x(), v.y(), v.z());
+  return fmt::format("<{}, {}, {}>", pov_number(v.x()), pov_number(v.y()), pov_number(v.z()));
 }
 
 }  // namespace detail
@@ -23,7 +30,14 @@ std::string pov_vec(const Vec3& v) {
 namespace {
 
 constexpr int kPovMaxOrder = 35;
+using detail::pov_number;
 using detail::pov_vec;
+
+// A material's number, to six digits (pov_number's check).
+std::string pov_short(double v) {
+  (void)pov_number(v);
+  return fmt::format("{:.6g}", v);
+}
 
 std::string texture(const char* keyword, const Material& m) {
   // POV-Ray: ambient × pigment + diffuse × pigment × (n·l) + phong × (r·v)^phong_size, the
@@ -31,9 +45,10 @@ std::string texture(const char* keyword, const Material& m) {
   return fmt::format(
       "  {} {{\n"
       "    pigment {{ color rgb {} }}\n"
-      "    finish {{ ambient {:.6g} diffuse 1 phong {:.6g} phong_size {:.6g} }}\n"
+      "    finish {{ ambient {} diffuse 1 phong {} phong_size {} }}\n"
       "  }}\n",
-      keyword, pov_vec(m.diffuse), m.ambient, m.specular, m.shininess);
+      keyword, pov_vec(m.diffuse), pov_short(m.ambient), pov_short(m.specular),
+      pov_short(m.shininess));
 }
 
 }  // namespace
@@ -50,6 +65,17 @@ Polynomial pov_polynomial(const Surface& surface) {
   if (poly.degree() > kPovMaxOrder)
     throw InvalidArgument("degree", std::to_string(poly.degree()),
                           "POV-Ray's polynomial object supports degree up to 35");
+  for (const Monomial& m : poly.terms())
+    if (!std::isfinite(m.c)) {
+      std::string term;
+      for (const auto& [name, power] : {std::pair{"x", m.i}, std::pair{"y", m.j}, std::pair{"z", m.k}})
+        if (power > 0) term += power > 1 ? fmt::format("{}^{}", name, power) : std::string(name);
+      throw BadInput(fmt::format("POV-Ray export: the {} of '{}' is not finite ({}); POV-Ray "
+                                 "cannot read it",
+                                 term.empty() ? std::string("constant term")
+                                              : "coefficient of " + term,
+                                 surface.label(), m.c));
+    }
   if (poly.degree() < 1)
     throw BadInput("POV-Ray export: '" + surface.label() + "' is a constant, there is no surface");
   (void)surface.bounds();  // throws BadInput when the clip is unbounded
@@ -71,9 +97,9 @@ std::string pov_polynomial_object(int degree, const std::vector<PovTerm>& terms,
                        terms[n].coefficient, n + 1 < terms.size() ? "," : "");
   out += "  sturm\n  clipped_by {\n";
   for (const SphereClip& s : surface.clip.spheres)
-    out += fmt::format("    sphere {{ {}, {:.17g} }}\n", pov_vec(s.center), s.radius);
+    out += fmt::format("    sphere {{ {}, {} }}\n", pov_vec(s.center), pov_number(s.radius));
   for (const HalfSpaceClip& h : surface.clip.planes)
-    out += fmt::format("    plane {{ {}, {:.17g} }}\n", pov_vec(h.normal), h.offset);
+    out += fmt::format("    plane {{ {}, {} }}\n", pov_vec(h.normal), pov_number(h.offset));
   out += "  }\n  bounded_by { clipped_by }\n";
   out += texture("texture", options.front);
   out += texture("interior_texture", options.back);
@@ -104,8 +130,8 @@ std::string pov_scene(const Surface& surface, const RenderOptions& options) {
   out += fmt::format("  location {}\n", pov_vec(view.eye));
   out += fmt::format("  sky {}\n", pov_vec(view.up));
   out += "  up <0, 1, 0>\n";
-  out += fmt::format("  right <{:.17g}, 0, 0>\n", -view.aspect());
-  out += fmt::format("  angle {:.17g}\n", horizontal_deg);
+  out += fmt::format("  right <{}, 0, 0>\n", pov_number(-view.aspect()));
+  out += fmt::format("  angle {}\n", pov_number(horizontal_deg));
   out += fmt::format("  look_at {}\n}}\n\n", pov_vec(view.target));
   const double far = 1000.0 * surface.scene_radius();
   for (const auto& l : shader.lights)
@@ -115,7 +141,7 @@ std::string pov_scene(const Surface& surface, const RenderOptions& options) {
 
   std::vector<detail::PovTerm> terms;
   for (const Monomial& m : poly.terms())
-    terms.push_back({m.i, m.j, m.k, fmt::format("{:.17g}", m.c)});
+    terms.push_back({m.i, m.j, m.k, pov_number(m.c)});
   out += detail::pov_polynomial_object(poly.degree(), terms, surface, options);
   return out;
 }

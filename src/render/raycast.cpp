@@ -147,5 +147,6 @@ bool SurfaceRayCaster::intersect_in_row(double s, SurfaceHit& hit, const RootGue
   return detail::intersect_in_row(*impl_, s, hit, guess);
 }
 const RootStats& SurfaceRayCaster::root_stats() const { return impl_->finder.stats(); }
+long long SurfaceRayCaster::abandoned_rays() const { return impl_->abandoned_rays; }
 
 }  // namespace zeroset

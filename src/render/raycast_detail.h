@@ -123,6 +123,7 @@ struct RayCaster {
   // Interval path.
   std::unique_ptr<IntervalEvaluator> intervals;
   std::vector<Segment> segments;  // scratch: the subdivision stack
+  long long abandoned_rays = 0;   // rays that ran out of RaycastOptions::interval_budget
 
   // A packet: four rays of the row (prepare_in_row). With AVX2 their straight-line parts are
   // done four at a time, bit for bit what the scalar code computes for each ray: the set-up

@@ -15,7 +15,12 @@ std::optional<double> interval_hit(RayCaster& rc, const Vec3& dir, double t0, do
   auto f = [&](double t) { return value_on_ray(rc, dir, t); };
   rc.segments.clear();
   rc.segments.push_back({t0, t1});
+  int budget = rc.options.interval_budget;
   while (!rc.segments.empty()) {
+    if (--budget < 0) {  // F undefined or unbounded along the ray: give it up as a miss
+      ++rc.abandoned_rays;
+      return std::nullopt;
+    }
     const Segment s = rc.segments.back();
     rc.segments.pop_back();
     Interval box[3];

@@ -2,6 +2,7 @@
 // derivatives, and the coefficients of the rounding band.
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "raycast_detail.h"
 #include "zeroset/expr/polynomial.h"
@@ -14,12 +15,22 @@ RayCaster::RayCaster(const Surface& s, const Vec3& e, const RaycastOptions& o)
   const Field& field = surface.field;
   exact = !o.force_interval && field.is_expandable() &&
           field.degree() <= RootFinder::kMaxDegree;
+  // G(p) = F(eye + p). A coefficient that overflowed (huge parameter values, a far eye and a
+  // high degree) has no exact restriction: such a field goes through interval arithmetic,
+  // which sees the overflow as undefined values rather than as a polynomial of NaNs.
+  std::optional<Polynomial> poly;
+  std::vector<Monomial> translated;
   if (exact) {
-    const Polynomial poly = field.polynomial();
-    degree = std::max(poly.degree(), 0);
+    poly = field.polynomial();
+    translated = poly->translated(eye).terms();
+    auto finite = [](const std::vector<Monomial>& terms) {
+      return std::all_of(terms.begin(), terms.end(), [](const Monomial& m) { return std::isfinite(m.c); });
+    };
+    exact = finite(poly->terms()) && finite(translated);
+  }
+  if (exact) {
+    degree = std::max(poly->degree(), 0);
     {
-      // G(p) = F(eye + p).
-      const std::vector<Monomial> translated = poly.translated(eye).terms();
       row_monomials = MonomialTable(degree);
       const MonomialTable& table = row_monomials;
       // The table's graded order: (total + 1)(total + 2)/2 monomials of each degree.
@@ -53,7 +64,7 @@ RayCaster::RayCaster(const Surface& s, const Vec3& e, const RaycastOptions& o)
       gradient_bound[static_cast<size_t>(i + j + k)] += std::abs(c);
     };
     std::vector<Monomial> abs_terms;
-    for (const Monomial& m : poly.terms()) {
+    for (const Monomial& m : poly->terms()) {
       abs_terms.push_back({m.i, m.j, m.k, std::abs(m.c)});
       if (m.i > 0) add_derivative(0, m.i - 1, m.j, m.k, m.i * m.c);
       if (m.j > 0) add_derivative(1, m.i, m.j - 1, m.k, m.j * m.c);

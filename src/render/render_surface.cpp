@@ -289,6 +289,7 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
       stats->hits += w.hits;
       stats->singular_normals += w.singular;
     }
+    for (const SurfaceRayCaster& c : casters) stats->abandoned_rays += c.abandoned_rays();
     stats->threads = threads;
     stats->exact = casters.front().is_exact();
     stats->seconds =

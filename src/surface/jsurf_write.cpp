@@ -103,11 +103,18 @@ Vec3 display(const json& j, const std::string& what) {
   throw BadInput(fmt::format("render/{}: expected '#rrggbb' or [r, g, b]", what));
 }
 
+// A number of the file; SURFER cannot read nan or inf, so a scene with one is refused.
+std::string finite_number(double x) {
+  if (!std::isfinite(x))
+    throw BadInput(fmt::format("SURFER export: a number of the scene is not finite ({})", x));
+  return fmt::format("{}", x);
+}
+
 std::string numbers(std::initializer_list<double> v) {
   std::string out;
   for (double x : v) {
     if (!out.empty()) out += ' ';
-    out += fmt::format("{}", x);
+    out += finite_number(x);
   }
   return out;
 }
@@ -155,13 +162,13 @@ std::string scene_to_jsurf(const Scene& scene) {
   put("surface_equation", equation);
   const auto& values = field.parameter_values();
   for (size_t i = 0; i < field.parameter_names().size(); ++i)
-    put("surface_parameter_" + names.at(field.parameter_names()[i]), fmt::format("{}", values[i]));
-  put("scale_factor", fmt::format("{}", std::log10(radius)));
+    put("surface_parameter_" + names.at(field.parameter_names()[i]), finite_number(values[i]));
+  put("scale_factor", finite_number(std::log10(radius)));
   put("rotation_matrix",
       numbers({rot(0, 0), rot(0, 1), rot(0, 2), 0, rot(1, 0), rot(1, 1), rot(1, 2), 0, rot(2, 0),
                rot(2, 1), rot(2, 2), 0, 0, 0, 0, 1}));
   put("camera_type", "PERSPECTIVE_CAMERA");
-  put("camera_fov_y", fmt::format("{}", s.camera.fov_deg));
+  put("camera_fov_y", finite_number(s.camera.fov_deg));
   put("camera_transform", numbers({1, 0, 0, t.x(), 0, 1, 0, t.y(), 0, 0, 1, t.z(), 0, 0, 0, 1}));
 
   const json render = scene.settings.is_object() && scene.settings.contains("render")
@@ -176,7 +183,7 @@ std::string scene_to_jsurf(const Scene& scene) {
     auto number = [&](const char* key) {
       if (!m[key].is_number())
         throw BadInput(fmt::format("render/{}/{}: expected a number", side, key));
-      return fmt::format("{}", m[key].get<double>());
+      return finite_number(m[key].get<double>());
     };
     if (m.contains("diffuse")) {
       put(p + "color", numbers(display(m["diffuse"], std::string(side) + "/diffuse")));

@@ -341,16 +341,39 @@ SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& 
   SingularScales s;
   s.radius = radius;
   s.cell = grid.cell;
-  std::vector<double> grads, hesses;
+  // The scales of ∇F and the Hessian near F = 0: at the nodes next to a sign change of F (a
+  // grid edge that F = 0 crosses), or where there is none (F = G², no sign change), at the
+  // nodes within a cell of F = 0 to first order. The sign change comes first because the
+  // first-order distance |F|/|∇F| can mislead by orders of magnitude: for (x²+y²+z²)^1000 − 1
+  // it is r/2000 at every node outside the sphere, whose gradients reach 10³⁰⁰, and a scale
+  // taken from them makes every point within 17% of the sphere look singular.
+  std::vector<double> grads, hesses, near_grads, near_hesses;
   bool all_zero = true;
+  const size_t nx = static_cast<size_t>(grid.n[0]), nxy = nx * static_cast<size_t>(grid.n[1]);
+  auto crosses = [&](size_t i) {
+    const double f = grid.f[i];
+    const size_t strides[3] = {1, nx, nxy};
+    const size_t index[3] = {i % nx, (i / nx) % static_cast<size_t>(grid.n[1]), i / nxy};
+    for (int a = 0; a < 3; ++a) {
+      if (index[a] + 1 >= static_cast<size_t>(grid.n[a])) continue;
+      const double o = grid.f[i + strides[a]];
+      if (std::isfinite(f) && std::isfinite(o) && (f == 0 || (f < 0) != (o < 0))) return true;
+    }
+    return false;
+  };
   for (size_t i = 0; i < grid.f.size(); ++i) {
     const double gn = grid.g[i].norm();
     if (grid.f[i] != 0 || gn != 0) all_zero = false;
-    if (std::abs(grid.f[i]) <= gn * grid.cell && std::isfinite(gn)) {
+    if (!std::isfinite(gn)) continue;
+    if (crosses(i)) {
       grads.push_back(gn);
       hesses.push_back(grid.h[i].norm());
+    } else if (std::abs(grid.f[i]) <= gn * grid.cell) {
+      near_grads.push_back(gn);
+      near_hesses.push_back(grid.h[i].norm());
     }
   }
+  if (grads.empty()) grads.swap(near_grads), hesses.swap(near_hesses);
   SingularSet out;
   if (all_zero) {  // F ≡ 0: every point is singular
     out.has_singular_sheet = true;

@@ -5,6 +5,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <vector>
 
 #include "zeroset/error.h"
 
@@ -83,6 +85,27 @@ TEST_F(IoPlyTest, RoundTripInBothFormats) {
     EXPECT_NEAR(ply.properties.at("radius")[1], 0.2, 1e-7);
     EXPECT_TRUE(ply.has_faces);
     EXPECT_EQ(ply.triangles, triangles_);
+  }
+}
+
+// Every number is written as a float: one that is not finite or beyond a float's range would
+// become a word no reader parses, so the file is refused and nothing is written.
+TEST_F(IoPlyTest, NumbersThatAreNotFiniteFloatsAreRefused) {
+  for (double bad : {std::numeric_limits<double>::quiet_NaN(),
+                     std::numeric_limits<double>::infinity(), 1e39}) {
+    for (int where = 0; where < 3; ++where) {
+      PlyContent c = mesh_content();
+      std::vector<Vec3> positions = positions_, normals = normals_;
+      std::vector<double> radius(positions_.size(), 0.1);
+      if (where == 0) positions[1].y() = bad;
+      if (where == 1) normals[2].z() = bad;
+      if (where == 2) radius[3] = bad;
+      c.positions = positions;
+      c.normals = normals;
+      c.properties = {{"radius", PlyScalar::kFloat, radius}};
+      EXPECT_THROW(write_ply(path("bad.ply"), c, PlyFormat::kAscii), BadInput);
+      EXPECT_FALSE(fs::exists(path("bad.ply")));
+    }
   }
 }
 

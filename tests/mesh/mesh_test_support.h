@@ -2,6 +2,7 @@
 // Surfaces for the mesh tests.
 #include <string>
 
+#include "support/equation.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/scene.h"
 
@@ -15,12 +16,6 @@ inline Surface kummer(double mu, double clip_radius = 3) {
   Surface s = catalog_surface("kummer");
   s.field.set_parameter("mu", mu);
   s.clip = Clip::sphere(clip_radius);
-  return s;
-}
-
-inline Surface equation(const std::string& text, const Clip& clip) {
-  Surface s = surface_from_equation(text);
-  s.clip = clip;
   return s;
 }
 

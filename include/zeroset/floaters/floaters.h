@@ -135,6 +135,9 @@ struct StepStats {
   std::size_t births = 0;    ///< fissions
   std::size_t deaths = 0;    ///< deaths by the randomised density rule
   std::size_t removed = 0;   ///< strays (far from F = 0, degenerate σ, or outside the clip)
+  /// Of those, floaters removed because F or ∇F was not finite where they went (a pole, a NaN
+  /// region) or they left the clip.
+  std::size_t undefined_removed = 0;
   std::size_t inserted = 0;  ///< random insertions (start, reset, or an empty system)
   /// |F|/|∇F| at the floaters after the step (first-order distance; infinite-free: a floater
   /// with ∇F = 0 and F ≠ 0 counts as the largest double), floaters held on nodes left out. 0

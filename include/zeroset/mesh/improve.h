@@ -12,7 +12,8 @@
 /// coplanar triangles; and singular points found from the field alone (Newton's method on
 /// ∇F = 0), each then held by its nearest vertex. The improver stops when every vertex moves
 /// less than `speed_threshold` mean edge lengths in a step; finish() then projects every free
-/// vertex onto F = 0.
+/// vertex onto F = 0. No move takes a vertex out of the clip or onto a point where F or ∇F is
+/// not finite (a pole, a NaN region): such moves are refused and the vertex stays.
 #include <cstdint>
 #include <memory>
 #include <stop_token>
@@ -62,6 +63,12 @@ struct ImproveStats {
   long long cancelled_moves = 0;   ///< moves cancelled by the flip guard so far
   long long flipped_triangles = 0; ///< triangles facing against ∇F now (should stay 0 on smooth parts)
   std::vector<Vec3> singular_points;  ///< points found with F ≈ 0 and ∇F ≈ 0, each held by a vertex
+  /// Moves refused so far, the vertex staying where it was: out of the clip, or onto a point
+  /// where F or ∇F is not finite (found at the next evaluation and undone).
+  long long refused_moves = 0;
+  /// After finish(): vertices where F is not finite. Each is a failure: max_residual is then
+  /// the largest double.
+  long long undefined_vertices = 0;
   double max_residual = 0;         ///< max |F|/|∇F| over free vertices after finish()
   double seconds = 0;
 };

@@ -8,8 +8,11 @@
 ///    triangles are counter-clockwise seen from the side ∇F points to;
 ///  - with `clip`, the vertices where triangles were cut at the clip surface G = 0 lie on the
 ///    curve F = 0 ∩ G = 0 and are flagged `is_boundary` (|G| ≤ 1e-12 there);
-///  - F ≥ 0 and NaN count as positive; a grid node where F is not finite is counted in
-///    PolygonizeStats::nan_samples;
+///  - where F is not finite (NaN or infinite: a logarithm of a negative number, a pole) there is
+///    no surface: an edge with such an end holds no vertex, and a sign change across which |F|
+///    does not get smaller (1/x − 1 at x = 0, a jump) is not a zero; the triangles on those
+///    edges are left out, so the mesh ends there with an open border. Every vertex lies where F
+///    is finite. Non-finite grid nodes are counted in PolygonizeStats::nan_samples;
 ///  - the sparse path (GridMode::kSparse, or kAuto on large grids) samples only bricks that a
 ///    first-order distance test keeps, and can miss surface parts that fit inside a brick
 ///    without reaching its corners or centre (tiny components, thin spikes): raise
@@ -69,7 +72,10 @@ struct PolygonizeStats {
   long long bricks_kept = 0;           ///< sparse path: bricks sampled
   long long grid_samples = 0;          ///< field values at grid nodes
   long long refine_evaluations = 0;    ///< field values spent refining edge vertices
-  long long nan_samples = 0;           ///< grid nodes where F was not finite (counted positive)
+  long long nan_samples = 0;           ///< grid nodes where F was not finite (NaN or ±∞)
+  long long undefined_edges = 0;       ///< crossing edges with a non-finite end: no vertex
+  long long pole_edges = 0;            ///< sign changes refused as poles or jumps: no vertex
+  long long undefined_triangles = 0;   ///< triangles left out for a corner on such an edge
   long long active_cells = 0;          ///< cells the surface passes through
   long long ambiguous_faces = 0;       ///< face decisions made by the asymptotic decider
   long long edge_vertices = 0;         ///< vertices before clean-up and clipping

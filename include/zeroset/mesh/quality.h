@@ -36,6 +36,9 @@ struct MeshQuality {
   double max_residual = 0;
   double rms_residual = 0;
   size_t residual_vertices = 0;  ///< vertices that entered the residual figures
+  /// Vertices where F is not finite (singular balls included): never on F = 0, so when
+  /// there are any, max_residual is the largest double.
+  size_t undefined_vertices = 0;
   /// Angle between each face normal and ∇F at the face centroid, outside the singular balls.
   double mean_normal_deviation_deg = 0;
   double max_normal_deviation_deg = 0;

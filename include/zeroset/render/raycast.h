@@ -17,6 +17,12 @@ struct RaycastOptions {
   /// Interval path: subdivision stops at this width relative to the clipped ray segment; a
   /// leaf with a sign change is refined, one without is dropped (unless F is 0 at its start).
   double interval_tolerance = 1.0 / 8192;
+  /// Interval path: at most this many interval evaluations per ray. Where F is undefined or
+  /// unbounded along a ray (0/0, a pole) the enclosures exclude nothing and the subdivision
+  /// would visit every leaf, thousands per ray; a ray that runs out is a miss, counted in
+  /// SurfaceRayCaster::abandoned_rays. Rays through defined fields need a few dozen; where
+  /// enclosures overflow (degree 1000) a ray in 10,000 needs more.
+  int interval_budget = 256;
   /// Use the interval path even for polynomials (for tests and comparisons).
   bool force_interval = false;
 };
@@ -82,6 +88,8 @@ class SurfaceRayCaster {
   bool intersect_in_row(double s, SurfaceHit& hit, const RootGuess& guess = {});
 
   const RootStats& root_stats() const;
+  /// Rays of the interval path given up as misses at RaycastOptions::interval_budget.
+  long long abandoned_rays() const;
 
  private:
   struct Impl;

@@ -47,6 +47,7 @@ struct RenderStats {
   long long rays = 0;
   long long hits = 0;
   long long singular_normals = 0;  ///< hits where ∇F vanished and the fallback normal was used
+  long long abandoned_rays = 0;    ///< interval path: rays given up at the per-ray budget (misses)
   int threads = 0;                 ///< worker threads used
   bool exact = false;              ///< polynomial root isolation (else interval arithmetic)
 };
