@@ -142,7 +142,6 @@ void write_empty_sample(const SampleArgs& a, const Surface& surface, const Camer
   if (!a.stats.empty())
     write_json({{"surface", surface.label()}, {"floaters", 0}, {"field", survey_json(survey)}},
                a.stats);
-  say(fmt::format("{}: 0 floaters (no surface)", surface.label()));
 }
 
 void run_sample(const SampleArgs& a) {
@@ -191,6 +190,8 @@ void run_sample(const SampleArgs& a) {
   if (survey.vanishes_identically()) {
     // Every point is on F = 0 (warned): no floaters, as `mesh` gives no triangles.
     write_empty_sample(a, surface, camera, survey, width, height);
+    outputs.commit();
+    say(fmt::format("{}: 0 floaters (no surface)", surface.label()));
     return;
   }
   FloaterSystem sys(surface, options);

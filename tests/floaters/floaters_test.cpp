@@ -293,7 +293,7 @@ TEST(FloaterRobustness, SurfaceEmptyInsideTheClip) {
 
 TEST(FloaterRobustness, HugeAndTinyNominalRadius) {
   const Surface kummer = catalog_surface("kummer", {{"mu", 1.5}});
-  for (double r : {1e300, 1e6, 10.0, 1e-6, 1e-12, 1e-300}) {
+  for (double r : {1e6, 10.0, 1e-6, 1e-12, 1e-300}) {
     SCOPED_TRACE(r);
     run_robust(kummer, {.radius = r}, 100);
   }
@@ -319,6 +319,7 @@ TEST(FloaterSystem, RejectsBadOptionsNamingThem) {
   };
   EXPECT_NE(message({.radius = -1}).find("radius"), std::string::npos);
   EXPECT_NE(message({.radius = NAN}).find("radius"), std::string::npos);
+  EXPECT_NE(message({.radius = 1e300}).find("radius"), std::string::npos);
   EXPECT_NE(message({.max_count = 0}).find("max_count"), std::string::npos);
   EXPECT_NE(message({.dt = 0}).find("dt"), std::string::npos);
   EXPECT_NE(message({.death_radius_factor = 1}).find("death_radius_factor"), std::string::npos);
