@@ -14,7 +14,7 @@
 #endif
 
 #include "render_detail.h"
-#include "zeroset/detail/parallel.h"
+#include "zeroset/detail/exception_trap.h"
 #include "zeroset/error.h"
 
 namespace zeroset::detail {

@@ -259,7 +259,7 @@ TEST(HostileOutputs, AnInterruptedAnimationLeavesTheDirectoryAsItWas) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   // Interrupted once some of its 400 frames are staged: the old 3 frames, byte for byte.
   std::vector<std::string> args = kAnimate;
-  for (const std::string& a : {"--frames", "400", "-o"}) args.push_back(a);
+  for (const char* a : {"--frames", "400", "-o"}) args.push_back(a);
   args.push_back(d);
   const auto staged = [&] { return has_temp_file(d); };
   for (const int sig : {SIGINT, SIGTERM}) expect_interrupted_cleanly(d, args, sig, staged);

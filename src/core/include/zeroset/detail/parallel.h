@@ -2,8 +2,6 @@
 // OpenMP helpers with a serial fallback, and one field evaluator per worker thread: the one
 // place where the modules ask OpenMP how many workers there are and which one is running.
 #include <algorithm>
-#include <atomic>
-#include <exception>
 #include <span>
 #include <vector>
 
@@ -11,6 +9,7 @@
 #include <omp.h>
 #endif
 
+#include "zeroset/detail/exception_trap.h"
 #include "zeroset/expr/field.h"
 #include "zeroset/types.h"
 
@@ -41,33 +40,6 @@ inline int team_size() {
   return 1;
 #endif
 }
-
-// An exception must not leave an OpenMP region or work-sharing loop, nor a std::thread's
-// function: either calls std::terminate (std::bad_alloc would abort instead of exiting with a
-// message). Each piece of parallel work runs through `run`, which keeps the first exception
-// and makes later pieces return at once; after the region, `rethrow` throws it on the calling
-// thread. `run` is a template, so the body is inlined: no call through a pointer per piece.
-class ExceptionTrap {
- public:
-  template <class Body>
-  void run(Body&& body) noexcept {
-    if (failed_.load(std::memory_order_relaxed)) return;
-    try {
-      body();
-    } catch (...) {
-      if (!failed_.exchange(true)) error_ = std::current_exception();
-    }
-  }
-  bool failed() const { return failed_.load(std::memory_order_relaxed); }
-  /// After the region (its closing barrier or the threads' join orders the writes).
-  void rethrow() const {
-    if (error_) std::rethrow_exception(error_);
-  }
-
- private:
-  std::atomic<bool> failed_{false};
-  std::exception_ptr error_;
-};
 
 // Evaluators own scratch memory and must not be shared, so each worker gets its own.
 class EvaluatorPool {
