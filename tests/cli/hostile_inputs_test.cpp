@@ -79,8 +79,8 @@ TEST(HostileInputs, NumericFlagsMustBeFiniteAndInRange) {
   expect_refused(d, "render sphere --target 0,0,1e300 -o OUT", {"--target"});
   expect_refused(d, "render sphere --fov nan -o OUT", {"--fov"});
   const std::string frames = (fs::path(d) / "frames").string();
-  for (const std::string& flag : {"--fps nan", "--fps 1e9", "--fps inf", "--orbit nan",
-                                  "--orbit 1e300", "--frames 2000000000"}) {
+  for (const std::string flag : {"--fps nan", "--fps 1e9", "--fps inf", "--orbit nan",
+                                 "--orbit 1e300", "--frames 2000000000"}) {
     const auto r = run_command(zs("animate sphere --orbit 10 " + flag + " -o " + frames));
     EXPECT_EQ(r.exit_code, 2) << flag << "\n" << r.output;
     EXPECT_NE(r.output.find(flag.substr(0, flag.find(' '))), std::string::npos) << r.output;
