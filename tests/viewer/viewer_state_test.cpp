@@ -230,12 +230,24 @@ TEST(ViewerState, FloatersFollowTheAnimatedParameter) {
   state.set_loop(false);
   ASSERT_TRUE(state.play("r"));
   ASSERT_TRUE(run_until(state, [&] { return !state.animation().is_playing; }));
+  // The animation runs by the clock: a slow build (the sanitizers) takes fewer steps during
+  // it, so the floaters trail further at its end. They must be back on the sphere within 200
+  // steps after it, and after at least 20.
   const std::size_t steps = state.stats().floater_steps;
-  ASSERT_TRUE(run_until(state, [&] { return state.stats().floater_steps >= steps + 20; }));
-  const auto f = state.floaters();
-  ASSERT_GT(f->positions.size(), 50u);
   double worst = 0;
-  for (const Vec3& p : f->positions) worst = std::max(worst, std::abs(p.norm() - 1.5));
+  std::size_t count = 0;
+  const auto back_on_sphere = [&] {
+    const auto f = state.floaters();
+    if (!f) return false;
+    count = f->positions.size();
+    worst = 0;
+    for (const Vec3& p : f->positions) worst = std::max(worst, std::abs(p.norm() - 1.5));
+    return worst < 0.05 && state.stats().floater_steps >= steps + 20;
+  };
+  ASSERT_TRUE(run_until(state, [&] {
+    return back_on_sphere() || state.stats().floater_steps >= steps + 200;
+  }));
+  EXPECT_GT(count, 50u);
   EXPECT_LT(worst, 0.05);
   EXPECT_GT(state.stats().steps_per_second, 0);
 }
