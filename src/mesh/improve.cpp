@@ -29,46 +29,7 @@ enum Mode : std::uint8_t { kFree = 0, kHeld = 1, kOnCurve = 2 };
 // |∇F|² below this × grad_ref² marks a vertex that has reached a singular curve.
 constexpr double kOnSingularCurve = 1e-4;
 
-void check_options(const ImproveOptions& o) {
-  auto bad = [](const char* name, double v, const char* why) {
-    throw InvalidArgument(name, fmt::format("{}", v), why);
-  };
-  if (o.max_steps < 0) bad("max_steps", o.max_steps, "must be ≥ 0");
-  if (!(o.relaxation > 0 && o.relaxation <= 1)) bad("relaxation", o.relaxation, "must be in (0, 1]");
-  if (!(o.feedback >= 0 && o.feedback <= 1)) bad("feedback", o.feedback, "must be in [0, 1]");
-  if (!(o.spring_base > 0 && std::isfinite(o.spring_base))) bad("spring_base", o.spring_base, "must be > 0");
-  if (!(o.curvature_weight >= 0 && std::isfinite(o.curvature_weight)))
-    bad("curvature_weight", o.curvature_weight, "must be ≥ 0");
-  if (!(o.singularity_weight >= 0 && std::isfinite(o.singularity_weight)))
-    bad("singularity_weight", o.singularity_weight, "must be ≥ 0");
-  if (!(o.singularity_scale > 0)) bad("singularity_scale", o.singularity_scale, "must be > 0");
-  if (o.flip_steps < 0) bad("flip_steps", o.flip_steps, "must be ≥ 0");
-  if (o.singularity_interval < 1) bad("singularity_interval", o.singularity_interval, "must be ≥ 1");
-  if (!(o.flip_max_dihedral_deg >= 0 && o.flip_max_dihedral_deg < 90))
-    bad("flip_max_dihedral_deg", o.flip_max_dihedral_deg, "must be in [0, 90)");
-  if (!(o.speed_threshold > 0)) bad("speed_threshold", o.speed_threshold, "must be > 0");
-  if (!(o.max_move_fraction > 0 && o.max_move_fraction <= 1))
-    bad("max_move_fraction", o.max_move_fraction, "must be in (0, 1]");
-  if (!(o.min_area_fraction >= 0 && o.min_area_fraction < 1))
-    bad("min_area_fraction", o.min_area_fraction, "must be in [0, 1)");
-  if (o.threads < 0) bad("threads", o.threads, "must be ≥ 0");
-}
-
 }  // namespace
-
-// A step is a dozen short parallel loops over the vertices, about a millisecond each for
-// 50 000 vertices on one core. On a busy machine a fork-join then costs more than it saves:
-// a preempted worker holds up the others, which spin at the barrier and take the CPU from it
-// (measured at 128³, 47 000 vertices, load ~5 on 2 cores: 7.3 s with one worker, 23.9 s with
-// two, 10.8 s with two under OMP_WAIT_POLICY=passive). So with threads = 0 the improver uses
-// one worker per kVerticesPerWorker vertices, at most all cores.
-constexpr size_t kVerticesPerWorker = 100000;
-
-int improver_workers(int requested, size_t vertices) {
-  if (requested > 0) return detail::worker_count(requested);
-  const size_t by_size = std::max<size_t>(1, vertices / kVerticesPerWorker);
-  return static_cast<int>(std::min<size_t>(by_size, static_cast<size_t>(detail::worker_count(0))));
-}
 
 struct MeshImprover::State {
   Mesh mesh;
@@ -99,7 +60,7 @@ struct MeshImprover::State {
 
   State(Mesh m, const Surface& s, const ImproveOptions& o)
       : mesh(std::move(m)), surface(s), opt(o),
-        workers(improver_workers(o.threads, mesh.positions.size())), pool(s.field, workers) {}
+        workers(detail::improver_workers(o.threads, mesh.positions.size())), pool(s.field, workers) {}
 
   size_t nv() const { return mesh.positions.size(); }
   std::uint32_t* nb(std::uint32_t v) { return &nbr[static_cast<size_t>(v) * static_cast<size_t>(cap)]; }
@@ -604,7 +565,7 @@ struct MeshImprover::State {
 };
 
 MeshImprover::MeshImprover(Mesh mesh, const Surface& surface, const ImproveOptions& options) {
-  check_options(options);
+  detail::check_improve_options(options);
   surface.field.require_parameters();
   state_ = std::make_unique<State>(std::move(mesh), surface, options);
   State& s = *state_;

@@ -1,10 +1,12 @@
 #pragma once
 // Pieces shared by the polygonizer and the improver.
 #include <cmath>
+#include <cstddef>
 
 #include <Eigen/Geometry>
 
 #include "zeroset/expr/field.h"
+#include "zeroset/mesh/improve.h"
 #include "zeroset/mesh/mesh.h"
 #include "zeroset/surface/surface.h"
 
@@ -40,5 +42,10 @@ inline double mean_ratio(const Vec3& a, const Vec3& b, const Vec3& c) {
   const double sum = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
   return sum > 0 ? 3.4641016151377544 * area_normal(a, b, c).norm() / sum : 0.0;
 }
+
+// The improver's set-up (improve_setup.cpp): throws InvalidArgument naming a bad option; the
+// workers a step uses for `vertices` vertices (`requested` 0: as many as pay off).
+void check_improve_options(const ImproveOptions& o);
+int improver_workers(int requested, size_t vertices);
 
 }  // namespace zeroset::detail
