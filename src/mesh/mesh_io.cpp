@@ -16,6 +16,7 @@
 #include "zeroset/error.h"
 #include "zeroset/io/atomic_file.h"
 #include "zeroset/io/ply.h"
+#include "zeroset/surface/json_read.h"
 
 namespace zeroset {
 namespace {
@@ -308,11 +309,13 @@ Mesh read_glb(const Reader& r) {
   const std::uint32_t json_len = r.u32(12);
   if (r.u32(16) != 0x4E4F534Au) r.fail("the first chunk is not JSON");
   r.need(20, json_len);
+  // The scene files' reader: nesting, size, repeated keys and NUL bytes are refused while the
+  // chunk is parsed, before anything deep is built.
   nlohmann::json doc;
   try {
-    doc = nlohmann::json::parse(r.data().substr(20, json_len));
-  } catch (const std::exception& e) {
-    r.fail(std::string("bad JSON chunk: ") + e.what());
+    doc = json_read::parse(std::string_view(r.data()).substr(20, json_len), "JSON chunk");
+  } catch (const BadInput& e) {
+    r.fail(e.what());
   }
   const size_t bin_at = 20 + json_len;
   const std::uint32_t bin_len = r.u32(bin_at);

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 
@@ -73,6 +74,38 @@ TEST_F(MeshIo, ReadingABrokenFileIsAnIoError) {
   EXPECT_THROW(read_mesh(path("short.stl")), IoError);
   std::ofstream(path("bad.obj")) << "v 0 0 0\nf 1 2 3\n";
   EXPECT_THROW(read_mesh(path("bad.obj")), IoError);
+}
+
+// A glTF binary's JSON chunk is read like a scene file: 10^5 levels of nesting are refused
+// while parsing (no deep recursion, no crash), and so is a repeated key, naming the file.
+TEST_F(MeshIo, GlbJsonChunkIsReadWithTheSceneFilesLimits) {
+  auto glb = [&](const std::string& name, std::string json) {
+    while (json.size() % 4 != 0) json += ' ';
+    std::string bytes;
+    auto u32 = [&](std::uint32_t v) {
+      for (int k = 0; k < 4; ++k) bytes += static_cast<char>((v >> (8 * k)) & 0xFFu);
+    };
+    u32(0x46546C67u);
+    u32(2);
+    u32(static_cast<std::uint32_t>(12 + 8 + json.size() + 8));
+    u32(static_cast<std::uint32_t>(json.size()));
+    u32(0x4E4F534Au);
+    bytes += json;
+    u32(0);
+    u32(0x004E4942u);
+    std::ofstream(path(name), std::ios::binary) << bytes;
+    return path(name);
+  };
+  const std::string deep = glb("deep.glb", "{\"extras\":" + std::string(100000, '[') +
+                                               std::string(100000, ']') + "}");
+  try {
+    read_mesh(deep);
+    FAIL() << "deep JSON accepted";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("deep.glb"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("nest"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(read_mesh(glb("twice.glb", R"({"meshes": [], "meshes": []})")), IoError);
 }
 
 }  // namespace
