@@ -396,8 +396,14 @@ double RootFinder::find_first_root(std::span<const double> coeffs, double t0, do
   }
   if (d <= 0) {
     ++stats_.calls;
-    // A constant: the whole interval lies in the zero set when it is (nearly) zero.
-    const double c = d < 0 ? 0.0 : coeffs[0];
+    // Every coefficient zero: F vanishes on the whole line (F ≡ 0, or a ray inside a plane).
+    // There is no surface point to see along it, only a set the ray runs in: a miss.
+    if (d < 0) {
+      start_value_ = 0;
+      return std::numeric_limits<double>::quiet_NaN();
+    }
+    // A nonzero constant: the whole interval lies in the zero set when it is nearly zero.
+    const double c = coeffs[0];
     start_value_ = c;
     return std::abs(c) <= band ? t0 : std::numeric_limits<double>::quiet_NaN();
   }

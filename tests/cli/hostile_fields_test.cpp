@@ -139,8 +139,9 @@ TEST(HostileFields, APoleGetsNoWall) {
   EXPECT_NE(none.output.find("found no surface"), std::string::npos) << none.output;
 }
 
-// F ≡ 0: every point is on F = 0. mesh and sample say so alike and write nothing on it.
-TEST(HostileFields, AVanishingFieldIsNoSurfaceForMeshAndSample) {
+// F ≡ 0: every point is on F = 0. mesh, sample and render say so alike and put nothing on
+// it: no vertex, no floater, no ray that hits (the clip is not drawn as a surface).
+TEST(HostileFields, AVanishingFieldIsNoSurfaceForMeshSampleAndRender) {
   const std::string dir = fresh_dir("hostile_zero");
   for (const std::string eq : {"0", "x - x"}) {
     SCOPED_TRACE(eq);
@@ -155,6 +156,13 @@ TEST(HostileFields, AVanishingFieldIsNoSurfaceForMeshAndSample) {
     EXPECT_TRUE(ply_points(dir + "/z.ply").empty());
     const auto j = nlohmann::json::parse(read_text(dir + "/z.json"));
     EXPECT_TRUE(j["field"]["vanishes_identically"].get<bool>());
+    const auto r = run_command(zs("render '" + eq + "' --clip sphere:2 --size 32x32 -o " + dir +
+                                  "/z.png --stats " + dir + "/r.json"));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("vanishes identically"), std::string::npos) << r.output;
+    const auto rj = nlohmann::json::parse(read_text(dir + "/r.json"));
+    EXPECT_EQ(rj["hits"].get<long long>(), 0);
+    EXPECT_GT(rj["rays"].get<long long>(), 0);
   }
 }
 

@@ -89,10 +89,15 @@ TEST(RootFinder, SeparatesCloseSimpleRoots) {
   EXPECT_NEAR(*r, 1.0 + 1e-4, 1e-11);
 }
 
-TEST(RootFinder, TreatsIdenticallyZeroAsRootAtStart) {
+// f ≡ 0 on the line (F ≡ 0, or a ray inside a plane): no point is singled out, so no root;
+// a constant within the band still counts as a root at the start.
+TEST(RootFinder, IdenticallyZeroHasNoFirstRoot) {
   RootFinder f;
   const std::vector<double> zero{0.0, 0.0, 0.0};
-  const auto r = f.first_root(zero, 0.5, 2.0, 0.0);
+  EXPECT_FALSE(f.first_root(zero, 0.5, 2.0, 0.0));
+  EXPECT_FALSE(f.first_root(zero, 0.5, 2.0, 1e-9));
+  const std::vector<double> tiny{1e-12};
+  const auto r = f.first_root(tiny, 0.5, 2.0, 1e-9);
   ASSERT_TRUE(r);
   EXPECT_EQ(*r, 0.5);
 }

@@ -56,7 +56,8 @@ class RootFinder {
 
   explicit RootFinder(RootOptions options = {}) : options_(options) {}
 
-  /// The first root of Σ coeffs[k] t^k in [t0, t1] (t0 ≤ t1), or nothing.
+  /// The first root of Σ coeffs[k] t^k in [t0, t1] (t0 ≤ t1), or nothing; nothing too when
+  /// every coefficient is zero (f vanishes on the whole line: no point of it is singled out).
   /// `band` ≥ 0 is the absolute uncertainty of f's values (see `rounding_band`): a local
   /// minimum of |f| no larger than it counts as a root. Leading zero coefficients are allowed.
   /// `guess` (optional) orders the search; the result does not depend on it beyond the
