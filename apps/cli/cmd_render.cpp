@@ -330,6 +330,11 @@ void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArg
     if (file && frame_number_of(entry.path().filename().string()) >= a.frames)
       outputs.remove_on_commit(entry.path().string());
   }
+  // The video of an earlier run shows frames this one replaces: without a new one it goes too.
+  const fs::path old_video = dir / "animation.mp4";
+  const bool stale_video = !have_ffmpeg && (fs::is_regular_file(old_video, ec) ||
+                                            fs::is_symlink(old_video, ec));
+  if (stale_video) outputs.remove_on_commit(old_video.string());
 
   Progress progress("animate", global_flags().quiet);
   for (int f = range.first; f <= range.last; ++f) {
@@ -355,6 +360,7 @@ void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArg
     say("wrote " + video);
   else if (want_video)
     say("ffmpeg not found on PATH: no video (frames are in " + a.dir + ")");
+  if (stale_video) say("removed " + old_video.string() + ", an earlier run's video of other frames");
 }
 
 // ---------------------------------------------------------------------------------- export

@@ -230,14 +230,17 @@ std::string animate(const std::string& extra) {
   return zs("animate torus --param r=0.2:0.9 --size 40x32 --aa 1 --no-video " + extra);
 }
 
+// ... nor a stale video: an earlier run's DIR/animation.mp4 goes when this run writes none.
 TEST(HostileOutputs, ASecondAnimationWithFewerFramesLeavesNoStaleFrame) {
   const std::string d = fresh_dir("hostile-animate-fewer");
   put(d + "/notes.txt", "mine");
   put(d + "/frame_12.png", "not the command's pattern");
   auto r = run_command(animate("--frames 6 -o " + d));
   ASSERT_EQ(r.exit_code, 0) << r.output;
+  put(d + "/animation.mp4", "an earlier run's video");
   r = run_command(animate("--frames 3 -o " + d));
   ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("removed " + d + "/animation.mp4"), std::string::npos) << r.output;
   std::vector<std::string> names;
   for (const auto& [name, bytes] : contents(d)) names.push_back(name);
   EXPECT_EQ(names, (std::vector<std::string>{"frame_0000.png", "frame_0001.png", "frame_0002.png",
