@@ -81,6 +81,7 @@ FloaterOptions options_from(const SampleArgs& a, const Scene& scene) {
                                                   {"seed", "--seed"},
                                                   {"radius_grading", "--grading"}});
   o.threads = global_flags().threads;
+  check_floater_memory(o, o.seed_count > o.max_count ? "--seed-count" : "--max-count");
   return o;
 }
 

@@ -2,9 +2,11 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "zeroset/error.h"
+#include "zeroset/io/memory.h"
 #include "zeroset/surface/json_read.h"
 
 namespace zeroset {
@@ -135,6 +137,18 @@ json floater_settings_to_json(const FloaterOptions& o) {
           {"snap_to_nodes", o.snap_to_nodes},
           {"scaled_repulsion", o.scaled_repulsion},
           {"radius_adapt", std::string(to_string(o.radius_adapt))}};
+}
+
+void check_floater_memory(const FloaterOptions& options, const std::string& option) {
+  const MemoryLimit have = available_memory();
+  if (!have.known) return;
+  const std::size_t count = std::max(options.max_count, options.seed_count);
+  const double needed = static_cast<double>(count) * kBytesPerFloater;
+  if (needed <= have.budget()) return;
+  const auto fits = static_cast<long long>(have.budget() / kBytesPerFloater);
+  throw InvalidArgument(option, std::to_string(count),
+                        fmt::format("{} floaters {}; use {} {} or less", count,
+                                    memory_shortfall(needed, have), option, fits));
 }
 
 }  // namespace zeroset

@@ -49,4 +49,14 @@ void apply_floater_settings(const nlohmann::json& floaters, FloaterOptions& opti
 /// The "floaters" object for `options`.
 nlohmann::json floater_settings_to_json(const FloaterOptions& options);
 
+/// Memory one floater takes in a run, all its state and outputs included (measured: about
+/// 550 bytes at 10^6 floaters).
+inline constexpr double kBytesPerFloater = 600;
+
+/// Refuses options whose population (the larger of max_count and seed_count) would not fit in
+/// the memory this process may still take (available_memory in zeroset/io/memory.h): throws
+/// InvalidArgument naming `option` (what the front end calls max_count), the limit that
+/// applies and the largest count that fits. For front ends, before a long run.
+void check_floater_memory(const FloaterOptions& options, const std::string& option);
+
 }  // namespace zeroset
