@@ -41,8 +41,9 @@ std::size_t remove_undefined(FloaterState& sys) {
 namespace {
 
 // Fission: both halves get σ/√2; the child starts at a random tangential offset of a quarter
-// to half the old radius (FloaterOptions::fission_offset; without it where its parent is). Without clip
-// projection a child that would start outside the clip is not made (returns false).
+// to half the old radius (FloaterOptions::fission_offset; without it where its parent is).
+// Without clip projection a child that would start outside the clip is not made (returns
+// false).
 bool split_floater(FloaterState& sys, std::size_t i) {
   Rng rng(sys.opt.seed, sys.id[i], sys.step_count, Stream::kFission);
   const double s = sys.sigma[i];

@@ -12,8 +12,9 @@
 ///
 /// Every key is optional; missing ones keep their current value. radius 0 chooses σ̂ from the
 /// surface's area. The booleans are FloaterOptions' switches (false: the paper's or
-/// Witkin–Heckbert's plain rule, see docs/floaters.md). The command line, scene files and the viewer check these settings with
-/// validate_settings below, so each refuses a bad value with the same words.
+/// Witkin–Heckbert's plain rule, see docs/floaters.md). The command line, scene files and the
+/// viewer check these settings with validate_settings below, so each refuses a bad value with
+/// the same words.
 #include <cstddef>
 #include <cstdint>
 #include <nlohmann/json.hpp>
