@@ -199,9 +199,12 @@ TEST(FloaterSwitches, LocalNominalRadiusStopsTheChurnNearASingularPoint) {
 TEST(FloaterSwitches, WithoutTaperRadiiAreSmallerForTheSameSpacing) {
   const Surface sphere = catalog_surface("sphere");
   auto radius_per_spacing = [&](bool taper) {
-    const FloaterSystem sys =
-        settled(sphere, {.max_count = 800, .seed = 6, .energy_taper = taper,
-                         .radius_adapt = RadiusAdapt::kWitkinHeckbert}, 300);
+    const FloaterSystem sys = settled(sphere,
+                                      {.max_count = 800,
+                                       .seed = 6,
+                                       .energy_taper = taper,
+                                       .radius_adapt = RadiusAdapt::kWitkinHeckbert},
+                                      300);
     const auto pos = sys.positions();
     double spacing = 0, radius = 0;
     for (std::size_t i = 0; i < pos.size(); ++i) {
@@ -268,8 +271,11 @@ TEST(RadiusAdaptModes, CurvatureOnlyIsDenserWhereCurvatureIsHigh) {
   const Surface tube_and_plane = resolve_surface("(y^2 + z^2 - 0.0025) * (z - 0.8)", so);
   auto tube_per_plane = [&](RadiusAdapt mode) {
     const FloaterSystem sys = settled(tube_and_plane,
-                                      {.radius = 0.12, .max_count = 5000, .seed = 1,
-                                       .radius_adapt = mode, .snap_to_nodes = false},
+                                      {.radius = 0.12,
+                                       .max_count = 5000,
+                                       .seed = 1,
+                                       .radius_adapt = mode,
+                                       .snap_to_nodes = false},
                                       300);
     double tube = 0, plane = 0;
     for (const Vec3& p : sys.positions()) (p.z() < 0.5 ? tube : plane) += 1;
@@ -289,8 +295,7 @@ TEST(RadiusAdaptModes, SingularOnlyIsDenserNearANode) {
   const Surface cone = catalog_surface("cone");
   auto ratio = [&](RadiusAdapt mode) {
     return cone_apex_ratio(settled(
-        cone, {.max_count = 1500, .seed = 10, .radius_adapt = mode, .snap_to_nodes = false},
-        300));
+        cone, {.max_count = 1500, .seed = 10, .radius_adapt = mode, .snap_to_nodes = false}, 300));
   };
   const double wh = ratio(RadiusAdapt::kWitkinHeckbert), singular = ratio(RadiusAdapt::kSingular);
   RecordProperty("wh", std::to_string(wh));
