@@ -33,7 +33,15 @@ struct SampleArgs {
   bool no_clip_projection = false;
   bool no_snap = false;
   bool plain_repulsion = false;
+  bool no_clip_newton = false;
+  bool no_average_mu = false;
+  bool no_local_radius = false;
+  bool no_taper = false;
+  bool no_fission_offset = false;
   double grading = 0;
+  double feedback = 0;
+  double equilibrium_speed = 0;
+  int estimator_interval = 0;
   std::string radius_adapt;
   std::string animate;
   std::size_t settle_steps = 1000;
@@ -54,6 +62,9 @@ struct SampleArgs {
   CLI::Option* seed_opt = nullptr;
   CLI::Option* steps_opt = nullptr;
   CLI::Option* grading_opt = nullptr;
+  CLI::Option* feedback_opt = nullptr;
+  CLI::Option* equilibrium_speed_opt = nullptr;
+  CLI::Option* estimator_interval_opt = nullptr;
 };
 
 
@@ -72,14 +83,26 @@ FloaterOptions options_from(const SampleArgs& a, const Scene& scene) {
   if (a.no_clip_projection) o.clip_projection = false;
   if (a.no_snap) o.snap_to_nodes = false;
   if (a.plain_repulsion) o.scaled_repulsion = false;
+  if (a.no_clip_newton) o.clip_newton = false;
+  if (a.no_average_mu) o.average_radius_factor = false;
+  if (a.no_local_radius) o.local_nominal_radius = false;
+  if (a.no_taper) o.energy_taper = false;
+  if (a.no_fission_offset) o.fission_offset = false;
   if (a.grading_opt->count()) o.radius_grading = a.grading;
+  if (a.feedback_opt->count()) o.feedback = a.feedback;
+  if (a.equilibrium_speed_opt->count()) o.equilibrium_speed = a.equilibrium_speed;
+  if (a.estimator_interval_opt->count()) o.estimator_interval = a.estimator_interval;
   if (!a.radius_adapt.empty())
     o.radius_adapt = parse_radius_adapt(a.radius_adapt, "--radius-adapt");
-  validate_flags([&] { validate_settings(o); }, {{"radius", "--radius"},
-                                                  {"max_count", "--max-count"},
-                                                  {"seed_count", "--seed-count"},
-                                                  {"seed", "--seed"},
-                                                  {"radius_grading", "--grading"}});
+  validate_flags([&] { validate_settings(o); },
+                 {{"radius", "--radius"},
+                  {"max_count", "--max-count"},
+                  {"seed_count", "--seed-count"},
+                  {"seed", "--seed"},
+                  {"radius_grading", "--grading"},
+                  {"feedback", "--feedback"},
+                  {"equilibrium_speed", "--equilibrium-speed"},
+                  {"estimator_interval", "--estimator-interval"}});
   o.threads = global_flags().threads;
   check_floater_memory(o, o.seed_count > o.max_count ? "--seed-count" : "--max-count");
   return o;
@@ -123,6 +146,14 @@ nlohmann::json options_json(const FloaterOptions& o, double sigma_hat) {
           {"snap_to_nodes", o.snap_to_nodes},
           {"scaled_repulsion", o.scaled_repulsion},
           {"radius_grading", o.radius_grading},
+          {"feedback", o.feedback},
+          {"equilibrium_speed", o.equilibrium_speed},
+          {"estimator_interval", o.estimator_interval},
+          {"clip_newton", o.clip_newton},
+          {"average_radius_factor", o.average_radius_factor},
+          {"local_nominal_radius", o.local_nominal_radius},
+          {"energy_taper", o.energy_taper},
+          {"fission_offset", o.fission_offset},
           {"radius_adapt", std::string(to_string(o.radius_adapt))}};
 }
 
@@ -378,6 +409,32 @@ void register_sample_command(CLI::App& app) {
   a->grading_opt = cmd->add_option("--grading", a->grading,
                                    "How fast the fission radius may grow with distance from a "
                                    "neighbour's (default 0.1; 0: off)");
+  // zeroset's heuristics beyond the papers, each with the plain rule as its "off".
+  cmd->add_flag("--no-clip-newton", a->no_clip_newton,
+                "After projecting a floater back into the clip volume, do not step it along the "
+                "boundary onto F = 0 (the paper's projection alone)");
+  cmd->add_flag("--no-average-mu", a->no_average_mu,
+                "Take each refresh of the radius factor mu alone instead of averaging it with "
+                "the previous one");
+  cmd->add_flag("--no-local-radius", a->no_local_radius,
+                "Fission and death compare with the nominal radius sigma^ (the paper) instead of "
+                "the local min(sigma^, fission radius)");
+  cmd->add_flag("--no-taper", a->no_taper,
+                "Witkin-Heckbert's plain Gaussian energy (cut off at 3 sigma) instead of the "
+                "one tapered to zero there");
+  cmd->add_flag("--no-fission-offset", a->no_fission_offset,
+                "A fission child starts where its parent is (Witkin-Heckbert) instead of at a "
+                "random offset of 0.25 to 0.5 radii");
+  a->feedback_opt = cmd->add_option("--feedback", a->feedback,
+                                    "phi, the pull towards F = 0 (default 15; below 2/dt = 66.7)");
+  a->equilibrium_speed_opt =
+      cmd->add_option("--equilibrium-speed", a->equilibrium_speed,
+                      "gamma: a floater slower than gamma radii per time unit may fission or die "
+                      "(default 4; in (0, 16.7])");
+  a->estimator_interval_opt =
+      cmd->add_option("--estimator-interval", a->estimator_interval,
+                      "Refresh the curvature and singularity estimators every N steps (default "
+                      "8; 1 to 1000)");
   cmd->add_option("--radius-adapt", a->radius_adapt,
                   "Per-floater fission radius: wh (global, original method), curvature, "
                   "singular or mixed (default, alpha/3 + 2 beta/3)");

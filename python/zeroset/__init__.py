@@ -310,19 +310,27 @@ class Surface:
 
     def floaters(self, radius=None, max_count=None, seed_count=None, seed=None, cos_weight=None,
                  clip_projection=None, snap_to_nodes=None, scaled_repulsion=None,
-                 radius_grading=None, radius_adapt=None, threads=0):
+                 radius_grading=None, radius_adapt=None, feedback=None, equilibrium_speed=None,
+                 estimator_interval=None, clip_newton=None, average_radius_factor=None,
+                 local_nominal_radius=None, energy_taper=None, fission_offset=None, threads=0):
         """A floater system seeded on the surface, not yet stepped (see Floaters)."""
         opts = self._floater_options(
             radius=radius, max_count=max_count, seed_count=seed_count, seed=seed,
             cos_weight=cos_weight, clip_projection=clip_projection, snap_to_nodes=snap_to_nodes,
             scaled_repulsion=scaled_repulsion, radius_grading=radius_grading,
-            radius_adapt=radius_adapt)
+            radius_adapt=radius_adapt, feedback=feedback, equilibrium_speed=equilibrium_speed,
+            estimator_interval=estimator_interval, clip_newton=clip_newton,
+            average_radius_factor=average_radius_factor,
+            local_nominal_radius=local_nominal_radius, energy_taper=energy_taper,
+            fission_offset=fission_offset)
         return Floaters(_z._floaters(self._s, opts, _count(threads, "threads")))
 
     def sample(self, steps=None, max_steps=3000, radius=None, max_count=None, seed_count=None,
                seed=None, cos_weight=None, clip_projection=None, snap_to_nodes=None,
-               scaled_repulsion=None, radius_grading=None, radius_adapt=None, animate=None,
-               settle_steps=1000, threads=0):
+               scaled_repulsion=None, radius_grading=None, radius_adapt=None, feedback=None,
+               equilibrium_speed=None, estimator_interval=None, clip_newton=None,
+               average_radius_factor=None, local_nominal_radius=None, energy_taper=None,
+               fission_offset=None, animate=None, settle_steps=1000, threads=0):
         """Samples the surface with floaters as `zeroset sample` does: exactly `steps` steps, or
         until settled (at most max_steps). animate=("mu", 1.02, 2.44) settles at the first
         value, then moves the parameter over `steps` steps. Returns the Floaters, which unpack
@@ -331,7 +339,11 @@ class Surface:
             radius=radius, max_count=max_count, seed_count=seed_count, seed=seed,
             cos_weight=cos_weight, clip_projection=clip_projection, snap_to_nodes=snap_to_nodes,
             scaled_repulsion=scaled_repulsion, radius_grading=radius_grading,
-            radius_adapt=radius_adapt)
+            radius_adapt=radius_adapt, feedback=feedback, equilibrium_speed=equilibrium_speed,
+            estimator_interval=estimator_interval, clip_newton=clip_newton,
+            average_radius_factor=average_radius_factor,
+            local_nominal_radius=local_nominal_radius, energy_taper=energy_taper,
+            fission_offset=fission_offset)
         if animate is not None:
             try:
                 name, start, end = animate

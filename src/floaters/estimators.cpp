@@ -179,7 +179,8 @@ void update_estimators(FloaterState& sys) {
       }
       // Averaged with the previous estimate: α_i comes from random perimeter points, and a
       // σ_max^i that jumps from update to update triggers fissions and deaths for nothing.
-      sys.mu[b + k] = 0.5 * (sys.mu[b + k] + std::clamp(f, sys.opt.min_radius_factor, 1.0));
+      const double mu = std::clamp(f, sys.opt.min_radius_factor, 1.0);
+      sys.mu[b + k] = sys.opt.average_radius_factor ? 0.5 * (sys.mu[b + k] + mu) : mu;
     }
   });
   if (sys.opt.snap_to_nodes) snap_candidates(sys, candidate);

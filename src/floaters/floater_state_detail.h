@@ -375,7 +375,8 @@ inline std::uint8_t judge_fate(const FloaterState& sys, std::size_t i, double e,
   if (stray) return kStray;
   // Floaters held on the singular set's points and curves keep their radius and number.
   if (!near_eq || sys.pinned[i] >= kOnPoint) return 0;
-  const double local_nominal = std::min(sys.sigma_hat, local_max);
+  const double local_nominal =
+      sys.opt.local_nominal_radius ? std::min(sys.sigma_hat, local_max) : sys.sigma_hat;
   std::uint8_t f = 0;
   if (s > local_max ||
       (e > sys.opt.fission_energy_factor * desired_energy(sys) && s > local_nominal))

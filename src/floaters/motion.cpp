@@ -204,7 +204,9 @@ void move_one(FloaterState& sys, std::size_t i, const PairSums& sum, Evaluator& 
     p += tangential_move + normal_move;
     if (sys.opt.clip_projection) {
       const Vec3 projected = sys.surface.clip.project(p);
-      if (projected != p) p = step_onto_clip_curve(ev, sys.surface.clip, projected, 0.5 * s);
+      if (projected != p)
+        p = sys.opt.clip_newton ? step_onto_clip_curve(ev, sys.surface.clip, projected, 0.5 * s)
+                                : projected;
     } else {
       outside = !sys.surface.clip.contains(p);
     }
@@ -246,7 +248,7 @@ void repulsion_and_move(FloaterState& sys) {
   sys.scratch.resize(static_cast<std::size_t>(sys.threads));
   const MoveConstants k = move_constants(sys);
   const PairConstants pk{sys.opt.repulsion, sys.opt.cos_weight ? 1.0 : 0.0,
-                                 sys.opt.radius_grading};
+                         sys.opt.radius_grading, sys.opt.energy_taper ? 1.0 : 0.0};
   const auto runs = sys.hash.runs();
   const auto order = sys.hash.order();
   const std::span<PairSums> sums(sys.pair_sums);

@@ -129,6 +129,7 @@ struct PairConstants {
   double alpha;       // α
   double cos_weight;  // 1: E_ij weighted by |cos(∇F_i, ∇F_j)|; 0: not
   double grading;     // g
+  double taper = 1;   // 1: the factor (1 − |r|²/9σ²) of A.1; 0: the plain Gaussian
 };
 
 /// What one floater of a pair gets from the other: E_ij, |r|²·E_ij, the force along r_ij and
@@ -166,15 +167,17 @@ template <bool kScaled, class V>
   const V aw = within ? k.alpha * w : zero;
   const V ui = d2 * (1.0 / (2.0 * (si * si))), uj = d2 * (1.0 / (2.0 * (sj * sj)));
   // Both terms are finite for every listed pair; beyond its own cutoff each is dropped.
-  const V ei_all = aw * exp_cutoff(-ui) * mul_add(ui, splat<V>(-2.0 / 9), one);
-  const V ej_all = aw * exp_cutoff(-uj) * mul_add(uj, splat<V>(-2.0 / 9), one);
+  // The taper's slopes; × 1 (the default) leaves them exactly −2/9 and −1/9.
+  const V slope_u = splat<V>(-2.0 / 9 * k.taper), slope_x = splat<V>(-1.0 / 9 * k.taper);
+  const V ei_all = aw * exp_cutoff(-ui) * mul_add(ui, slope_u, one);
+  const V ej_all = aw * exp_cutoff(-uj) * mul_add(uj, slope_u, one);
   const V ei = ui < splat<V>(4.5) ? ei_all : zero;
   const V ej = uj < splat<V>(4.5) ? ej_all : zero;
   V coef_i, coef_j;
   if constexpr (kScaled) {
     const V inv = 2.0 / (si + sj);
     const V x = d2 * inv * inv;
-    const V f_all = aw * exp_cutoff(-0.5 * x) * mul_add(x, splat<V>(-1.0 / 9), one);
+    const V f_all = aw * exp_cutoff(-0.5 * x) * mul_add(x, slope_x, one);
     const V f = x < splat<V>(9.0) ? f_all : zero;
     coef_i = (2.0 * si * inv) * f;
     coef_j = (2.0 * sj * inv) * f;

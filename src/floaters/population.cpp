@@ -41,8 +41,9 @@ std::size_t remove_undefined(FloaterState& sys) {
 namespace {
 
 // Fission: both halves get σ/√2; the child starts at a random tangential offset of a quarter
-// to half the old radius (never zero: coincident twins would feel no force). Without clip
-// projection a child that would start outside the clip is not made (returns false).
+// to half the old radius (FloaterOptions::fission_offset; without it where its parent is).
+// Without clip projection a child that would start outside the clip is not made (returns
+// false).
 bool split_floater(FloaterState& sys, std::size_t i) {
   Rng rng(sys.opt.seed, sys.id[i], sys.step_count, Stream::kFission);
   const double s = sys.sigma[i];
@@ -50,7 +51,10 @@ bool split_floater(FloaterState& sys, std::size_t i) {
   tangent_basis(sys.unit[i], t1, t2);
   const double theta = rng.uniform(0, 2 * std::numbers::pi);
   const double r = rng.uniform(0.25, 0.5) * s;
-  Vec3 p = sys.pos[i] + r * (std::cos(theta) * t1 + std::sin(theta) * t2);
+  // Without the offset (Witkin–Heckbert's plain split) the twins coincide; the pair kernel
+  // separates coincident floaters along a direction from their ids.
+  Vec3 p = sys.pos[i];
+  if (sys.opt.fission_offset) p += r * (std::cos(theta) * t1 + std::sin(theta) * t2);
   if (sys.opt.clip_projection)
     p = sys.surface.clip.project(p);
   else if (!sys.surface.clip.contains(p))

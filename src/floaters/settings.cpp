@@ -38,8 +38,8 @@ void validate_settings(const FloaterOptions& o) {
   check(o.radius_grading >= 0 && o.radius_grading <= kMaxRadiusGrading, "radius_grading",
         fmt::format("{}", o.radius_grading),
         fmt::format("must lie in [0, {:g}] (0: off)", kMaxRadiusGrading));
-  // The dynamics' constants (library options; the command line and scene files do not set
-  // them).
+  // The dynamics' constants (library options, but feedback, equilibrium_speed and
+  // estimator_interval, which the command line and scene files set too).
   auto finite = [](double v) { return std::isfinite(v); };
   auto num = [](double v) { return fmt::format("{}", v); };
   check(finite(o.dt) && o.dt > 0, "dt", num(o.dt), "must be positive");
@@ -50,20 +50,33 @@ void validate_settings(const FloaterOptions& o) {
         "must not be negative");
   check(finite(o.radius_damping) && o.radius_damping > 0, "radius_damping",
         num(o.radius_damping), "must be positive");
-  check(finite(o.feedback) && o.feedback >= 0, "feedback", num(o.feedback),
-        "must not be negative");
+  // The pull's Euler step shrinks the distance to F = 0 by (1 − φ·dt): it diverges from
+  // φ·dt = 2 on.
+  check(finite(o.feedback) && o.feedback >= 0 && o.feedback * o.dt < kMaxFeedbackStep,
+        "feedback", num(o.feedback),
+        fmt::format("must lie in [0, {:g}) (feedback·dt below {:g}: the pull's Euler step is "
+                    "stable)",
+                    kMaxFeedbackStep / o.dt, kMaxFeedbackStep));
   check(finite(o.max_step_fraction) && o.max_step_fraction > 0, "max_step_fraction",
         num(o.max_step_fraction), "must be positive");
-  check(finite(o.equilibrium_speed) && o.equilibrium_speed >= 0, "equilibrium_speed",
-        num(o.equilibrium_speed), "must not be negative");
+  // A tangential move is at most max_step_fraction·σ per step: a γ beyond max_step_fraction/dt
+  // counts every floater as near equilibrium; γ = 0 none, and nothing would ever fission.
+  const double most_speed = o.max_step_fraction / o.dt;
+  check(finite(o.equilibrium_speed) && o.equilibrium_speed > 0 &&
+            o.equilibrium_speed <= most_speed,
+        "equilibrium_speed", num(o.equilibrium_speed),
+        fmt::format("must lie in (0, {:g}] (max_step_fraction/dt: above it every floater counts "
+                    "as near equilibrium)",
+                    most_speed));
   check(finite(o.fission_energy_factor) && o.fission_energy_factor >= 0, "fission_energy_factor",
         num(o.fission_energy_factor), "must not be negative");
   check(finite(o.death_radius_factor) && o.death_radius_factor >= 0 && o.death_radius_factor < 1,
         "death_radius_factor", num(o.death_radius_factor), "must be in [0, 1)");
   check(finite(o.max_radius_factor) && o.max_radius_factor >= 1, "max_radius_factor",
         num(o.max_radius_factor), "must be at least 1");
-  check(o.estimator_interval >= 1, "estimator_interval", std::to_string(o.estimator_interval),
-        "must be at least 1");
+  check(o.estimator_interval >= 1 && o.estimator_interval <= kMaxEstimatorInterval,
+        "estimator_interval", std::to_string(o.estimator_interval),
+        fmt::format("must lie in [1, {}]", kMaxEstimatorInterval));
   check(o.curvature_samples >= 1 && o.curvature_samples <= 64, "curvature_samples",
         std::to_string(o.curvature_samples), "must be between 1 and 64");
   check(finite(o.singular_scale) && o.singular_scale >= 0, "singular_scale",
@@ -98,6 +111,12 @@ void apply_floater_settings(const json& floaters, FloaterOptions& options,
       o.radius = number(value, origin, p);
     else if (key == "radius_grading")
       o.radius_grading = number(value, origin, p);
+    else if (key == "feedback")
+      o.feedback = number(value, origin, p);
+    else if (key == "equilibrium_speed")
+      o.equilibrium_speed = number(value, origin, p);
+    else if (key == "estimator_interval")
+      o.estimator_interval = static_cast<int>(whole(value, origin, p, 0, 1e9));
     else if (key == "cos_weight")
       o.cos_weight = boolean(value, origin, p);
     else if (key == "clip_projection")
@@ -106,6 +125,16 @@ void apply_floater_settings(const json& floaters, FloaterOptions& options,
       o.snap_to_nodes = boolean(value, origin, p);
     else if (key == "scaled_repulsion")
       o.scaled_repulsion = boolean(value, origin, p);
+    else if (key == "clip_newton")
+      o.clip_newton = boolean(value, origin, p);
+    else if (key == "average_radius_factor")
+      o.average_radius_factor = boolean(value, origin, p);
+    else if (key == "local_nominal_radius")
+      o.local_nominal_radius = boolean(value, origin, p);
+    else if (key == "energy_taper")
+      o.energy_taper = boolean(value, origin, p);
+    else if (key == "fission_offset")
+      o.fission_offset = boolean(value, origin, p);
     else if (key == "radius_adapt") {
       try {
         o.radius_adapt = parse_radius_adapt(json_read::string(value, origin, p), p);
@@ -114,8 +143,10 @@ void apply_floater_settings(const json& floaters, FloaterOptions& options,
       }
     } else {
       fail(origin, p,
-           "unknown key (known: max_count, seed_count, seed, radius, radius_grading, "
-           "cos_weight, clip_projection, snap_to_nodes, scaled_repulsion, radius_adapt)");
+           "unknown key (known: max_count, seed_count, seed, radius, radius_grading, feedback, "
+           "equilibrium_speed, estimator_interval, cos_weight, clip_projection, snap_to_nodes, "
+           "scaled_repulsion, clip_newton, average_radius_factor, local_nominal_radius, "
+           "energy_taper, fission_offset, radius_adapt)");
     }
   }
   try {
@@ -132,10 +163,18 @@ json floater_settings_to_json(const FloaterOptions& o) {
           {"seed", o.seed},
           {"radius", o.radius},
           {"radius_grading", o.radius_grading},
+          {"feedback", o.feedback},
+          {"equilibrium_speed", o.equilibrium_speed},
+          {"estimator_interval", o.estimator_interval},
           {"cos_weight", o.cos_weight},
           {"clip_projection", o.clip_projection},
           {"snap_to_nodes", o.snap_to_nodes},
           {"scaled_repulsion", o.scaled_repulsion},
+          {"clip_newton", o.clip_newton},
+          {"average_radius_factor", o.average_radius_factor},
+          {"local_nominal_radius", o.local_nominal_radius},
+          {"energy_taper", o.energy_taper},
+          {"fission_offset", o.fission_offset},
           {"radius_adapt", std::string(to_string(o.radius_adapt))}};
 }
 

@@ -68,6 +68,13 @@ TEST(HostileInputs, NumericFlagsMustBeFiniteAndInRange) {
   const std::string d = fresh_dir("hostile_flags");
   expect_refused(d, "sample sphere --grading nan --png OUT", {"--grading", "[0, 1000]"});
   expect_refused(d, "sample sphere --grading 1e9 --png OUT", {"--grading"});
+  expect_refused(d, "sample sphere --feedback inf --png OUT", {"--feedback"});
+  expect_refused(d, "sample sphere --feedback 1e300 --png OUT", {"--feedback", "66.6667"});
+  expect_refused(d, "sample sphere --equilibrium-speed nan --png OUT", {"--equilibrium-speed"});
+  expect_refused(d, "sample sphere --equilibrium-speed -4 --png OUT", {"--equilibrium-speed"});
+  expect_refused(d, "sample sphere --estimator-interval 99999999999 --png OUT",
+                 {"--estimator-interval"});
+  expect_refused(d, "sample sphere --estimator-interval -1 --png OUT", {"--estimator-interval"});
   expect_refused(d, "sample sphere --radius 1e300 --png OUT", {"--radius", "2e+06"});
   expect_refused(d, "sample sphere --radius inf --png OUT", {"--radius"});
   expect_refused(d, "sample sphere --disk-scale 1e300 --png OUT", {"--disk-scale"});

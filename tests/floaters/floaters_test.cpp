@@ -301,7 +301,9 @@ TEST(FloaterRobustness, HugeAndTinyNominalRadius) {
 
 TEST(FloaterRobustness, ExtremeTimeStepsStayFinite) {
   const Surface kummer = catalog_surface("kummer", {{"mu", 1.5}});
-  run_robust(kummer, {.dt = 10}, 50);
+  // φ and γ scaled with dt as validate_settings asks: the same per-step pull and speed test.
+  run_robust(kummer, {.dt = 10, .feedback = 15 * 0.03 / 10, .equilibrium_speed = 4 * 0.03 / 10},
+             50);
   run_robust(kummer, {.dt = 1e-9}, 50);
 }
 
@@ -324,6 +326,14 @@ TEST(FloaterSystem, RejectsBadOptionsNamingThem) {
   EXPECT_NE(message({.dt = 0}).find("dt"), std::string::npos);
   EXPECT_NE(message({.death_radius_factor = 1}).find("death_radius_factor"), std::string::npos);
   EXPECT_NE(message({.estimator_interval = 0}).find("estimator_interval"), std::string::npos);
+  EXPECT_NE(message({.estimator_interval = 1001}).find("estimator_interval"), std::string::npos);
+  // φ·dt ≥ 2: the pull's Euler step diverges; γ beyond max_step_fraction/dt or 0.
+  EXPECT_NE(message({.feedback = 2 / 0.03}).find("feedback"), std::string::npos);
+  EXPECT_NE(message({.dt = 1, .feedback = 2}).find("feedback"), std::string::npos);
+  EXPECT_NE(message({.equilibrium_speed = 0}).find("equilibrium_speed"), std::string::npos);
+  EXPECT_NE(message({.equilibrium_speed = 0.5 / 0.03 * 1.01}).find("equilibrium_speed"),
+            std::string::npos);
+  EXPECT_EQ(message({.feedback = 60, .equilibrium_speed = 16, .estimator_interval = 1000}), "");
 
   FloaterSystem sys(kummer, {.max_count = 100});
   FloaterOptions bad = sys.options();

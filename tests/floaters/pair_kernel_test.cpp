@@ -169,7 +169,8 @@ TEST(PairBatch, EveryPathGivesTheSameBits) {
   const Scene scene = make_scene(5, 60);
   const Candidates c = make_candidates(6, scene.count);
   for (bool scaled : {true, false})
-    for (const PairConstants k : {PairConstants{1.0, 1.0, 0.1}, PairConstants{0.5, 0.0, 0.0}}) {
+    for (const PairConstants k : {PairConstants{1.0, 1.0, 0.1}, PairConstants{0.5, 0.0, 0.0},
+                                  PairConstants{1.0, 1.0, 0.1, 0.0}}) {
       const auto reference = sums(FilterPath::kScalar, scaled, k, scene, c);
       ASSERT_EQ(reference.size(), scene.count);
       for (FilterPath path : {FilterPath::kSse2, FilterPath::kAvx2}) {
@@ -207,15 +208,17 @@ PairSums expected(const Scene& scene, const Candidates& c, std::size_t s, bool s
                          ? 1.0
                          : std::abs(me[5] * other[5] + me[6] * other[6] + me[7] * other[7]);
     const double u = d2 / (2 * si * si);
-    const double eij = u < 4.5 ? k.alpha * w * std::exp(-u) * (1 - u / 4.5) : 0.0;
+    // The taper (1 − |r|²/9σ²) or, switched off, the plain Gaussian (still cut off at 3σ).
+    const auto taper = [&](double factor) { return k.taper > 0 ? factor : 1.0; };
+    const double eij = u < 4.5 ? k.alpha * w * std::exp(-u) * taper(1 - u / 4.5) : 0.0;
     double force;
     if (scaled) {
       // P_i = σ_i Σ_j (r_ij/σ_ij) 2E(r_ij; σ_ij) (FloaterOptions::scaled_repulsion).
       const double sij = (si + sj) / 2, x = d2 / (sij * sij);
-      force = x < 9 ? 2 * (si / sij) * k.alpha * w * std::exp(-x / 2) * (1 - x / 9) : 0.0;
+      force = x < 9 ? 2 * (si / sij) * k.alpha * w * std::exp(-x / 2) * taper(1 - x / 9) : 0.0;
     } else {
       const double x = d2 / (sj * sj);
-      const double eji = x < 9 ? k.alpha * w * std::exp(-x / 2) * (1 - x / 9) : 0.0;
+      const double eji = x < 9 ? k.alpha * w * std::exp(-x / 2) * taper(1 - x / 9) : 0.0;
       force = eij + (si / sj) * (si / sj) * eji;
     }
     sum.e += eij;
@@ -233,7 +236,8 @@ TEST(PairBatch, SumsFollowTheFormulas) {
   // No coincident floaters here (the next test is about those).
   for (std::size_t s = 7; s < scene.count; s += 7) scene.records[kRecordFields * s] += 0.01;
   const Candidates c = make_candidates(8, scene.count);
-  for (const PairConstants k : {PairConstants{1.5, 1.0, 0.2}, PairConstants{0.5, 0.0, 0.0}})
+  for (const PairConstants k : {PairConstants{1.5, 1.0, 0.2}, PairConstants{0.5, 0.0, 0.0},
+                                PairConstants{1.5, 1.0, 0.2, 0.0}})
     for (bool scaled : {true, false}) {
       const auto got = sums(best_filter_path(), scaled, k, scene, c);
       for (std::size_t s = 0; s < scene.count; ++s) {

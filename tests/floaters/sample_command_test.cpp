@@ -63,7 +63,8 @@ TEST_F(SampleCommand, ExtensionsCanBeSwitchedOff) {
   const auto r =
       run("sample planes --max-count 200 --steps 20 --no-cos-weight --no-snap "
           "--no-clip-projection --plain-repulsion --grading 0 --radius-adapt wh "
-          "--ascii -o " +
+          "--no-clip-newton --no-average-mu --no-local-radius --no-taper --no-fission-offset "
+          "--feedback 20 --equilibrium-speed 3 --estimator-interval 5 --ascii -o " +
           path("p.ply") + " --stats " + path("p.json"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::ifstream in(path("p.json"));
@@ -73,6 +74,12 @@ TEST_F(SampleCommand, ExtensionsCanBeSwitchedOff) {
   EXPECT_FALSE(o["clip_projection"].get<bool>());
   EXPECT_FALSE(o["scaled_repulsion"].get<bool>());
   EXPECT_EQ(o["radius_adapt"], "wh");
+  for (const char* key : {"clip_newton", "average_radius_factor", "local_nominal_radius",
+                          "energy_taper", "fission_offset"})
+    EXPECT_FALSE(o[key].get<bool>()) << key;
+  EXPECT_EQ(o["feedback"], 20);
+  EXPECT_EQ(o["equilibrium_speed"], 3);
+  EXPECT_EQ(o["estimator_interval"], 5);
 }
 
 TEST_F(SampleCommand, ReadsFloaterSettingsFromASceneFile) {
@@ -100,6 +107,15 @@ TEST_F(SampleCommand, BadInputExitsWithTwoAndWritesNothing) {
       {"sample kummer --radius nan" + out, "--radius"},
       {"sample kummer --max-count 0" + out, "--max-count"},
       {"sample kummer --radius-adapt fast" + out, "--radius-adapt"},
+      {"sample kummer --feedback 70" + out, "--feedback"},
+      {"sample kummer --feedback -1" + out, "--feedback"},
+      {"sample kummer --feedback nan" + out, "--feedback"},
+      {"sample kummer --equilibrium-speed 0" + out, "--equilibrium-speed"},
+      {"sample kummer --equilibrium-speed 20" + out, "--equilibrium-speed"},
+      {"sample kummer --estimator-interval 0" + out, "--estimator-interval"},
+      {"sample kummer --estimator-interval 5000" + out, "--estimator-interval"},
+      {"sample kummer --estimator-interval 2.5" + out, "--estimator-interval"},
+      {"sample kummer --no-taper=maybe" + out, "--no-taper"},
       {"sample kummer --steps 5 --until-converged" + out, "--until-converged"},
       {"sample kummer --animate mu=1:2" + out, "--steps"},
       {"sample kummer --animate nu=1:2 --steps 5" + out, "nu"},
@@ -120,6 +136,19 @@ TEST_F(SampleCommand, BadInputExitsWithTwoAndWritesNothing) {
   EXPECT_EQ(bad_scene.exit_code, 2);
   EXPECT_NE(bad_scene.output.find("/floaters/max_count"), std::string::npos) << bad_scene.output;
   fs::remove(path("bad.json"));
+  for (const char* entry : {R"("feedback": 100)", R"("equilibrium_speed": -1)",
+                            R"("estimator_interval": 0)", R"("energy_taper": "off")",
+                            R"("clip_newton": 0)"}) {
+    {
+      std::ofstream scene(path("bad.json"));
+      scene << R"({"name": "kummer", "floaters": {)" << entry << "}}";
+    }
+    const auto r = run("sample " + path("bad.json") + out);
+    EXPECT_EQ(r.exit_code, 2) << entry << "\n" << r.output;
+    const std::string key = std::string(entry).substr(1, std::string(entry).find('"', 1) - 1);
+    EXPECT_NE(r.output.find("/floaters/" + key), std::string::npos) << r.output;
+    fs::remove(path("bad.json"));
+  }
   for (const auto& [args, expected] : cases) {
     const auto r = run(args);
     EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;

@@ -14,7 +14,10 @@ using nlohmann::json;
 TEST(FloaterSettings, EveryKeyIsAppliedAndWrittenBack) {
   const json j = json::parse(R"({"max_count": 500, "seed_count": 50, "seed": 9,
       "radius": 0.25, "radius_grading": 0.3, "cos_weight": false, "clip_projection": false,
-      "snap_to_nodes": false, "scaled_repulsion": false, "radius_adapt": "curvature"})");
+      "snap_to_nodes": false, "scaled_repulsion": false, "radius_adapt": "curvature",
+      "feedback": 30, "equilibrium_speed": 2.5, "estimator_interval": 3, "clip_newton": false,
+      "average_radius_factor": false, "local_nominal_radius": false, "energy_taper": false,
+      "fission_offset": false})");
   FloaterOptions o;
   apply_floater_settings(j, o, "s.json");
   EXPECT_EQ(o.max_count, 500u);
@@ -27,6 +30,14 @@ TEST(FloaterSettings, EveryKeyIsAppliedAndWrittenBack) {
   EXPECT_FALSE(o.snap_to_nodes);
   EXPECT_FALSE(o.scaled_repulsion);
   EXPECT_EQ(o.radius_adapt, RadiusAdapt::kCurvature);
+  EXPECT_EQ(o.feedback, 30);
+  EXPECT_EQ(o.equilibrium_speed, 2.5);
+  EXPECT_EQ(o.estimator_interval, 3);
+  EXPECT_FALSE(o.clip_newton);
+  EXPECT_FALSE(o.average_radius_factor);
+  EXPECT_FALSE(o.local_nominal_radius);
+  EXPECT_FALSE(o.energy_taper);
+  EXPECT_FALSE(o.fission_offset);
   EXPECT_EQ(floater_settings_to_json(o), j);
   // Missing keys keep their value.
   FloaterOptions kept = o;
@@ -47,6 +58,19 @@ TEST(FloaterSettings, MalformedEntriesAreRefusedWithTheirPointer) {
       {R"({"radius_grading": "a"})", "/floaters/radius_grading"},
       {R"({"cos_weight": 1})", "/floaters/cos_weight"},
       {R"({"radius_adapt": "fast"})", "/floaters/radius_adapt"},
+      {R"({"feedback": -1})", "/floaters/feedback"},
+      {R"({"feedback": 70})", "/floaters/feedback: must lie in [0, 66.6667)"},
+      {R"({"feedback": "strong"})", "/floaters/feedback"},
+      {R"({"equilibrium_speed": 0})", "/floaters/equilibrium_speed"},
+      {R"({"equilibrium_speed": 17})", "/floaters/equilibrium_speed"},
+      {R"({"estimator_interval": 0})", "/floaters/estimator_interval"},
+      {R"({"estimator_interval": 1001})", "/floaters/estimator_interval"},
+      {R"({"estimator_interval": 2.5})", "/floaters/estimator_interval"},
+      {R"({"clip_newton": "no"})", "/floaters/clip_newton"},
+      {R"({"average_radius_factor": 0})", "/floaters/average_radius_factor"},
+      {R"({"local_nominal_radius": null})", "/floaters/local_nominal_radius"},
+      {R"({"energy_taper": []})", "/floaters/energy_taper"},
+      {R"({"fission_offset": 1})", "/floaters/fission_offset"},
       {R"({"max_cuont": 5})", "/floaters/max_cuont: unknown key"},
       {R"([2])", "/floaters: expected an object"},
   };

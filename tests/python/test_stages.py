@@ -66,6 +66,23 @@ def test_floaters_equal_the_cli(cli, tmp_path):
     assert f.stats["steps"] == 60
 
 
+def test_floater_switches_equal_the_cli(cli, tmp_path):
+    cli("sample", "cone", "--max-count", "300", "--steps", "40", "--seed", "4", "--no-clip-newton",
+        "--no-average-mu", "--no-local-radius", "--no-taper", "--no-fission-offset",
+        "--feedback", "20", "--equilibrium-speed", "3", "--estimator-interval", "5",
+        "-o", tmp_path / "cli.ply")
+    f = zeroset.Surface("cone").sample(
+        max_count=300, steps=40, seed=4, clip_newton=False, average_radius_factor=False,
+        local_nominal_radius=False, energy_taper=False, fission_offset=False, feedback=20,
+        equilibrium_speed=3, estimator_interval=5)
+    f.save(tmp_path / "py.ply")
+    assert (tmp_path / "py.ply").read_bytes() == (tmp_path / "cli.ply").read_bytes()
+    with pytest.raises(ValueError, match="feedback"):
+        zeroset.Surface("cone").floaters(feedback=100)
+    with pytest.raises(ValueError, match="estimator_interval"):
+        zeroset.Surface("cone").floaters(estimator_interval=0)
+
+
 def test_floaters_step_in_an_animation_loop():
     f = zeroset.Surface("kummer", mu=1.5).floaters(max_count=300, seed=3)
     f.step(30)

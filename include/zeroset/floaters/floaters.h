@@ -67,12 +67,24 @@ struct FloaterOptions {
   double desired_energy_factor = 0.8;  ///< Ê = factor·α
   double radius_rate = 15;             ///< ρ, rate of the radius adaptation
   double radius_damping = 10;          ///< β of A.3, keeps dσ/dt finite for lone floaters
-  double feedback = 15;                ///< φ, pull of the φF term towards F = 0
+  /// φ, pull of the φF term towards F = 0: the distance to F = 0 shrinks by a factor
+  /// (1 − φ·dt) per step, so φ·dt must stay below 2 (validate_settings); φ·dt ≤ 1 does not
+  /// overshoot.
+  double feedback = 15;
   /// The tangential move of one step is at most this fraction of σ_i (stability).
   double max_step_fraction = 0.5;
-  double equilibrium_speed = 4;  ///< γ: near equilibrium when |ṗ_i| < γσ_i
-  // Fission and death use the local nominal radius σ̂_i = min(σ̂, σ_max^i), so floaters made
-  // small near a singular point are not killed for being small.
+  /// γ: near equilibrium when |ṗ_i| < γσ_i. Positive, and at most max_step_fraction/dt: a
+  /// tangential move never exceeds max_step_fraction·σ_i per step, so beyond that every
+  /// floater would count as near equilibrium however fast it moves.
+  double equilibrium_speed = 4;
+  /// Fission and death use the local nominal radius σ̂_i = min(σ̂, σ_max^i), so floaters made
+  /// small near a singular point are not killed for being small. Off: the paper's σ̂ in both
+  /// tests (docs/algorithms.md A.7), so floaters below δσ̂ near a singular point die.
+  bool local_nominal_radius = true;
+  /// The fission child starts at a random tangential offset of 0.25σ_i to 0.5σ_i. Off:
+  /// Witkin–Heckbert's plain split, the child where its parent is (the pair forces separate
+  /// the twins along a direction derived from their ids).
+  bool fission_offset = true;
   double fission_energy_factor = 0.2;  ///< ν: energised fission when E_i > νÊ and σ_i > σ̂_i
   double death_radius_factor = 0.7;    ///< δ: death candidate when σ_i < δσ̂_i
   double max_radius_factor = 1.5;      ///< σ_max = factor·σ̂ (fission whenever σ_i > σ_max^i)
@@ -82,16 +94,28 @@ struct FloaterOptions {
   /// dense side always pushes floaters towards the sparse side, and fission there and death
   /// elsewhere never stop. false: A.2 exactly.
   bool scaled_repulsion = true;
+  /// The energy's taper (1 − |r|²/9σ²), which takes E_ij and its force to zero at the cutoff
+  /// 3σ. Off: Witkin–Heckbert's plain Gaussian α e^(−|r|²/2σ²), still cut off at 3σ (where it
+  /// has fallen to 1.1% of its peak) so the neighbour search stays finite.
+  bool energy_taper = true;
 
   // --- Rösch–Ruhl–Saupe 97 extensions (each can be switched off) ------------------------------
   /// §3.2: a floater that leaves the clip volume is projected back onto its boundary (then
   /// moved along the boundary onto F = 0, so it stays on the surface). Off: it is removed
   /// (the unclipped method loses floaters over the boundary).
   bool clip_projection = true;
+  /// After that projection, up to two Newton steps along the clip boundary put the floater on
+  /// the curve F = 0 ∩ ∂clip (docs/algorithms.md A.6). Off: the paper's projection alone, and
+  /// floaters on the boundary stay off F = 0 (pushed out and projected back every step).
+  bool clip_newton = true;
   /// §3.3: E_ij is weighted by |cos(∇F_i, ∇F_j)|, so sheets pass through each other.
   bool cos_weight = true;
   RadiusAdapt radius_adapt = RadiusAdapt::kMixed;  ///< §3.3: per-particle σ_max^i = μ_i σ_max
-  /// α_i and β_i (and node snapping) are refreshed every this many steps (≥ 1).
+  /// μ_i is averaged with its previous value at each refresh, μ_i ← (μ_i + clamp(f))/2, since
+  /// α_i comes from random perimeter points. Off: the paper's μ_i = clamp(f), the estimate of
+  /// this refresh alone.
+  bool average_radius_factor = true;
+  /// α_i and β_i (and node snapping) are refreshed every this many steps (in [1, 1000]).
   int estimator_interval = 8;
   int curvature_samples = 4;  ///< random perimeter points for α_i
   /// γ_s of β_i = min(|r|/γ_s, 1), in world units. 0: scene_radius/3 (= 1 on the paper's

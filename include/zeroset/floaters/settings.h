@@ -5,11 +5,16 @@
 ///
 ///   "floaters": {"max_count": 2000, "radius": 0, "seed": 1, "seed_count": 200,
 ///                "cos_weight": true, "clip_projection": true, "snap_to_nodes": true,
-///                "scaled_repulsion": true, "radius_grading": 0.1, "radius_adapt": "mixed"}
+///                "scaled_repulsion": true, "radius_grading": 0.1, "radius_adapt": "mixed",
+///                "feedback": 15, "equilibrium_speed": 4, "estimator_interval": 8,
+///                "clip_newton": true, "average_radius_factor": true,
+///                "local_nominal_radius": true, "energy_taper": true, "fission_offset": true}
 ///
 /// Every key is optional; missing ones keep their current value. radius 0 chooses σ̂ from the
-/// surface's area. The command line, scene files and the viewer check these settings with
-/// validate_settings below, so each refuses a bad value with the same words.
+/// surface's area. The booleans are FloaterOptions' switches (false: the paper's or
+/// Witkin–Heckbert's plain rule, see docs/floaters.md). The command line, scene files and the
+/// viewer check these settings with validate_settings below, so each refuses a bad value with
+/// the same words.
 #include <cstddef>
 #include <cstdint>
 #include <nlohmann/json.hpp>
@@ -30,11 +35,18 @@ inline constexpr double kMaxFloaterRadius = 2e6;
 /// The largest radius grading (the growth of the fission radius per neighbour distance; 0.1
 /// by default): beyond a few units it no longer limits anything.
 inline constexpr double kMaxRadiusGrading = 1000;
+/// feedback·dt stays below this: the pull towards F = 0 multiplies the distance by
+/// (1 − feedback·dt) per step, which diverges from 2 on.
+inline constexpr double kMaxFeedbackStep = 2;
+/// The longest estimator interval: beyond it μ_i would hardly ever be refreshed in a run.
+inline constexpr int kMaxEstimatorInterval = 1000;
 
 /// Checks the settings a user gives: radius in [0, kMaxFloaterRadius] (0: chosen from the
 /// surface's area), max_count in [1, kMaxFloaterCount], seed_count in [0, kMaxFloaterCount],
-/// seed in [0, kMaxFloaterSeed], radius_grading in [0, kMaxRadiusGrading]; and the dynamics'
-/// constants that only the library sets (dt, repulsion, the estimators' and convergence settings).
+/// seed in [0, kMaxFloaterSeed], radius_grading in [0, kMaxRadiusGrading], feedback in
+/// [0, kMaxFeedbackStep/dt), equilibrium_speed in (0, max_step_fraction/dt], estimator_interval
+/// in [1, kMaxEstimatorInterval]; and the dynamics' constants that only the library sets (dt,
+/// repulsion, the estimators' and convergence settings).
 /// The one check of FloaterOptions: FloaterSystem runs it too. Throws SettingError naming the key
 /// as the scene file does.
 void validate_settings(const FloaterOptions& options);
