@@ -43,12 +43,12 @@ json scene_keyframes(const json& settings) {
 }
 
 int keyframe_frames(const json& keys) {
-  long long last = 0;
+  double last = 0;  // read_keyframes checks each frame is whole; here only the largest counts
   if (keys.is_array())
     for (const json& k : keys)
-      if (k.is_object() && k.contains("frame") && k["frame"].is_number_integer())
-        last = std::max(last, k["frame"].get<long long>());
-  return static_cast<int>(std::clamp<long long>(last + 1, kDefaultFrames, INT_MAX));
+      if (k.is_object() && k.contains("frame") && k["frame"].is_number())
+        last = std::max(last, k["frame"].get<double>());
+  return static_cast<int>(std::clamp<double>(last + 1, kDefaultFrames, INT_MAX));
 }
 
 }  // namespace detail

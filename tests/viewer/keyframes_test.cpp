@@ -114,6 +114,19 @@ TEST(ViewerKeyframes, ScrubbingAndPlayingFollowTheTracksOfZerosetAnimate) {
   EXPECT_TRUE(s.keyframe_playhead() == 0.0 || s.keyframe_playhead() == 1.0);
 }
 
+TEST(ViewerKeyframes, KeyframesByFrameBeyondTheDefaultCountAreKeptInTheirPlace) {
+  Scene scene = read_scene(write_torus("frames.json"));
+  scene.settings["animation"]["keyframes"][2] = json::parse(R"({"frame": 99, "params": {"R": 1}})");
+  scene.settings["animation"]["keyframes"][1]["frame"] = 33.0;  // whole, written as a float
+  ViewerState s(scene, Mode::kRaytrace, 1);
+  EXPECT_EQ(s.keyframe_frames(), 100);
+  EXPECT_DOUBLE_EQ(s.keyframe_time(1), 1.0 / 3);
+  EXPECT_DOUBLE_EQ(s.keyframe_time(2), 1.0);
+  ASSERT_TRUE(s.add_keyframe(0.5)) << s.status().text;
+  EXPECT_EQ(s.keyframes()[1]["frame"], 33.0);
+  EXPECT_EQ(s.keyframes()[2]["time"], 0.5);
+}
+
 TEST(ViewerKeyframes, SavingWritesTheLoadedKeyframesBackAsTheyCame) {
   const std::string original = write_torus("original.json");
   ViewerState s(read_scene(original), std::nullopt, 1, original);
