@@ -238,6 +238,57 @@ void run_pan(ViewerState& s, const CommandLine& c) {
   s.pan(dx, dy);
 }
 
+Ease parse_ease_name(const std::string& text) {
+  if (const std::optional<Ease> e = find_ease(text)) return *e;
+  throw InvalidArgument("ease", text, "expected linear, in, out or in-out");
+}
+
+std::size_t parse_keyframe_index(const std::string& text) {
+  return static_cast<std::size_t>(parse_integer(text, "keyframe index", 0, 1'000'000'000));
+}
+
+void run_keyframe(ViewerState& s, const CommandLine& c) {
+  const Args& a = c.args;
+  const std::string& what = a[0];
+  const auto count = [&](std::size_t lo, std::size_t hi, const char* usage) {
+    if (a.size() < lo || a.size() > hi)
+      throw InvalidArgument(fmt::format("usage: keyframe {}", usage));
+  };
+  // The optional ease of add and update, checked before anything changes.
+  const auto ease = [&] {
+    return a.size() > 2 ? std::optional<Ease>(parse_ease_name(a[2])) : std::nullopt;
+  };
+  if (what == "add") {
+    count(2, 3, "add TIME [EASE]");
+    const double time = parse_number(a[1], "keyframe time");
+    require(s.add_keyframe(time, ease()));
+  } else if (what == "update") {
+    count(2, 3, "update INDEX [EASE]");
+    const std::size_t index = parse_keyframe_index(a[1]);
+    require(s.update_keyframe(index, ease()));
+  } else if (what == "ease") {
+    count(3, 3, "ease INDEX EASE");
+    const std::size_t index = parse_keyframe_index(a[1]);
+    require(s.set_keyframe_ease(index, parse_ease_name(a[2])));
+  } else if (what == "move") {
+    count(3, 3, "move INDEX TIME");
+    const std::size_t index = parse_keyframe_index(a[1]);
+    require(s.move_keyframe(index, parse_number(a[2], "keyframe time")));
+  } else if (what == "delete") {
+    count(2, 2, "delete INDEX");
+    require(s.delete_keyframe(parse_keyframe_index(a[1])));
+  } else if (what == "clear") {
+    count(1, 1, "clear");
+    s.clear_keyframes();
+  } else if (what == "time") {
+    count(2, 2, "time T");
+    require(s.scrub_keyframes(parse_number(a[1], "keyframe time")));
+  } else {
+    throw InvalidArgument("keyframe", what,
+                          "expected add, update, ease, move, delete, clear or time");
+  }
+}
+
 void run_reset_view(ViewerState& s, const CommandLine&) { s.reset_view(); }
 void run_save_scene(ViewerState& s, const CommandLine& c) { require(s.save_scene(c.args[0])); }
 void run_save_mesh(ViewerState& s, const CommandLine& c) { require(s.save_mesh(c.args[0])); }
@@ -279,6 +330,12 @@ const std::vector<CommandInfo>& command_table() {
        "overlay the singular set: curves as tubes, special points as spheres", run_singular},
       {"lights", 1, 1, "lights follow|fixed", "lights follow the camera, or stay in the world", run_lights},
       {"color", 4, 4, "color front|back|background R G B", "a colour (components in [0, 1])", run_color},
+      {"keyframe", 1, 3,
+       "keyframe add TIME [EASE] | update I [EASE] | ease I EASE | move I TIME | delete I | "
+       "clear | time T",
+       "record keyframes of the parameters and camera (TIME in [0, 1], EASE linear|in|out|in-out; "
+       "time T shows the animation at T)",
+       run_keyframe},
       // camera
       {"camera", 2, 3, "camera AZIMUTH ELEVATION [DISTANCE]", "set the orbit camera (degrees)", run_camera},
       {"orbit", 2, 2, "orbit D_AZIMUTH D_ELEVATION", "turn the camera (degrees)", run_orbit},

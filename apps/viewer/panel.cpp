@@ -137,6 +137,8 @@ void surface_section(ViewerState& state, PanelState& panel) {
   if (ImGui::Button(a.is_playing ? "Pause" : "Play")) {
     if (a.is_playing)
       state.pause();
+    else if (state.has_keyframes())
+      state.play();  // the keyframes, not one parameter
     else
       state.play(animated);
   }
@@ -508,6 +510,7 @@ void draw_panel(ViewerState& state, PanelState& panel, float height) {
     ImGui::PopStyleColor();
   }
   surface_section(state, panel);
+  keyframes_section(state, panel);
   mode_section(state);
   clip_section(state);
   view_section(state);

@@ -83,6 +83,19 @@ void ViewerState::set_mode(Mode mode) {
 
 bool ViewerState::play(std::string_view parameter) {
   return guard("play", [&] {
+    if (has_keyframes()) {
+      if (!parameter.empty())
+        throw InvalidArgument(fmt::format("the keyframes animate this scene, not '{}' alone "
+                                          "(keyframe clear removes them)",
+                                          parameter));
+      (void)keyframe_tracks();  // they still fit the surface
+      animation_.is_playing = true;
+      // Without loop a finished animation stopped at an end: play it back the other way.
+      if ((animation_.direction > 0 && key_time_ >= 1) ||
+          (animation_.direction < 0 && key_time_ <= 0))
+        animation_.direction = -animation_.direction;
+      return;
+    }
     if (surface_.ranges.empty()) throw InvalidArgument("the surface has no parameter to animate");
     std::string name(parameter.empty() ? animation_.parameter : parameter);
     if (name.empty()) name = surface_.ranges.front().name;
@@ -118,6 +131,7 @@ bool ViewerState::set_speed(double ranges_per_second) {
 
 void ViewerState::advance_animation(double dt) {
   if (!animation_.is_playing) return;
+  if (has_keyframes()) return advance_keyframes(dt);
   const int index = surface_.field.parameter_index(animation_.parameter);
   if (index < 0) {
     animation_.is_playing = false;
@@ -304,6 +318,10 @@ json ViewerState::settings() const {
   if (!animation_.parameter.empty()) a["parameter"] = animation_.parameter;
   a["speed"] = animation_.speed;
   a["loop"] = animation_.loop;
+  if (keyframes_.empty())
+    a.erase("keyframes");
+  else
+    a["keyframes"] = keyframes_;
   json& v = s["viewer"];
   if (!v.is_object()) v = json::object();
   v["mode"] = std::string(viewer::to_string(mode_));

@@ -75,6 +75,9 @@ ViewerState::~ViewerState() = default;
 
 void ViewerState::open_scene(Scene scene, const std::string& origin) {
   scene.surface.field.require_parameters();
+  // Keyframes are read as `zeroset animate` reads them, so the viewer opens no scene it refuses.
+  json keys = detail::scene_keyframes(scene.settings);
+  (void)read_keyframes(scene.settings, scene.surface, detail::keyframe_frames(keys), origin);
   // Settings first: a malformed scene must leave the current state untouched.
   const Animation animation = animation_;
   const FloaterOptions floater_options = floater_options_;
@@ -94,6 +97,8 @@ void ViewerState::open_scene(Scene scene, const std::string& origin) {
     throw;
   }
   extra_settings_ = scene.settings.is_object() ? scene.settings : json::object();
+  keyframes_ = std::move(keys);
+  key_time_ = 0;
   surface_ = std::move(scene.surface);
   match_ranges_to_field(surface_);
   clip_is_substitute_ = false;
@@ -292,6 +297,7 @@ bool ViewerState::save_scene(const std::string& path) {
   return guard("save-scene", [&] {
     if (file_extension(path) != "json")
       throw InvalidArgument("scene file", path, "the name must end in .json");
+    (void)keyframe_tracks();  // keyframes the surface no longer fits would make a bad file
     write_scene(scene(), path);
     set_status(fmt::format("saved scene {}", path));
   });

@@ -26,6 +26,7 @@
 #include "zeroset/mesh/polygonize.h"
 #include "zeroset/render/render.h"
 #include "zeroset/render/view.h"
+#include "zeroset/surface/keyframes.h"
 #include "zeroset/surface/scene.h"
 #include "zeroset/surface/singular_set.h"
 
@@ -246,6 +247,41 @@ class ViewerState {
   void set_lights_follow_camera(bool follow);
   bool lights_follow_camera() const;
 
+  // ---- keyframes (viewer_keyframes.cpp) ------------------------------------------------------
+  /// The keyframes as the scene file holds them ("animation"/"keyframes", docs/scenes.md), in
+  /// increasing time; an empty array when there are none. While there are any, play() follows
+  /// them (`speed` animations per second) instead of one parameter.
+  const nlohmann::json& keyframes() const { return keyframes_; }
+  bool has_keyframes() const { return !keyframes_.empty(); }
+  /// Keyframe `index`'s time in [0, 1]; one given by frame is placed as in an animation of
+  /// keyframe_frames() frames.
+  double keyframe_time(std::size_t index) const;
+  /// Keyframe `index`'s ease towards the next (in-out when the entry names none).
+  Ease keyframe_ease(std::size_t index) const;
+  /// The frame count that places keyframes given by frame: `zeroset animate`'s default (60),
+  /// or as many as the last such keyframe needs.
+  int keyframe_frames() const;
+  /// The tracks of the keyframes for the current surface, read as `zeroset animate` reads them.
+  /// Throws BadInput naming the entry when they no longer fit the surface (a parameter the
+  /// equation lost).
+  Keyframes keyframe_tracks() const;
+  /// A keyframe at `time` in [0, 1] with every parameter's value and the camera's azimuth,
+  /// elevation, distance, roll and field of view as they are now; `ease` (default in-out) leads
+  /// to the next one. Refused at the time of an existing keyframe.
+  bool add_keyframe(double time, std::optional<Ease> ease = std::nullopt);
+  /// Keyframe `index` takes the current parameters and camera (and `ease` when given).
+  bool update_keyframe(std::size_t index, std::optional<Ease> ease = std::nullopt);
+  bool set_keyframe_ease(std::size_t index, Ease ease);
+  /// Moves keyframe `index` to `time`; refused when that leaves the keyframes out of order.
+  bool move_keyframe(std::size_t index, double time);
+  bool delete_keyframe(std::size_t index);
+  void clear_keyframes();
+  /// Shows the keyframes at animation time `time` in [0, 1]: their parameters and camera there.
+  /// Stops playing.
+  bool scrub_keyframes(double time);
+  /// The animation time the keyframes were last shown at.
+  double keyframe_playhead() const { return key_time_; }
+
   // ---- camera --------------------------------------------------------------------------------
   /// Sets the size of the 3D view in pixels (the ray caster renders at this size).
   void set_viewport(int width, int height);
@@ -317,6 +353,12 @@ class ViewerState {
   /// (FloaterSystem::set_surface), else new parameter values.
   void surface_changed(bool structure);
   void advance_animation(double dt);
+  /// advance_animation while there are keyframes (viewer_keyframes.cpp).
+  void advance_keyframes(double dt);
+  /// Sets the parameters and camera to the keyframes' at `time` (no guard).
+  void show_keyframes_at(double time);
+  /// Validates `keys` as the scene's keyframes for the current surface, then keeps them.
+  void replace_keyframes(nlohmann::json keys);
   void restart_job();
   void start_preview_job();
   void start_floater_job();
@@ -337,6 +379,8 @@ class ViewerState {
   nlohmann::json extra_settings_ = nlohmann::json::object();  // scene keys we keep as they are
   Mode mode_ = Mode::kRaytrace;
   Animation animation_;
+  nlohmann::json keyframes_ = nlohmann::json::array();  // the scene file's entries, as they are
+  double key_time_ = 0;  // where the keyframes were last shown, in [0, 1]
   FloaterOptions floater_options_;
   MeshSettings mesh_settings_ = kLiveMeshDefaults;
   DisplaySettings display_;

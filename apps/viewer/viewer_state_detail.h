@@ -1,7 +1,8 @@
 #pragma once
 // What the parts of ViewerState share: the floater job's control block and the signal of a
 // failed nested action. Private to the viewer state (viewer_state.cpp, viewer_settings.cpp,
-// viewer_camera.cpp, viewer_jobs.cpp and the command handlers in commands.cpp).
+// viewer_camera.cpp, viewer_jobs.cpp, viewer_keyframes.cpp and the command handlers in
+// commands.cpp).
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
@@ -34,6 +35,12 @@ namespace detail {
 /// note, the search's time and whether it reflects the surface as it is now; {} entries empty
 /// before the first search.
 nlohmann::json singular_json(const SingularFrame* frame, bool is_current);
+
+/// The "animation"/"keyframes" entries of scene settings, an empty array when there are none
+/// (viewer_keyframes.cpp).
+nlohmann::json scene_keyframes(const nlohmann::json& settings);
+/// The frame count that places keyframes given by frame (ViewerState::keyframe_frames).
+int keyframe_frames(const nlohmann::json& keys);
 
 /// Thrown by a command whose action failed (and already set the error status); guard() lets
 /// it pass without a second message.

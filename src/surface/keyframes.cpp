@@ -34,9 +34,7 @@ KeyTrack& track_of(std::vector<KeyTrack>& tracks, const std::string& name) {
 }
 
 Ease ease_from(const json& j, const std::string& origin, const std::string& where) {
-  const std::string name = json_read::string(j, origin, where);
-  for (Ease e : {Ease::kLinear, Ease::kIn, Ease::kOut, Ease::kInOut})
-    if (name == ease_name(e)) return e;
+  if (const std::optional<Ease> e = find_ease(json_read::string(j, origin, where))) return *e;
   fail(origin, where, "expected \"linear\", \"in\", \"out\" or \"in-out\"");
 }
 
@@ -68,6 +66,12 @@ const char* ease_name(Ease e) {
       return "in-out";
   }
   return "linear";
+}
+
+std::optional<Ease> find_ease(std::string_view name) {
+  for (Ease e : {Ease::kLinear, Ease::kIn, Ease::kOut, Ease::kInOut})
+    if (name == ease_name(e)) return e;
+  return std::nullopt;
 }
 
 double KeyTrack::value(double time) const {

@@ -8,6 +8,8 @@
 
 #include "panel.h"
 #include "zeroset/surface/catalog.h"
+#include "zeroset/surface/keyframes.h"
+#include "zeroset/surface/scene.h"
 
 namespace zeroset::viewer {
 namespace {
@@ -85,6 +87,38 @@ TEST(Panel, RandomClicksAndDragsInEveryModeKeepTheViewerWorking) {
   }
   EXPECT_NO_THROW(state.view());
   EXPECT_TRUE(state.command("catalog kummer"));
+}
+
+// With keyframes the Keyframes section is there too: random clicks add, update, move the time
+// of, ease and delete them; whatever happens they stay keyframes `zeroset animate` reads.
+TEST(Panel, RandomClicksOnTheKeyframesKeepThemValid) {
+  const Scene scene = scene_from_json(nlohmann::json::parse(R"j({
+    "equation": "x^2 + y^2 + z^2 - R^2 + a*z^3", "parameters": {"R": 1, "a": 0.1},
+    "clip": ["sphere:2"],
+    "animation": {"keyframes": [{"time": 0, "params": {"R": 0.8}},
+      {"frame": 30, "params": {"R": 1.2}, "camera": {"azimuth_deg": 90}, "ease": "out"},
+      {"time": 1, "params": {"a": -0.2}, "camera": {"distance": 7}}]}})j"), "keys.json");
+  ViewerState state(scene, Mode::kRaytrace, 2);
+  PanelState panel;
+  panel.scene_path = (std::filesystem::temp_directory_path() / "zeroset_panel_keys.json").string();
+  Gui gui;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> x(0, kPanelWidth), y(0, 800), step(-60, 60);
+  const nlohmann::json before = state.keyframes();
+  bool touched = false;
+  for (int i = 0; i < 3000; ++i) {
+    const float x0 = x(rng), y0 = y(rng);
+    if (i % 4 == 0)
+      ASSERT_NO_THROW(gui.drag(state, panel, x0, y0, x0 + step(rng), y0 + step(rng)));
+    else
+      ASSERT_NO_THROW(gui.click(state, panel, x0, y0));
+    touched |= state.keyframes() != before || state.keyframe_playhead() != 0;
+    if (state.has_keyframes())
+      ASSERT_NO_THROW((void)read_keyframes(state.scene().settings, state.surface(),
+                                           state.keyframe_frames(), "panel"))
+          << state.keyframes().dump();
+  }
+  EXPECT_TRUE(touched) << "the clicks reached the Keyframes section";
 }
 
 }  // namespace

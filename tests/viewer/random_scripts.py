@@ -132,6 +132,15 @@ def draw_script(rng, actions, scenes, out_dir):
         (8, lambda: "mode " + rng.choice(["floaters", "mesh", "raytrace"])),
         (3, lambda: "play" + rng.choice(["", " " + rng.choice(PARAMS)])),
         (2, lambda: "pause"),
+        (5, lambda: "keyframe " + rng.choice([
+            "add %s%s" % (rng.choice(["0", "0.25", "0.5", "1", num()]),
+                          rng.choice(["", " in", " out", " linear", " in-out", " bouncy"])),
+            "update %s" % rng.choice(["0", "1", "7", "-1", num()]),
+            "ease %s %s" % (rng.choice(["0", "1", "9"]), rng.choice(["in", "out", "x"])),
+            "move %s %s" % (rng.choice(["0", "1", "2"]),
+                            rng.choice(["0", "0.3", "0.7", "1", num()])),
+            "delete %s" % rng.choice(["0", "1", "5", num()]),
+            "clear", "time %s" % rng.choice(["0", "0.5", "1", num()]), "wobble"])),
         (2, lambda: "loop " + rng.choice(["on", "off", "maybe"])),
         (3, lambda: "speed " + num()),
         (8, lambda: "floaters " + " ".join(

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "render/image_masks.h"
+#include "support/file_bytes.h"
 #include "support/run_command.h"
 #include "zeroset/io/image.h"
 #include "zeroset/render/overlay.h"
@@ -20,6 +21,7 @@
 namespace zeroset {
 namespace {
 
+using test::file_bytes;
 using test::run_command;
 
 // The viewer's default background (linear RGB), see viewer_state.cpp.
@@ -317,6 +319,80 @@ TEST(ViewerWindow, WithoutADisplayItSaysHowToRunHeadless) {
                              " view kummer --frames 1");
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("xvfb-run"), std::string::npos) << r.output;
+}
+
+// ---- keyframes: recorded in the viewer, rendered by `zeroset animate` ---------------------------
+
+const char* kTorusBase = R"j("equation": "(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + y^2)",
+  "parameters": {"R": 0.75, "r": 0.25}, "clip": ["sphere:2"],
+  "camera": {"azimuth_deg": 30, "elevation_deg": 20})j";
+
+// The frames `zeroset animate` renders of `scene` (7 frames, 48x48, one ray per pixel).
+std::vector<std::string> animate_frames(const std::string& scene, const std::string& out) {
+  std::filesystem::remove_all(out);
+  const auto r = run_command(std::string(ZEROSET_BINARY) + " animate " + scene +
+                             " --frames 7 --size 48x48 --aa 1 --no-video -o " + out);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  std::vector<std::string> frames;
+  for (int f = 0; f < 7; ++f)
+    frames.push_back(file_bytes(out + "/frame_000" + std::to_string(f) + ".png"));
+  return frames;
+}
+
+TEST(ViewerWindow, KeyframesRecordedByAScriptAnimateAsTheSameKeyframesWrittenByHand) {
+  if (!has_xvfb()) GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb)";
+  const std::string dir = temp_dir() + "/keyframes";
+  std::filesystem::create_directories(dir);
+  const std::string base = dir + "/base.json", hand = dir + "/hand.json";
+  const std::string recorded = dir + "/recorded.json";
+  std::filesystem::remove(recorded);
+  std::ofstream(base) << "{" << kTorusBase << "}";
+  // Two parameters and the camera at three keyframes; fov 30 and roll 0 are the camera's own.
+  std::ofstream(hand) << "{" << kTorusBase << R"(, "animation": {"keyframes": [
+    {"time": 0, "params": {"R": 0.8, "r": 0.3}, "ease": "in", "camera": {"azimuth_deg": 10,
+     "elevation_deg": 20, "distance": 6, "roll_deg": 0, "fov_deg": 30}},
+    {"time": 0.5, "params": {"R": 1.2, "r": 0.5}, "ease": "out", "camera": {"azimuth_deg": 50,
+     "elevation_deg": 60, "distance": 5.5, "roll_deg": 0, "fov_deg": 30}},
+    {"time": 1, "params": {"R": 1.2, "r": 0.45}, "ease": "linear", "camera": {"azimuth_deg": 100,
+     "elevation_deg": 40, "distance": 5, "roll_deg": 0, "fov_deg": 30}}]}})";
+  // Recorded out of order (the last keyframe first), with bad commands between: each is
+  // refused and the script goes on.
+  const std::string script = write_script(
+      "keyframes.txt",
+      "param R 0.8\nparam r 0.3\ncamera 10 20 6\nkeyframe add 0 in\n"
+      "param R 1.2\nparam r 0.45\ncamera 100 40 5\nkeyframe add 1 linear\n"
+      "param r 0.5\ncamera 50 60 5.5\nkeyframe add 0.5 in-out\n"
+      "keyframe add 0.5\nexpect-error already\n"
+      "keyframe move 1 0\nexpect-error increasing time\n"
+      "keyframe ease 1 bouncy\nexpect-error expected linear, in, out or in-out\n"
+      "keyframe delete 3\nexpect-error expected 0 to 2\n"
+      "keyframe add 2\nexpect-error must lie in [0, 1]\n"
+      "keyframe ease 1 out\n"
+      "keyframe time 0.25\nframes 3\nplay\nframes 5\npause\n"
+      "save-scene " + recorded + "\n");
+  const auto r = view(base + " --no-ui --size 200x200 --script " + script);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::vector<std::string> ours = animate_frames(recorded, dir + "/recorded-frames");
+  const std::vector<std::string> theirs = animate_frames(hand, dir + "/hand-frames");
+  for (int f = 0; f < 7; ++f) {
+    EXPECT_FALSE(ours[f].empty()) << f;
+    EXPECT_TRUE(ours[f] == theirs[f]) << "frame " << f;
+  }
+  EXPECT_FALSE(ours[2] == ours[3]) << "the frames move";
+
+  // A keyframed scene loaded in the viewer and saved: the same frames, and a second save is the
+  // first byte for byte.
+  const std::string once = dir + "/once.json", twice = dir + "/twice.json";
+  std::filesystem::remove(once);
+  std::filesystem::remove(twice);
+  const std::string resave = write_script(
+      "resave.txt", "keyframe time 0.6\nframes 2\nsave-scene " + once + "\nload " + once +
+                        "\nsave-scene " + twice + "\n");
+  const auto r2 = view(hand + " --no-ui --size 200x200 --script " + resave);
+  ASSERT_EQ(r2.exit_code, 0) << r2.output;
+  EXPECT_EQ(file_bytes(twice), file_bytes(once));
+  const std::vector<std::string> resaved = animate_frames(once, dir + "/resaved-frames");
+  for (int f = 0; f < 7; ++f) EXPECT_TRUE(resaved[f] == theirs[f]) << "frame " << f;
 }
 
 }  // namespace

@@ -3,7 +3,9 @@
 /// given at moments of an animation, eased in between. The scene file's
 /// "animation": {"keyframes": [...]} holds them; `zeroset animate` renders them and
 /// `zeroset export --animate` writes them for POV-Ray.
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -26,6 +28,8 @@ enum class Ease {
 double ease(Ease e, double s);
 /// The name in scene files: "linear", "in", "out", "in-out".
 const char* ease_name(Ease e);
+/// The ease of that name (as ease_name gives it), or nullopt.
+std::optional<Ease> find_ease(std::string_view name);
 
 /// One animated value: a parameter's, or a camera field's (`azimuth_deg`, `elevation_deg`,
 /// `distance`, `roll_deg`, `fov_deg`). Held at the first key's value before it and at the last
