@@ -2,6 +2,7 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "zeroset/error.h"
@@ -36,8 +37,8 @@ void validate_settings(const FloaterOptions& o) {
   check(o.radius_grading >= 0 && o.radius_grading <= kMaxRadiusGrading, "radius_grading",
         fmt::format("{}", o.radius_grading),
         fmt::format("must lie in [0, {:g}] (0: off)", kMaxRadiusGrading));
-  // The dynamics' constants (library options; the command line and scene files do not set
-  // them).
+  // The dynamics' constants (library options; scene files set feedback, equilibrium_speed and
+  // estimator_interval, checked above with the rest).
   auto finite = [](double v) { return std::isfinite(v); };
   auto num = [](double v) { return fmt::format("{}", v); };
   check(finite(o.dt) && o.dt > 0, "dt", num(o.dt), "must be positive");
@@ -48,20 +49,23 @@ void validate_settings(const FloaterOptions& o) {
         "must not be negative");
   check(finite(o.radius_damping) && o.radius_damping > 0, "radius_damping",
         num(o.radius_damping), "must be positive");
-  check(finite(o.feedback) && o.feedback >= 0, "feedback", num(o.feedback),
-        "must not be negative");
+  check(finite(o.feedback) && o.feedback >= 0 && o.feedback <= kMaxFeedback, "feedback",
+        num(o.feedback), fmt::format("must lie in [0, {:g}]", kMaxFeedback));
   check(finite(o.max_step_fraction) && o.max_step_fraction > 0, "max_step_fraction",
         num(o.max_step_fraction), "must be positive");
-  check(finite(o.equilibrium_speed) && o.equilibrium_speed >= 0, "equilibrium_speed",
-        num(o.equilibrium_speed), "must not be negative");
+  check(finite(o.equilibrium_speed) && o.equilibrium_speed >= 0 &&
+            o.equilibrium_speed <= kMaxEquilibriumSpeed,
+        "equilibrium_speed", num(o.equilibrium_speed),
+        fmt::format("must lie in [0, {:g}] radii per time unit", kMaxEquilibriumSpeed));
   check(finite(o.fission_energy_factor) && o.fission_energy_factor >= 0, "fission_energy_factor",
         num(o.fission_energy_factor), "must not be negative");
   check(finite(o.death_radius_factor) && o.death_radius_factor >= 0 && o.death_radius_factor < 1,
         "death_radius_factor", num(o.death_radius_factor), "must be in [0, 1)");
   check(finite(o.max_radius_factor) && o.max_radius_factor >= 1, "max_radius_factor",
         num(o.max_radius_factor), "must be at least 1");
-  check(o.estimator_interval >= 1, "estimator_interval", std::to_string(o.estimator_interval),
-        "must be at least 1");
+  check(o.estimator_interval >= 1 && o.estimator_interval <= kMaxEstimatorInterval,
+        "estimator_interval", std::to_string(o.estimator_interval),
+        fmt::format("must lie in [1, {}] steps", kMaxEstimatorInterval));
   check(o.curvature_samples >= 1 && o.curvature_samples <= 64, "curvature_samples",
         std::to_string(o.curvature_samples), "must be between 1 and 64");
   check(finite(o.singular_scale) && o.singular_scale >= 0, "singular_scale",
@@ -96,7 +100,16 @@ void apply_floater_settings(const json& floaters, FloaterOptions& options,
       o.radius = number(value, origin, p);
     else if (key == "radius_grading")
       o.radius_grading = number(value, origin, p);
-    else if (key == "cos_weight")
+    else if (key == "feedback")
+      o.feedback = number(value, origin, p);
+    else if (key == "equilibrium_speed")
+      o.equilibrium_speed = number(value, origin, p);
+    else if (key == "estimator_interval") {
+      const double v = number(value, origin, p);
+      if (v != std::floor(v)) fail(origin, p, "expected a whole number");
+      // Far outside the rule stays so; validate_settings says the rule.
+      o.estimator_interval = static_cast<int>(std::clamp(v, -1e9, 1e9));
+    } else if (key == "cos_weight")
       o.cos_weight = boolean(value, origin, p);
     else if (key == "clip_projection")
       o.clip_projection = boolean(value, origin, p);
@@ -113,7 +126,8 @@ void apply_floater_settings(const json& floaters, FloaterOptions& options,
     } else {
       fail(origin, p,
            "unknown key (known: max_count, seed_count, seed, radius, radius_grading, "
-           "cos_weight, clip_projection, snap_to_nodes, scaled_repulsion, radius_adapt)");
+           "feedback, equilibrium_speed, estimator_interval, cos_weight, clip_projection, "
+           "snap_to_nodes, scaled_repulsion, radius_adapt)");
     }
   }
   try {
@@ -130,6 +144,9 @@ json floater_settings_to_json(const FloaterOptions& o) {
           {"seed", o.seed},
           {"radius", o.radius},
           {"radius_grading", o.radius_grading},
+          {"feedback", o.feedback},
+          {"equilibrium_speed", o.equilibrium_speed},
+          {"estimator_interval", o.estimator_interval},
           {"cos_weight", o.cos_weight},
           {"clip_projection", o.clip_projection},
           {"snap_to_nodes", o.snap_to_nodes},

@@ -14,7 +14,8 @@ using nlohmann::json;
 TEST(FloaterSettings, EveryKeyIsAppliedAndWrittenBack) {
   const json j = json::parse(R"({"max_count": 500, "seed_count": 50, "seed": 9,
       "radius": 0.25, "radius_grading": 0.3, "cos_weight": false, "clip_projection": false,
-      "snap_to_nodes": false, "scaled_repulsion": false, "radius_adapt": "curvature"})");
+      "snap_to_nodes": false, "scaled_repulsion": false, "radius_adapt": "curvature",
+      "feedback": 7.5, "equilibrium_speed": 2, "estimator_interval": 3})");
   FloaterOptions o;
   apply_floater_settings(j, o, "s.json");
   EXPECT_EQ(o.max_count, 500u);
@@ -27,6 +28,9 @@ TEST(FloaterSettings, EveryKeyIsAppliedAndWrittenBack) {
   EXPECT_FALSE(o.snap_to_nodes);
   EXPECT_FALSE(o.scaled_repulsion);
   EXPECT_EQ(o.radius_adapt, RadiusAdapt::kCurvature);
+  EXPECT_EQ(o.feedback, 7.5);
+  EXPECT_EQ(o.equilibrium_speed, 2);
+  EXPECT_EQ(o.estimator_interval, 3);
   EXPECT_EQ(floater_settings_to_json(o), j);
   // Missing keys keep their value.
   FloaterOptions kept = o;
@@ -47,6 +51,13 @@ TEST(FloaterSettings, MalformedEntriesAreRefusedWithTheirPointer) {
       {R"({"radius_grading": "a"})", "/floaters/radius_grading"},
       {R"({"cos_weight": 1})", "/floaters/cos_weight"},
       {R"({"radius_adapt": "fast"})", "/floaters/radius_adapt"},
+      {R"({"feedback": -1})", "/floaters/feedback: must lie in [0, 1000]"},
+      {R"({"feedback": 1001})", "/floaters/feedback: must lie in [0, 1000]"},
+      {R"({"feedback": "strong"})", "/floaters/feedback: expected a number"},
+      {R"({"equilibrium_speed": -0.1})", "/floaters/equilibrium_speed: must lie in [0, 1000]"},
+      {R"({"estimator_interval": 0})", "/floaters/estimator_interval: must lie in [1, 100000]"},
+      {R"({"estimator_interval": 1e12})", "/floaters/estimator_interval: must lie in [1, 100000]"},
+      {R"({"estimator_interval": 2.5})", "/floaters/estimator_interval: expected a whole"},
       {R"({"max_cuont": 5})", "/floaters/max_cuont: unknown key"},
       {R"([2])", "/floaters: expected an object"},
   };

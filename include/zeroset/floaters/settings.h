@@ -5,7 +5,8 @@
 ///
 ///   "floaters": {"max_count": 2000, "radius": 0, "seed": 1, "seed_count": 200,
 ///                "cos_weight": true, "clip_projection": true, "snap_to_nodes": true,
-///                "scaled_repulsion": true, "radius_grading": 0.1, "radius_adapt": "mixed"}
+///                "scaled_repulsion": true, "radius_grading": 0.1, "radius_adapt": "mixed",
+///                "feedback": 15, "equilibrium_speed": 4, "estimator_interval": 8}
 ///
 /// Every key is optional; missing ones keep their current value. radius 0 chooses σ̂ from the
 /// surface's area. The command line, scene files and the viewer check these settings with
@@ -30,11 +31,18 @@ inline constexpr double kMaxFloaterRadius = 2e6;
 /// The largest radius grading (the growth of the fission radius per neighbour distance; 0.1
 /// by default): beyond a few units it no longer limits anything.
 inline constexpr double kMaxRadiusGrading = 1000;
+/// The largest φ (feedback), γ (equilibrium_speed) and estimator interval (steps) a user may
+/// give: far beyond the defaults (15, 4, 8), so the paper's comparisons fit, yet finite.
+inline constexpr double kMaxFeedback = 1000;
+inline constexpr double kMaxEquilibriumSpeed = 1000;
+inline constexpr int kMaxEstimatorInterval = 100'000;
 
 /// Checks the settings a user gives: radius in [0, kMaxFloaterRadius] (0: chosen from the
 /// surface's area), max_count in [1, kMaxFloaterCount], seed_count in [0, kMaxFloaterCount],
-/// seed in [0, kMaxFloaterSeed], radius_grading in [0, kMaxRadiusGrading]; and the dynamics'
-/// constants that only the library sets (dt, repulsion, the estimators' and convergence settings).
+/// seed in [0, kMaxFloaterSeed], radius_grading in [0, kMaxRadiusGrading], feedback in
+/// [0, kMaxFeedback], equilibrium_speed in [0, kMaxEquilibriumSpeed], estimator_interval in
+/// [1, kMaxEstimatorInterval]; and the dynamics' constants that only the library sets (dt,
+/// repulsion, the estimators' and convergence settings).
 /// The one check of FloaterOptions: FloaterSystem runs it too. Throws SettingError naming the key
 /// as the scene file does.
 void validate_settings(const FloaterOptions& options);
