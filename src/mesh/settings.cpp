@@ -119,7 +119,8 @@ void apply_mesh_settings(const json& mesh, MeshSettings& settings, const std::st
     auto whole_number = [&](const char* key) {
       const json& v = mesh[key];
       const double c = v.is_number() ? v.get<double>() : std::nan("");
-      if (!(c == std::floor(c))) json_read::fail(origin, base + "/" + key, "expected a whole number");
+      if (!(c == std::floor(c)))
+        json_read::fail(origin, base + "/" + key, "expected a whole number");
       return static_cast<int>(std::clamp(c, -1e9, 1e9));
     };
     if (mesh.contains("cells")) m.cells = whole_number("cells");

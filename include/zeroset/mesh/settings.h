@@ -9,9 +9,10 @@
 ///
 /// "improve" is true or "auto" (until at rest), false or "off", or a number of steps (at
 /// most). The other keys are the switches of `zeroset mesh` (docs/meshing.md) and κ_d, the
-/// weight of the curvature estimator (docs/algorithms.md, the mesh improver). Every key is optional; missing ones keep their current value. The command line,
-/// scene files and the viewer check these settings with validate_settings below, so each
-/// refuses a bad value with the same words.
+/// weight of the curvature estimator (docs/algorithms.md, the mesh improver). Every key is
+/// optional; missing ones keep their current value. The command line, scene files and the
+/// viewer check these settings with validate_settings below, so each refuses a bad value with
+/// the same words.
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
