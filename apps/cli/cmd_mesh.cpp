@@ -47,6 +47,10 @@ struct MeshArgs {
   CLI::Option* resolution_opt = nullptr;
   CLI::Option* improve_opt = nullptr;
   CLI::Option* boundary_opt = nullptr;
+  CLI::Option* grid_opt = nullptr;
+  CLI::Option* refine_steps_opt = nullptr;
+  CLI::Option* curvature_weight_opt = nullptr;
+  double curvature_weight = MeshSettings{}.curvature_weight;
 };
 
 // Settings from a scene file's "mesh" object (as the viewer saves them, or with improve as
@@ -62,9 +66,24 @@ MeshSettings settings_from(const MeshArgs& a, const Scene& scene) {
         if (a.resolution_opt->count()) m.cells = a.resolution;
         if (a.improve_opt->count()) apply_improve(a.improve, m);
         if (a.boundary_opt->count()) m.boundary = parse_boundary(a.boundary);
+        if (a.grid_opt->count()) m.grid = parse_grid(a.grid);
+        if (a.refine_steps_opt->count()) m.refine_steps = a.refine_steps;
+        if (a.curvature_weight_opt->count()) m.curvature_weight = a.curvature_weight;
+        // The switches turn off what the scene may have on.
+        if (a.no_curvature) m.curvature = false;
+        if (a.no_singularity) m.singularity = false;
+        if (a.no_flips) m.flips = false;
+        if (a.no_find_singular) m.find_singular = false;
+        if (a.no_crossings) m.crossings = false;
+        if (a.no_curves) m.curves = false;
         validate_settings(m);
       },
-      {{"cells", "--resolution"}, {"improve", "--improve"}, {"boundary", "--boundary"}});
+      {{"cells", "--resolution"},
+       {"improve", "--improve"},
+       {"boundary", "--boundary"},
+       {"grid", "--grid"},
+       {"refine_steps", "--refine-steps"},
+       {"curvature_weight", "--curvature-weight"}});
   return m;
 }
 
@@ -146,21 +165,11 @@ void run_mesh(const MeshArgs& a) {
   const MeshSettings settings = settings_from(a, scene);
   const int resolution = settings.cells;
 
-  PolygonizeOptions po;
-  po.cells = resolution;
+  PolygonizeOptions po = polygonize_options(settings);
   po.threads = global_flags().threads;
-  po.refine_steps = a.refine_steps;
-  if (a.grid == "dense") po.mode = GridMode::kDense;
-  else if (a.grid == "sparse") po.mode = GridMode::kSparse;
-  else if (a.grid != "auto") throw InvalidArgument("--grid", a.grid, "use auto, dense or sparse");
-  ImproveOptions io;
-  io.boundary = settings.boundary;
-  io.use_curvature = !a.no_curvature;
-  io.use_singularity = !a.no_singularity;
-  io.flip_edges = !a.no_flips;
-  io.find_singular_points = !a.no_find_singular;
+  ImproveOptions io = improve_options(settings, ImproveOptions{}.max_steps);
   io.threads = global_flags().threads;
-  const int max_steps = settings.improve ? settings.max_improve_steps.value_or(io.max_steps) : 0;
+  const int max_steps = io.max_steps;
   check_grid_memory(surface, po, "--resolution");
 
   // Searched for --stats as well: it costs milliseconds, next to the mesh's seconds.
@@ -212,7 +221,7 @@ void run_mesh(const MeshArgs& a) {
     say(fmt::format("{}: the grid of {} cells found no surface inside the clip", surface.label(), resolution));
   // F ≡ 0 was warned about; its "sheet" of vanishing ∇F is the whole clip, nothing to add.
   if (!survey.vanishes_identically()) warn_if_singular_sheet(surface, singular);
-  if (!a.no_crossings && !mesh.empty()) {
+  if (settings.crossings && !mesh.empty()) {
     const CrossingStats cs = mesh_crossings(mesh, surface, ps.cell_size);
     stats["crossings"] = {{"crossing_curves", cs.crossing_curves},
                           {"isolated_curves", cs.isolated_curves},
@@ -266,6 +275,7 @@ void run_mesh(const MeshArgs& a) {
                         {"undefined_vertices", is.undefined_vertices},
                         {"boundary", std::string(to_string(settings.boundary))},
                         {"curvature", io.use_curvature},
+                        {"curvature_weight", io.curvature_weight},
                         {"singularity", io.use_singularity},
                         {"flips", io.flip_edges},
                         {"find_singular_points", io.find_singular_points},
@@ -277,7 +287,7 @@ void run_mesh(const MeshArgs& a) {
     stats["quality_after"] = quality_json(*after);
     stats["topology_after"] = topology_json(mesh);
   }
-  if (a.no_curves) mesh.curves.clear();
+  if (!settings.curves) mesh.curves.clear();
   // The mesher never makes degenerate output (a test sweeps for it); if it ever did, say so.
   if (const DegenerateCount d = count_degenerate(mesh); d.zero_area_triangles + d.coincident_vertices > 0)
     warn(fmt::format("{}: the mesh has {} triangles of zero area and {} vertices on top of "
@@ -332,14 +342,18 @@ void register_mesh_command(CLI::App& app) {
       cmd->add_option("-r,--resolution", args->resolution,
                       "Grid cells along the longest side of the clip's bounding box")
           ->capture_default_str();
-  cmd->add_option("--grid", args->grid,
-                  "auto, dense (sample every node) or sparse (bricks near the surface only)")
-      ->capture_default_str();
-  cmd->add_option("--refine-steps", args->refine_steps,
-                  "Steps placing each vertex onto F = 0 along its grid edge, one evaluation of F "
-                  "each (0: linear interpolation, as classic marching cubes)")
-      ->check(CLI::Range(0, 64))
-      ->capture_default_str();
+  args->grid_opt =
+      cmd->add_option("--grid", args->grid,
+                      "auto, dense (sample every node) or sparse (bricks near the surface only)")
+          ->type_name("auto|dense|sparse")
+          ->capture_default_str();
+  args->refine_steps_opt =
+      cmd->add_option("--refine-steps", args->refine_steps,
+                      fmt::format("Steps placing each vertex onto F = 0 along its grid edge, one "
+                                  "evaluation of F each (0: linear interpolation, as classic "
+                                  "marching cubes; at most {})",
+                                  kMaxRefineSteps))
+          ->capture_default_str();
   args->improve_opt =
       cmd->add_option("--improve", args->improve,
                       "auto (until every vertex is slower than the threshold), off, or at most "
@@ -353,6 +367,12 @@ void register_mesh_command(CLI::App& app) {
           ->capture_default_str();
   cmd->add_flag("--no-curvature", args->no_curvature,
                 "Springs without the curvature estimator (paper eq. 6)");
+  args->curvature_weight_opt =
+      cmd->add_option("--curvature-weight", args->curvature_weight,
+                      fmt::format("kappa_d, the weight of the curvature estimator in the spring "
+                                  "lengths (0 to {:g})",
+                                  kMaxCurvatureWeight))
+          ->capture_default_str();
   cmd->add_flag("--no-singularity", args->no_singularity,
                 "Springs without the singularity estimator");
   cmd->add_flag("--no-flips", args->no_flips, "No Delaunay edge flips (vertex motion only)");

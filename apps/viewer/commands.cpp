@@ -7,6 +7,7 @@
 #include <charconv>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <tuple>
 
 #include "viewer_state.h"
@@ -76,69 +77,69 @@ std::pair<std::string, std::string> split_key_value(const std::string& kv, const
   return {kv.substr(0, eq), kv.substr(eq + 1)};
 }
 
+// A value as the scene file has it: on/off (and the other words parse_on_off takes) for a key
+// that is true or false now, and for the mesh's improve (true, false or steps); else a JSON
+// number, true or false as written; any other text is a string ("fix", "sparse", "mixed").
+// The scene file's reader then checks it with its words.
+nlohmann::json setting_value(const std::string& key, const std::string& text,
+                             const nlohmann::json& current) {
+  if (current.is_boolean() || key == "improve") {
+    try {
+      return parse_on_off(text, key);
+    } catch (const InvalidArgument&) {
+    }
+  }
+  nlohmann::json j = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (!j.is_discarded() && (j.is_number() || j.is_boolean() || j.is_string())) return j;
+  return text;
+}
+
+// KEY=VALUE... as entries of the scene file's `object`; `max_steps` takes the mesh's
+// viewer-only key of that name.
+nlohmann::json settings_entries(ViewerState& s, const char* object, const Args& args,
+                                std::optional<int>* max_steps = nullptr) {
+  const nlohmann::json current = s.settings_object(object);
+  nlohmann::json entries = nlohmann::json::object();
+  for (const auto& kv : args) {
+    const auto [key, value] = split_key_value(kv, object);
+    if (max_steps && key == "max_steps") {
+      // The range is the library's validator's (set_settings).
+      constexpr long long kMost = std::numeric_limits<int>::max();
+      *max_steps = static_cast<int>(parse_integer(value, key, -kMost, kMost));
+      continue;
+    }
+    entries[key] = setting_value(key, value, current.contains(key) ? current[key] : nullptr);
+  }
+  return entries;
+}
+
 void run_floaters(ViewerState& s, const CommandLine& c) {
   if (c.args.size() == 1 && c.args[0] == "reset") {
     s.reset_floaters();
     return;
   }
-  // The values' types here; their ranges are the library's validator's (set_floater_options).
-  constexpr long long kMost = std::numeric_limits<long long>::max();
-  FloaterOptions o = s.floater_options();
-  for (const auto& kv : c.args) {
-    const auto [key, value] = split_key_value(kv, "floaters");
-    if (key == "max_count")
-      o.max_count = static_cast<std::size_t>(parse_integer(value, key, 0, kMost));
-    else if (key == "seed_count")
-      o.seed_count = static_cast<std::size_t>(parse_integer(value, key, 0, kMost));
-    else if (key == "seed")
-      o.seed = static_cast<std::uint64_t>(parse_integer(value, key, 0, kMost));
-    else if (key == "radius")
-      o.radius = parse_number(value, key);
-    else if (key == "radius_grading")
-      o.radius_grading = parse_number(value, key);
-    else if (key == "cos_weight")
-      o.cos_weight = parse_on_off(value, key);
-    else if (key == "clip_projection")
-      o.clip_projection = parse_on_off(value, key);
-    else if (key == "snap_to_nodes")
-      o.snap_to_nodes = parse_on_off(value, key);
-    else if (key == "scaled_repulsion")
-      o.scaled_repulsion = parse_on_off(value, key);
-    else if (key == "radius_adapt")
-      o.radius_adapt = parse_radius_adapt(value, key);
-    else
-      throw InvalidArgument(fmt::format(
-          "floaters: unknown key '{}' (max_count, seed_count, seed, radius, radius_grading, "
-          "cos_weight, clip_projection, snap_to_nodes, scaled_repulsion, radius_adapt)", key));
-  }
-  require(s.set_floater_options(o));
+  require(s.set_settings("floaters", settings_entries(s, "floaters", c.args), "floaters"));
 }
 
 void run_mesh(ViewerState& s, const CommandLine& c) {
-  // The values' types here; their ranges are the library's validator's (set_mesh_settings).
-  constexpr long long kMost = std::numeric_limits<int>::max();
-  MeshSettings m = s.mesh_settings();
-  for (const auto& kv : c.args) {
-    const auto [key, value] = split_key_value(kv, "mesh");
-    if (key == "cells") {
-      m.cells = static_cast<int>(parse_integer(value, key, -kMost, kMost));
-    } else if (key == "improve") {
-      // on and off as every on/off setting of the viewer; auto, off or steps as scene files.
-      try {
-        m.improve = parse_on_off(value, key);
-      } catch (const InvalidArgument&) {
-        apply_improve(value, m);
-      }
-    } else if (key == "max_steps") {
-      m.max_improve_steps = static_cast<int>(parse_integer(value, key, -kMost, kMost));
-    } else if (key == "boundary") {
-      m.boundary = parse_boundary(value);
-    } else {
-      throw InvalidArgument(
-          fmt::format("mesh: unknown key '{}' (cells, improve, max_steps, boundary)", key));
-    }
-  }
-  require(s.set_mesh_settings(m));
+  std::optional<int> max_steps;
+  const nlohmann::json entries = settings_entries(s, "mesh", c.args, &max_steps);
+  require(s.set_settings("mesh", entries, "mesh", max_steps));
+}
+
+// set floaters.KEY VALUE | set mesh.KEY VALUE: one key of the scene file's object.
+void run_set(ViewerState& s, const CommandLine& c) {
+  const std::string& name = c.args[0];
+  const size_t dot = name.find('.');
+  const std::string object = name.substr(0, dot);
+  if (dot == std::string::npos || dot + 1 == name.size() ||
+      (object != "floaters" && object != "mesh"))
+    throw InvalidArgument("set", name, "expected floaters.KEY or mesh.KEY");
+  const std::string key = name.substr(dot + 1);
+  const nlohmann::json current = s.settings_object(object);
+  const nlohmann::json value =
+      setting_value(key, c.args[1], current.contains(key) ? current[key] : nullptr);
+  require(s.set_settings(object, {{key, value}}, "set"));
 }
 
 void run_draw(ViewerState& s, const CommandLine& c) {
@@ -317,11 +318,15 @@ const std::vector<CommandInfo>& command_table() {
       {"loop", 1, 1, "loop on|off", "animate back and forth, or stop at the end", run_loop},
       {"speed", 1, 1, "speed RANGES_PER_SECOND", "animation speed (0.1: one sweep in 10 s)", run_speed},
       {"floaters", 1, -1, "floaters KEY=VALUE... | floaters reset",
-       "max_count, radius (σ̂, 0 auto), cos_weight, radius_adapt (wh|curvature|singular|mixed), "
-       "clip_projection, snap_to_nodes, scaled_repulsion, seed, seed_count, radius_grading",
+       "keys of the scene file's floaters object: max_count, radius (σ̂, 0 auto), cos_weight, "
+       "radius_adapt (wh|curvature|singular|mixed), feedback (φ), equilibrium_speed (γ), ...",
        run_floaters},
       {"mesh", 1, -1, "mesh KEY=VALUE...",
-       "cells, improve (on|off|auto|STEPS), max_steps, boundary (fix|constrain)", run_mesh},
+       "keys of the scene file's mesh object: cells, improve (on|off|auto|STEPS), boundary "
+       "(fix|constrain), grid, curvature_weight (κ_d), ...; and max_steps",
+       run_mesh},
+      {"set", 2, 2, "set floaters.KEY|mesh.KEY VALUE",
+       "one setting by its scene file key, checked as in scene files", run_set},
       {"draw", 1, 1, "draw disks|points", "how floaters are drawn", run_draw},
       {"disk-scale", 1, 1, "disk-scale S", "disk radius as a multiple of the floater radius", run_disk_scale},
       {"point-size", 1, 1, "point-size PIXELS", "size of floaters drawn as points", run_point_size},

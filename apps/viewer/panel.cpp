@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "settings_panel.h"
 #include "zeroset/expr/field.h"
 #include "zeroset/surface/catalog.h"
 
@@ -18,13 +19,6 @@ namespace {
 const ImVec4 kErrorColor(0.95f, 0.35f, 0.3f, 1.0f);
 const ImVec4 kDimColor(0.65f, 0.67f, 0.72f, 1.0f);
 const ImVec4 kNoteColor(0.95f, 0.75f, 0.3f, 1.0f);
-
-constexpr std::array<RadiusAdapt, 4> kAdaptModes = {RadiusAdapt::kWitkinHeckbert,
-                                                    RadiusAdapt::kCurvature,
-                                                    RadiusAdapt::kSingular, RadiusAdapt::kMixed};
-constexpr std::array<const char*, 4> kAdaptLabels = {
-    "Witkin-Heckbert (one sigma_max)", "curvature (alpha)", "singularity (beta)",
-    "mixed alpha/3 + 2 beta/3 (paper)"};
 
 // ImGui aborts on slider bounds beyond ±DBL_MAX/2 (±FLT_MAX/2 for floats), and computes
 // max − min: every bound is clamped to a finite span first, those of doubles to the parameter
@@ -166,43 +160,7 @@ void floaters_settings(ViewerState& state) {
                        "off F = 0: still finding the surface, or it has no point\n"
                        "inside the clip (or F is undefined there)");
 
-  FloaterOptions o = state.floater_options();
-  bool changed = false;
-  int max_count = static_cast<int>(std::min<std::size_t>(o.max_count, 200000));
-  if (ImGui::SliderInt("Max count", &max_count, 50, 200000, "%d", ImGuiSliderFlags_Logarithmic)) {
-    o.max_count = static_cast<std::size_t>(std::max(max_count, 1));
-    changed = true;
-  }
-  double radius = o.radius;
-  const double radius_max = slider_bound(state.surface().scene_radius() / 4);
-  const double zero = 0;
-  if (ImGui::SliderScalar("Density", ImGuiDataType_Double, &radius, &zero, &radius_max,
-                          radius == 0 ? "auto" : "%.4f")) {
-    o.radius = radius;
-    changed = true;
-  }
-  help_marker("The nominal repulsion radius sigma-hat: smaller means denser. 0 (auto) chooses "
-              "it from the surface's area so that about half of Max count cover it.");
-  changed |= ImGui::Checkbox("Cosine weighting", &o.cos_weight);
-  help_marker("Weight repulsion by |cos| of the angle between normals, so sheets crossing at a "
-              "self-intersection pass through each other (paper 3.3).");
-  changed |= ImGui::Checkbox("Snap to nodes", &o.snap_to_nodes);
-  help_marker("A floater that comes near a node (an isolated singular point) moves onto it and "
-              "stays there, following it while parameters move.");
-  changed |= ImGui::Checkbox("Clip projection", &o.clip_projection);
-  help_marker("Floaters leaving the clip volume are projected back onto its boundary "
-              "(paper 3.2); off: they are removed.");
-  int adapt = static_cast<int>(std::find(kAdaptModes.begin(), kAdaptModes.end(), o.radius_adapt) -
-                               kAdaptModes.begin());
-  if (ImGui::Combo("Adaptation", &adapt, kAdaptLabels.data(),
-                   static_cast<int>(kAdaptLabels.size()))) {
-    o.radius_adapt = kAdaptModes[static_cast<size_t>(adapt)];
-    changed = true;
-  }
-  help_marker("How each floater's largest radius before fission is chosen (paper 3.3): from the "
-              "curvature, from the distance to a singular point, or both; denser sampling "
-              "near nodes and creases.");
-  if (changed) state.set_floater_options(o);
+  draw_setting_widgets(state, "floaters");
   if (ImGui::Button("Reset floaters")) state.reset_floaters();
 
   DisplaySettings d = state.display();
@@ -249,19 +207,7 @@ void mesh_settings(ViewerState& state) {
   }
   if (st.is_busy) ImGui::TextColored(kDimColor, "working...");
 
-  MeshSettings m = state.mesh_settings();
-  ImGui::SliderInt("Cells", &m.cells, 8, 256);
-  if (ImGui::IsItemDeactivatedAfterEdit()) state.set_mesh_settings(m);
-  help_marker("Marching cubes cells along the longest side of the clip box.");
-  if (ImGui::Checkbox("Improve", &m.improve)) state.set_mesh_settings(m);
-  help_marker("Run the paper's improver after marching cubes: a spring-mass system on F = 0 "
-              "that pulls vertices into creases and singular points.");
-  int steps = m.max_improve_steps.value_or(kLiveImproveSteps);
-  ImGui::SliderInt("Max steps", &steps, 1, 2000, "%d", ImGuiSliderFlags_Logarithmic);
-  if (ImGui::IsItemDeactivatedAfterEdit()) {
-    m.max_improve_steps = steps;
-    state.set_mesh_settings(m);
-  }
+  draw_setting_widgets(state, "mesh");
   DisplaySettings d = state.display();
   if (ImGui::Checkbox("Wireframe", &d.wireframe)) state.set_display(d);
 }

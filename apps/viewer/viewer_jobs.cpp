@@ -291,15 +291,15 @@ void ViewerState::start_floater_job() {
 }
 
 void ViewerState::start_mesh_job() {
-  PolygonizeOptions options;
-  options.cells = mesh_settings_.cells;
+  // The same options as `zeroset mesh` makes from the same settings.
+  PolygonizeOptions options = polygonize_options(mesh_settings_);
   options.threads = threads_;
   options.compute_normals = true;
-  ImproveOptions improve;
-  improve.max_steps = mesh_settings_.max_improve_steps.value_or(kLiveImproveSteps);
-  improve.boundary = mesh_settings_.boundary;
+  ImproveOptions improve = improve_options(mesh_settings_, kLiveImproveSteps);
   improve.threads = threads_;
-  const bool is_improving = mesh_settings_.improve && improve.max_steps > 0;
+  const bool is_improving = improve.max_steps > 0;
+  const bool with_crossings = mesh_settings_.crossings;
+  const bool with_curves = mesh_settings_.curves;
   const Surface surface = surface_;
   const std::uint64_t generation = generation_;
   Mailbox<MeshFrame>* box = &mesh_box_;
@@ -314,11 +314,13 @@ void ViewerState::start_mesh_job() {
     Mesh mesh = polygonize(surface, options, &polygonize_stats, stop);
     if (stop.stop_requested()) return;
     const CrossingStats crossings =
-        mesh.empty() ? CrossingStats{}
-                     : mesh_crossings(mesh, surface, polygonize_stats.cell_size, {}, nullptr, stop);
+        mesh.empty() || !with_crossings
+            ? CrossingStats{}
+            : mesh_crossings(mesh, surface, polygonize_stats.cell_size, {}, nullptr, stop);
     if (stop.stop_requested()) return;
     auto frame = std::make_shared<MeshFrame>();
     frame->mesh = mesh;
+    if (!with_curves) frame->mesh.curves.clear();
     frame->polygonize = polygonize_stats;
     frame->crossings = crossings;
     frame->is_final = !is_improving;
@@ -335,6 +337,7 @@ void ViewerState::start_mesh_job() {
       if (is_done || wants_frame->exchange(false)) {
         auto next = std::make_shared<MeshFrame>();
         next->mesh = improver.mesh();
+        if (!with_curves) next->mesh.curves.clear();
         compute_field_normals(next->mesh, surface, threads);
         next->polygonize = polygonize_stats;
         next->crossings = crossings;

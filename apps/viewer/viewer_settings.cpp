@@ -183,6 +183,39 @@ bool ViewerState::set_mesh_settings(const MeshSettings& settings) {
   });
 }
 
+bool ViewerState::set_settings(std::string_view object, const json& entries,
+                               std::string_view action, std::optional<int> max_steps) {
+  const std::string origin(action);
+  try {
+    if (object == "floaters") {
+      FloaterOptions o = floater_options_;
+      apply_floater_settings(entries, o, origin);
+      return set_floater_options(o);
+    }
+    if (object == "mesh") {
+      MeshSettings m = mesh_settings_;
+      apply_mesh_settings(entries, m, origin);
+      if (max_steps) m.max_improve_steps = *max_steps;
+      return set_mesh_settings(m);
+    }
+    set_status(fmt::format("{}: '{}': expected floaters or mesh", action, object), true);
+    return false;
+  } catch (const BadInput& e) {
+    // The reader's message already names the action (its origin) and the key.
+    set_status(e.what(), true);
+    return false;
+  } catch (const std::exception& e) {
+    set_status(fmt::format("{}: {}", action, e.what()), true);
+    return false;
+  }
+}
+
+json ViewerState::settings_object(std::string_view object) const {
+  if (object == "floaters") return floater_settings_to_json(floater_options_);
+  if (object == "mesh") return mesh_settings_to_json(mesh_settings_);
+  return json::object();
+}
+
 bool ViewerState::set_display(const DisplaySettings& display) {
   return guard("display", [&] {
     validate_display(display);

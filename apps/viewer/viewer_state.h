@@ -237,6 +237,16 @@ class ViewerState {
   /// Validated as the library does, then within the live limits.
   bool set_mesh_settings(const MeshSettings& settings);
   const MeshSettings& mesh_settings() const { return mesh_settings_; }
+  /// Applies `entries`, keys of the scene file's `object` ("floaters" or "mesh") with values
+  /// as the scene file has them, read and checked by the scene file's reader (so a bad value is
+  /// refused with its words: "ACTION: /floaters/feedback: must lie in [0, 1000]"), then within
+  /// the live limits; the mode's job restarts or takes the new options as for the setters
+  /// above. `max_steps`, if given, is the mesh's improver step limit (the viewer's own key).
+  /// Nothing changes when anything is refused.
+  bool set_settings(std::string_view object, const nlohmann::json& entries,
+                    std::string_view action, std::optional<int> max_steps = std::nullopt);
+  /// The scene file's `object` ("floaters" or "mesh") for the current settings.
+  nlohmann::json settings_object(std::string_view object) const;
   bool set_display(const DisplaySettings& display);
   const DisplaySettings& display() const { return display_; }
 

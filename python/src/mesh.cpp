@@ -29,10 +29,11 @@ struct MeshArgs {
   std::optional<int> resolution;
   std::optional<std::string> improve;  // "auto", "off" or a number of steps
   std::optional<std::string> boundary;
-  std::string grid = "auto";
-  int refine_steps = PolygonizeOptions{}.refine_steps;
-  bool curvature = true, singularity = true, flips = true, find_singular = true;
-  bool crossings = true, curves = true, quality = false;
+  std::optional<std::string> grid;
+  std::optional<int> refine_steps;
+  std::optional<bool> curvature, singularity, flips, find_singular, crossings, curves;
+  std::optional<double> curvature_weight;
+  bool quality = false;
   int threads = 0;
 };
 
@@ -44,6 +45,14 @@ MeshSettings settings_from(const MeshArgs& a, const PySurface& s) {
   if (a.resolution) m.cells = *a.resolution;
   if (a.improve) apply_improve(*a.improve, m);
   if (a.boundary) m.boundary = parse_boundary(*a.boundary);
+  if (a.grid) m.grid = parse_grid(*a.grid);
+  if (a.refine_steps) m.refine_steps = *a.refine_steps;
+  if (a.curvature_weight) m.curvature_weight = *a.curvature_weight;
+  for (auto [given, setting] :
+       {std::pair{&a.curvature, &m.curvature}, std::pair{&a.singularity, &m.singularity},
+        std::pair{&a.flips, &m.flips}, std::pair{&a.find_singular, &m.find_singular},
+        std::pair{&a.crossings, &m.crossings}, std::pair{&a.curves, &m.curves}})
+    if (*given) *setting = **given;
   validate_settings(m);
   return m;
 }
@@ -98,26 +107,11 @@ py::tuple make_mesh(const PySurface& s, const MeshArgs& a) {
   // Its own copy: another Python thread may change the surface while the GIL is released.
   const Surface surface = s.surface();
   const MeshSettings settings = settings_from(a, s);
-  PolygonizeOptions po;
-  po.cells = settings.cells;
+  PolygonizeOptions po = polygonize_options(settings);
   po.threads = a.threads;
-  po.refine_steps = a.refine_steps;
-  if (a.grid == "dense")
-    po.mode = GridMode::kDense;
-  else if (a.grid == "sparse")
-    po.mode = GridMode::kSparse;
-  else if (a.grid != "auto")
-    throw InvalidArgument("grid", a.grid, "use auto, dense or sparse");
-  if (a.refine_steps < 0 || a.refine_steps > 64)
-    throw InvalidArgument("refine_steps", std::to_string(a.refine_steps), "must lie in [0, 64]");
-  ImproveOptions io;
-  io.boundary = settings.boundary;
-  io.use_curvature = a.curvature;
-  io.use_singularity = a.singularity;
-  io.flip_edges = a.flips;
-  io.find_singular_points = a.find_singular;
+  ImproveOptions io = improve_options(settings, ImproveOptions{}.max_steps);
   io.threads = a.threads;
-  const int max_steps = settings.improve ? settings.max_improve_steps.value_or(io.max_steps) : 0;
+  const int max_steps = io.max_steps;
   check_grid_memory(surface, po, "resolution");
 
   Mesh mesh;
@@ -132,7 +126,7 @@ py::tuple make_mesh(const PySurface& s, const MeshArgs& a) {
   run_interruptible([&](std::stop_token stop) {
     const auto t0 = std::chrono::steady_clock::now();
     mesh = polygonize(surface, po, &ps, stop);
-    if (a.crossings && !mesh.empty() && !stop.stop_requested())
+    if (settings.crossings && !mesh.empty() && !stop.stop_requested())
       cs = mesh_crossings(mesh, surface, ps.cell_size, {}, nullptr, stop);
     if (a.quality) {
       before = measure_quality(mesh, surface, qo);
@@ -152,7 +146,7 @@ py::tuple make_mesh(const PySurface& s, const MeshArgs& a) {
       after = measure_quality(mesh, surface, qo);
       topology_after = mesh_topology(mesh);
     }
-    if (!a.curves) mesh.curves.clear();
+    if (!settings.curves) mesh.curves.clear();
     seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   });
 
@@ -230,11 +224,25 @@ void bind_mesh(py::module_& m) {
 
   m.def("_mesh", [](const PySurface& s, std::optional<int> resolution,
                     std::optional<std::string> improve, std::optional<std::string> boundary,
-                    std::string grid, int refine_steps, bool curvature, bool singularity,
-                    bool flips, bool find_singular, bool crossings, bool curves, bool quality,
-                    int threads) {
-    MeshArgs a{resolution, improve,       boundary,  grid,   refine_steps, curvature, singularity,
-               flips,      find_singular, crossings, curves, quality,      threads};
+                    std::optional<std::string> grid, std::optional<int> refine_steps,
+                    std::optional<bool> curvature, std::optional<double> curvature_weight,
+                    std::optional<bool> singularity, std::optional<bool> flips,
+                    std::optional<bool> find_singular, std::optional<bool> crossings,
+                    std::optional<bool> curves, bool quality, int threads) {
+    MeshArgs a{.resolution = resolution,
+               .improve = improve,
+               .boundary = boundary,
+               .grid = grid,
+               .refine_steps = refine_steps,
+               .curvature = curvature,
+               .singularity = singularity,
+               .flips = flips,
+               .find_singular = find_singular,
+               .crossings = crossings,
+               .curves = curves,
+               .curvature_weight = curvature_weight,
+               .quality = quality,
+               .threads = threads};
     return make_mesh(s, a);
   });
   m.def("_read_mesh", [](const std::string& path, const PySurface& s) {

@@ -280,25 +280,35 @@ class Surface:
         return self._evaluate(self._s.hessian, points, threads)
 
     # --- stages
-    def mesh(self, resolution=None, improve=None, boundary=None, grid="auto", refine_steps=12,
-             curvature=True, singularity=True, flips=True, find_singular=True, crossings=True,
-             curves=True, quality=False, threads=0):
+    def mesh(self, resolution=None, improve=None, boundary=None, grid=None, refine_steps=None,
+             curvature=None, curvature_weight=None, singularity=None, flips=None,
+             find_singular=None, crossings=None, curves=None, quality=False, threads=0):
         """Polygonizes and improves the surface as `zeroset mesh` does (its options by the same
-        names: resolution 128 unless the scene file says otherwise; improve "auto", "off",
-        True, False or a number of steps; boundary "constrain" or "fix"; grid "auto", "dense"
-        or "sparse"). quality=True adds the quality figures before and after improvement to
-        the stats. Returns a Mesh, which unpacks as V, F, stats."""
+        names, each None for the scene file's value or else the default: resolution 128;
+        improve "auto", "off", True, False or a number of steps; boundary "constrain" or
+        "fix"; grid "auto", "dense" or "sparse"; refine_steps 12; curvature_weight 8, the
+        curvature estimator's kappa_d; the switches True). quality=True adds the quality
+        figures before and after improvement to the stats. Returns a Mesh, which unpacks as
+        V, F, stats."""
         if improve is True:
             improve = "auto"
         elif improve is False:
             improve = "off"
         elif improve is not None and not isinstance(improve, str):
             improve = str(_count(improve, "improve"))
+        def switch(value):
+            return None if value is None else bool(value)
+
+        if curvature_weight is not None:
+            curvature_weight = float(curvature_weight)
+            if not _math.isfinite(curvature_weight):
+                raise ValueError(f"curvature_weight = {curvature_weight}: the value must be finite")
         m, stats = _z._mesh(
             self._s, None if resolution is None else _count(resolution, "resolution", 1), improve,
-            boundary, grid, _count(refine_steps, "refine_steps"), bool(curvature),
-            bool(singularity), bool(flips), bool(find_singular), bool(crossings), bool(curves),
-            bool(quality), _count(threads, "threads"))
+            boundary, grid, None if refine_steps is None else _count(refine_steps, "refine_steps"),
+            switch(curvature), curvature_weight, switch(singularity), switch(flips),
+            switch(find_singular), switch(crossings), switch(curves), bool(quality),
+            _count(threads, "threads"))
         return Mesh(m, stats)
 
     def _floater_options(self, **options):

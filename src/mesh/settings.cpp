@@ -32,6 +32,32 @@ void validate_settings(const MeshSettings& m) {
                        fmt::format("must lie in [{}, {}]", kMinMeshCells, kMaxMeshCells));
   if (m.max_improve_steps && (*m.max_improve_steps < 0 || *m.max_improve_steps > kMaxImproveSteps))
     throw SettingError("improve", std::to_string(*m.max_improve_steps), improve_rule());
+  if (m.refine_steps < 0 || m.refine_steps > kMaxRefineSteps)
+    throw SettingError("refine_steps", std::to_string(m.refine_steps),
+                       fmt::format("must lie in [0, {}]", kMaxRefineSteps));
+  if (!(m.curvature_weight >= 0 && m.curvature_weight <= kMaxCurvatureWeight))
+    throw SettingError("curvature_weight", fmt::format("{}", m.curvature_weight),
+                       fmt::format("must lie in [0, {:g}]", kMaxCurvatureWeight));
+}
+
+PolygonizeOptions polygonize_options(const MeshSettings& m) {
+  PolygonizeOptions o;
+  o.cells = m.cells;
+  o.mode = m.grid;
+  o.refine_steps = m.refine_steps;
+  return o;
+}
+
+ImproveOptions improve_options(const MeshSettings& m, int auto_steps) {
+  ImproveOptions o;
+  o.max_steps = m.improve ? m.max_improve_steps.value_or(auto_steps) : 0;
+  o.boundary = m.boundary;
+  o.use_curvature = m.curvature;
+  o.curvature_weight = m.curvature_weight;
+  o.use_singularity = m.singularity;
+  o.flip_edges = m.flips;
+  o.find_singular_points = m.find_singular;
+  return o;
 }
 
 void apply_improve(std::string_view text, MeshSettings& m) {
@@ -62,19 +88,42 @@ std::string_view to_string(BoundaryMode mode) {
   return mode == BoundaryMode::kFixed ? "fix" : "constrain";
 }
 
+GridMode parse_grid(std::string_view text) {
+  if (text == "auto") return GridMode::kAuto;
+  if (text == "dense") return GridMode::kDense;
+  if (text == "sparse") return GridMode::kSparse;
+  throw SettingError("grid", std::string(text), "expected auto, dense or sparse");
+}
+
+std::string_view to_string(GridMode mode) {
+  switch (mode) {
+    case GridMode::kDense: return "dense";
+    case GridMode::kSparse: return "sparse";
+    case GridMode::kAuto: break;
+  }
+  return "auto";
+}
+
 void apply_mesh_settings(const json& mesh, MeshSettings& settings, const std::string& origin) {
   const std::string base = "/mesh";
   if (!mesh.is_object()) json_read::fail(origin, base, "expected an object");
-  json_read::known_keys(mesh, {"cells", "improve", "boundary"}, origin, base);
+  json_read::known_keys(mesh,
+                        {"cells", "improve", "boundary", "grid", "refine_steps", "curvature",
+                         "curvature_weight", "singularity", "flips", "find_singular", "crossings",
+                         "curves"},
+                        origin, base);
   MeshSettings m = settings;
   try {
     // The types here; the ranges are validate_settings' (the same for every entry point).
-    if (mesh.contains("cells")) {
-      const json& v = mesh["cells"];
+    // Whole numbers; far outside the rule stays so (validate_settings says the rule).
+    auto whole_number = [&](const char* key) {
+      const json& v = mesh[key];
       const double c = v.is_number() ? v.get<double>() : std::nan("");
-      if (!(c == std::floor(c))) json_read::fail(origin, base + "/cells", "expected a whole number");
-      m.cells = static_cast<int>(std::clamp(c, -1e9, 1e9));  // far outside the rule stays so
-    }
+      if (!(c == std::floor(c)))
+        json_read::fail(origin, base + "/" + key, "expected a whole number");
+      return static_cast<int>(std::clamp(c, -1e9, 1e9));
+    };
+    if (mesh.contains("cells")) m.cells = whole_number("cells");
     if (mesh.contains("improve")) {
       const json& v = mesh["improve"];
       if (v.is_boolean())
@@ -90,6 +139,18 @@ void apply_mesh_settings(const json& mesh, MeshSettings& settings, const std::st
     if (mesh.contains("boundary"))
       m.boundary =
           parse_boundary(json_read::string(mesh["boundary"], origin, base + "/boundary"));
+    if (mesh.contains("grid"))
+      m.grid = parse_grid(json_read::string(mesh["grid"], origin, base + "/grid"));
+    if (mesh.contains("refine_steps"))
+      m.refine_steps = whole_number("refine_steps");
+    if (mesh.contains("curvature_weight"))
+      m.curvature_weight =
+          json_read::number(mesh["curvature_weight"], origin, base + "/curvature_weight");
+    for (auto [key, flag] : {std::pair{"curvature", &m.curvature},
+                             std::pair{"singularity", &m.singularity}, std::pair{"flips", &m.flips},
+                             std::pair{"find_singular", &m.find_singular},
+                             std::pair{"crossings", &m.crossings}, std::pair{"curves", &m.curves}})
+      if (mesh.contains(key)) *flag = json_read::boolean(mesh[key], origin, base + "/" + key);
     validate_settings(m);
   } catch (const SettingError& e) {
     json_read::fail(origin, base + "/" + e.key(), e.why());
@@ -100,7 +161,18 @@ void apply_mesh_settings(const json& mesh, MeshSettings& settings, const std::st
 json mesh_settings_to_json(const MeshSettings& m) {
   json improve = m.improve;
   if (m.improve && m.max_improve_steps) improve = *m.max_improve_steps;
-  return {{"cells", m.cells}, {"improve", improve}, {"boundary", std::string(to_string(m.boundary))}};
+  return {{"cells", m.cells},
+          {"improve", improve},
+          {"boundary", std::string(to_string(m.boundary))},
+          {"grid", std::string(to_string(m.grid))},
+          {"refine_steps", m.refine_steps},
+          {"curvature", m.curvature},
+          {"curvature_weight", m.curvature_weight},
+          {"singularity", m.singularity},
+          {"flips", m.flips},
+          {"find_singular", m.find_singular},
+          {"crossings", m.crossings},
+          {"curves", m.curves}};
 }
 
 }  // namespace zeroset

@@ -58,7 +58,7 @@ expect "out.obj" zeroset mesh kummer --output = ou
 expect "sub" zeroset animate kummer -o s
 expect "bash" zeroset completion ""
 expect "" zeroset eval kummer --at ""
-expect "" zeroset mesh kummer --grid ""
+expect "auto dense sparse" zeroset mesh kummer --grid ""
 contains list zeroset ""
 contains --version zeroset --
 contains cayley zeroset info ""

@@ -1,5 +1,6 @@
 """Meshes, floaters, pictures and POV-Ray scenes from Python are those of the CLI for the same
 inputs, byte for byte; Jupyter pictures; Ctrl-C stops long calls."""
+import json
 import os
 import signal
 import threading
@@ -14,11 +15,32 @@ from conftest import read_floater_ply, read_ppm
 PNG = b"\x89PNG\r\n\x1a\n"
 
 
+def test_mesh_takes_the_scene_files_switches_as_the_cli(cli, tmp_path):
+    scene = tmp_path / "switches.json"
+    scene.write_text(json.dumps({"name": "kummer", "mesh": {
+        "cells": 18, "improve": 15, "grid": "sparse", "refine_steps": 2, "flips": False,
+        "curvature": False, "find_singular": False, "crossings": False, "curves": False}}))
+    cli("mesh", scene, "-o", tmp_path / "cli.obj")
+    zeroset.Surface(scene).mesh().save(tmp_path / "py.obj")
+    assert (tmp_path / "py.obj").read_bytes() == (tmp_path / "cli.obj").read_bytes()
+    # Arguments given win over the scene file, as flags do.
+    cli("mesh", scene, "--grid", "dense", "-o", tmp_path / "cli2.obj")
+    _, _, stats = zeroset.Surface(scene).mesh(grid="dense", flips=True)
+    assert stats["polygonize"]["grid"] == "dense"
+    assert stats["improve"]["edge_flips"] > 0
+    zeroset.Surface(scene).mesh(grid="dense").save(tmp_path / "py2.obj")
+    assert (tmp_path / "py2.obj").read_bytes() == (tmp_path / "cli2.obj").read_bytes()
+
+
 @pytest.mark.parametrize("spec,args,kwargs", [
     ("kummer", ["--param", "mu=1.5", "-r", "28"], dict(resolution=28)),
     ("x^2 + y^2 - z^2 - 0.1", ["--clip", "sphere:1.5", "-r", "20", "--improve", "30",
                                "--boundary", "fix"],
      dict(clip="sphere:1.5", resolution=20, improve=30, boundary="fix")),
+    ("kummer", ["--param", "mu=1.5", "-r", "20", "--improve", "20", "--no-flips",
+                "--curvature-weight", "3", "--grid", "dense", "--refine-steps", "4"],
+     dict(resolution=20, improve=20, flips=False, curvature_weight=3, grid="dense",
+          refine_steps=4)),
 ])
 def test_mesh_equals_the_cli(cli, tmp_path, spec, args, kwargs):
     cli("mesh", spec, *args, "-o", tmp_path / "cli.obj")

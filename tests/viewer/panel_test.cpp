@@ -7,6 +7,9 @@
 #include <random>
 
 #include "panel.h"
+#include "settings_panel.h"
+#include "zeroset/floaters/settings.h"
+#include "zeroset/mesh/settings.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/keyframes.h"
 #include "zeroset/surface/scene.h"
@@ -119,6 +122,76 @@ TEST(Panel, RandomClicksOnTheKeyframesKeepThemValid) {
           << state.keyframes().dump();
   }
   EXPECT_TRUE(touched) << "the clicks reached the Keyframes section";
+}
+
+// Every key of the scene file's "floaters" and "mesh" objects has exactly one widget with a
+// label and a tooltip, and every widget names a key that exists.
+TEST(Panel, EverySettingsKeyHasAWidgetWithATooltip) {
+  const std::pair<const char*, nlohmann::json> objects[] = {
+      {"floaters", floater_settings_to_json(FloaterOptions{})},
+      {"mesh", mesh_settings_to_json(MeshSettings{})}};
+  for (const auto& [object, keys] : objects) {
+    for (const auto& [key, value] : keys.items()) {
+      int widgets = 0;
+      for (const SettingWidget& w : setting_widgets()) {
+        if (w.object != object || w.key != key) continue;
+        ++widgets;
+        EXPECT_FALSE(w.label.empty()) << object << "." << key;
+        EXPECT_GT(w.tooltip.size(), 40u) << object << "." << key << ": say what it does";
+      }
+      EXPECT_EQ(widgets, 1) << object << "." << key << " needs one widget in settings_panel.cpp";
+    }
+  }
+  for (const SettingWidget& w : setting_widgets()) {
+    const bool known = (w.object == "floaters" || w.object == "mesh") &&
+                       (w.object == "floaters" ? objects[0] : objects[1])
+                           .second.contains(std::string(w.key));
+    EXPECT_TRUE(known) << w.object << "." << w.key << " is no scene key";
+  }
+}
+
+// What a widget can set is a valid setting: its slider's ends, its choices, both states of a
+// switch; each reaches the state as the value the scene file then holds.
+TEST(Panel, EveryWidgetsValuesAreAcceptedSettings) {
+  ViewerState state(Scene{make_surface(*find_catalog_entry("kummer")), {}}, Mode::kRaytrace, 1);
+  const double scene_radius = state.surface().scene_radius();
+  for (const SettingWidget& w : setting_widgets()) {
+    std::vector<nlohmann::json> values;
+    switch (w.kind) {
+      case WidgetKind::kSwitch: values = {false, true}; break;
+      case WidgetKind::kWhole:
+        values = {static_cast<long long>(w.min), static_cast<long long>(w.max)};
+        break;
+      case WidgetKind::kNumber: {
+        const double scale = w.scene_relative ? scene_radius : 1;
+        values = {w.min * scale, w.max * scale};
+        break;
+      }
+      case WidgetKind::kChoice: {
+        std::string_view rest = w.choices;
+        while (!rest.empty()) {
+          const size_t bar = rest.find('|');
+          values.emplace_back(std::string(rest.substr(0, bar)));
+          rest = bar == std::string_view::npos ? std::string_view{} : rest.substr(bar + 1);
+        }
+        EXPECT_GE(values.size(), 2u) << w.key;
+        break;
+      }
+      case WidgetKind::kImprove:
+        values = {false, true, "auto", static_cast<int>(w.max)};
+        break;
+    }
+    for (const nlohmann::json& v : values) {
+      const nlohmann::json entry = {{std::string(w.key), v}};
+      ASSERT_TRUE(state.set_settings(w.object, entry, "panel"))
+          << w.object << "." << w.key << " = " << v.dump() << ": " << state.status().text;
+      const nlohmann::json now = state.settings_object(w.object)[std::string(w.key)];
+      if (w.kind == WidgetKind::kImprove && v == "auto")
+        EXPECT_EQ(now, true) << w.key;  // the scene file's "improve": true
+      else
+        EXPECT_EQ(now, v) << w.object << "." << w.key;
+    }
+  }
 }
 
 }  // namespace

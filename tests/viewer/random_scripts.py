@@ -61,12 +61,19 @@ FLOATER_KEYS = {
     "radius_adapt": ["wh", "curvature", "singular", "mixed", "nosuch"],
     "cos_weight": ["on", "off", "maybe"], "clip_projection": ["on", "off"],
     "snap_to_nodes": ["on", "off"], "scaled_repulsion": ["on", "off"], "nosuch": ["1"],
+    "feedback": ["0", "15", "1000", "1001", "-1", "nan"],
+    "equilibrium_speed": ["0", "4", "1000", "1e9", "-1"],
+    "estimator_interval": ["1", "8", "100000", "100001", "0", "2.5"],
 }
 MESH_KEYS = {
     "cells": ["1", "8", "64", "256", "1024", "32768", "32769", "0", "-5", "nan"],
     "improve": ["on", "off", "auto", "0", "10", "100000", "100001", "maybe"],
     "max_steps": ["0", "5", "100000", "100001", "-1"],
     "boundary": ["fix", "constrain", "free"], "nosuch": ["1"],
+    "grid": ["auto", "dense", "sparse", "fine"], "refine_steps": ["0", "12", "64", "65", "-1"],
+    "curvature": ["on", "off", "maybe"], "curvature_weight": ["0", "8", "1000", "1001", "-1"],
+    "singularity": ["on", "off"], "flips": ["on", "off"], "find_singular": ["on", "off"],
+    "crossings": ["on", "off"], "curves": ["on", "off", "2"],
 }
 
 
@@ -122,6 +129,13 @@ def draw_script(rng, actions, scenes, out_dir):
     def path(ext):
         return small_path(ext) if rng.random() < 0.6 else bad_path(ext)
 
+    def random_setting():
+        """`set OBJECT.KEY VALUE`'s arguments: mostly real keys, some of no object."""
+        obj, keys = rng.choice([("floaters", FLOATER_KEYS), ("mesh", MESH_KEYS)])
+        key = rng.choice(sorted(keys))
+        name = rng.choice([obj + "." + key] * 8 + [key, "render." + key, obj + "."])
+        return name, rng.choice(keys[key] + [num()])
+
     makers = [
         (6, lambda: "equation " + rng.choice(EQUATIONS)),
         (4, lambda: "catalog " + rng.choice(CATALOG)),
@@ -148,6 +162,7 @@ def draw_script(rng, actions, scenes, out_dir):
             if rng.random() < 0.9 else "floaters reset"),
         (6, lambda: "mesh " + " ".join(
             "%s=%s" % (k, rng.choice(v)) for k, v in rng.sample(sorted(MESH_KEYS.items()), 2))),
+        (4, lambda: "set %s %s" % random_setting()),
         (2, lambda: "draw " + rng.choice(["disks", "points", "cubes"])),
         (2, lambda: "disk-scale " + num()),
         (2, lambda: "point-size " + num()),

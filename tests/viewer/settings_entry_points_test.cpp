@@ -70,6 +70,14 @@ const BadValue kBadValues[] = {
      "mesh max_steps=200000", "expected auto, off or a number of steps from 0 to 100000"},
     {"mesh sphere --boundary loose", R"({"mesh": {"boundary": "loose"}})", "/mesh/boundary",
      "mesh boundary=loose", "expected fix or constrain"},
+    {"mesh sphere --grid fine", R"({"mesh": {"grid": "fine"}})", "/mesh/grid", "mesh grid=fine",
+     "expected auto, dense or sparse"},
+    {"mesh sphere --refine-steps 65", R"({"mesh": {"refine_steps": 65}})", "/mesh/refine_steps",
+     "set mesh.refine_steps 65", "must lie in [0, 64]"},
+    {"mesh sphere --curvature-weight -1", R"({"mesh": {"curvature_weight": -1}})",
+     "/mesh/curvature_weight", "mesh curvature_weight=-1", "must lie in [0, 1000]"},
+    {"mesh sphere --curvature-weight 1e4", R"({"mesh": {"curvature_weight": 1e4}})",
+     "/mesh/curvature_weight", "set mesh.curvature_weight 1e4", "must lie in [0, 1000]"},
     // render (the viewer's colours are the "viewer" object's; size and samples are the
     // command line's and the "render" object's only)
     {"render sphere --front 1.5,0,0", R"({"render": {"front": {"diffuse": [1.5, 0, 0]}}})",
@@ -156,6 +164,41 @@ TEST(SettingsEntryPoints, EachBadValueIsRefusedWithTheSameWordsEverywhere) {
   }
 }
 
+TEST(SettingsEntryPoints, TheFloatersDynamicsConstantsAreRefusedAlikeBySampleAndTheViewer) {
+  // No flag sets them: the scene file as `zeroset sample` and the viewer read it, and `set`.
+  struct Case {
+    const char* settings;
+    const char* pointer;
+    const char* command;
+    const char* why;
+  };
+  const Case cases[] = {
+      {R"({"floaters": {"feedback": -1}})", "/floaters/feedback", "set floaters.feedback -1",
+       "must lie in [0, 1000]"},
+      {R"({"floaters": {"equilibrium_speed": 2000}})", "/floaters/equilibrium_speed",
+       "floaters equilibrium_speed=2000", "must lie in [0, 1000] radii per time unit"},
+      {R"({"floaters": {"estimator_interval": 0}})", "/floaters/estimator_interval",
+       "set floaters.estimator_interval 0", "must lie in [1, 100000] steps"},
+  };
+  int index = 200;
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.settings);
+    const std::string scene = write_scene_file(c.settings, index++);
+    const auto r = test::run_command(std::string(ZEROSET_BINARY) + " sample " + scene +
+                                     output_for("sample"));
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find(std::string(c.pointer) + ": " + c.why), std::string::npos)
+        << r.output;
+    ViewerState state(sphere_scene(), Mode::kRaytrace, 1);
+    EXPECT_FALSE(state.command("load " + scene));
+    EXPECT_NE(state.status().text.find(std::string(c.pointer) + ": " + c.why), std::string::npos)
+        << state.status().text;
+    EXPECT_FALSE(state.command(c.command));
+    EXPECT_NE(state.status().text.find(std::string(c.pointer) + ": " + c.why), std::string::npos)
+        << state.status().text;
+  }
+}
+
 TEST(SettingsEntryPoints, TheViewersLiveLimitsAreItsOwnAndSaySo) {
   // The library takes these; the viewer, which computes live, refuses them with its own words
   // for commands and scene files alike.
@@ -200,7 +243,10 @@ TEST(SettingsEntryPoints, TheViewerReadsTheMeshObjectAsTheCommandLineDoes) {
   EXPECT_TRUE(state.mesh_settings().improve);
   EXPECT_EQ(state.mesh_settings().max_improve_steps, 25);
   EXPECT_EQ(state.mesh_settings().boundary, BoundaryMode::kFixed);
-  EXPECT_EQ(state.scene().settings["mesh"], scene.settings["mesh"]);
+  // Written back as read, with every other key at its default.
+  for (const auto& [key, value] : scene.settings["mesh"].items())
+    EXPECT_EQ(state.scene().settings["mesh"][key], value) << key;
+  EXPECT_EQ(state.scene().settings["mesh"].size(), mesh_settings_to_json(MeshSettings{}).size());
   Scene unknown = sphere_scene();
   unknown.settings = nlohmann::json::parse(R"({"mesh": {"cels": 40}})");
   EXPECT_THROW(ViewerState(unknown, Mode::kRaytrace, 1), BadInput);

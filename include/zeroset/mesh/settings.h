@@ -2,18 +2,24 @@
 /// The mesh settings a user gives, and the "mesh" object of a scene file, read by
 /// `zeroset mesh` and the viewer's mesh mode and written by the viewer's save-scene:
 ///
-///   "mesh": {"cells": 64, "improve": true, "boundary": "constrain"}
+///   "mesh": {"cells": 64, "improve": true, "boundary": "constrain", "grid": "auto",
+///            "refine_steps": 12, "curvature": true, "curvature_weight": 8,
+///            "singularity": true, "flips": true, "find_singular": true, "crossings": true,
+///            "curves": true}
 ///
 /// "improve" is true or "auto" (until at rest), false or "off", or a number of steps (at
-/// most). Every key is optional; missing ones keep their current value. The command line,
-/// scene files and the viewer check these settings with validate_settings below, so each
-/// refuses a bad value with the same words.
+/// most). The other keys are the switches of `zeroset mesh` (docs/meshing.md) and κ_d, the
+/// weight of the curvature estimator (docs/algorithms.md, the mesh improver). Every key is
+/// optional; missing ones keep their current value. The command line, scene files and the
+/// viewer check these settings with validate_settings below, so each refuses a bad value with
+/// the same words.
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <string_view>
 
 #include "zeroset/mesh/improve.h"
+#include "zeroset/mesh/polygonize.h"
 
 namespace zeroset {
 
@@ -22,6 +28,10 @@ inline constexpr int kMinMeshCells = 1;
 inline constexpr int kMaxMeshCells = 32768;
 /// Most improver steps a run may ask for.
 inline constexpr int kMaxImproveSteps = 100'000;
+/// Most steps placing a vertex onto F = 0 along its grid edge.
+inline constexpr int kMaxRefineSteps = 64;
+/// Largest κ_d: far beyond it the curvature term alone sets the spring lengths.
+inline constexpr double kMaxCurvatureWeight = 1000;
 
 /// How a surface is polygonized and improved.
 struct MeshSettings {
@@ -31,10 +41,26 @@ struct MeshSettings {
   /// end's default (ImproveOptions::max_steps for `zeroset mesh`).
   std::optional<int> max_improve_steps;
   BoundaryMode boundary = BoundaryMode::kConstrained;
+  GridMode grid = GridMode::kAuto;  ///< dense, sparse (bricks near the surface) or chosen
+  int refine_steps = PolygonizeOptions{}.refine_steps;  ///< 0: linear interpolation
+  bool curvature = true;  ///< springs with the curvature estimator (paper eq. 6)
+  double curvature_weight = ImproveOptions{}.curvature_weight;  ///< κ_d
+  bool singularity = true;    ///< springs with the singularity estimator
+  bool flips = true;          ///< Delaunay edge flips
+  bool find_singular = true;  ///< Newton's method on ∇F = 0 for singular points
+  bool crossings = true;      ///< sheets meet exactly on crossing curves
+  bool curves = true;         ///< the singular curves go into the mesh file
 };
 
-/// Checks cells in [kMinMeshCells, kMaxMeshCells] and the improver steps in
-/// [0, kMaxImproveSteps]. Throws SettingError naming the key as the scene file does ("cells",
+/// The polygonizer's options for `settings` (bounds, threads and normals are the caller's).
+PolygonizeOptions polygonize_options(const MeshSettings& settings);
+/// The improver's options for `settings`; max_steps is the step limit, `auto_steps` when the
+/// settings say "auto", 0 when they say off (threads are the caller's).
+ImproveOptions improve_options(const MeshSettings& settings, int auto_steps);
+
+/// Checks cells in [kMinMeshCells, kMaxMeshCells], the improver steps in
+/// [0, kMaxImproveSteps], refine_steps in [0, kMaxRefineSteps] and curvature_weight in
+/// [0, kMaxCurvatureWeight]. Throws SettingError naming the key as the scene file does ("cells",
 /// "improve").
 void validate_settings(const MeshSettings& settings);
 
@@ -45,6 +71,9 @@ void apply_improve(std::string_view text, MeshSettings& settings);
 /// "fix" or "constrain"; throws SettingError (key "boundary") for anything else.
 BoundaryMode parse_boundary(std::string_view text);
 std::string_view to_string(BoundaryMode mode);
+/// "auto", "dense" or "sparse"; throws SettingError (key "grid") for anything else.
+GridMode parse_grid(std::string_view text);
+std::string_view to_string(GridMode mode);
 
 /// Applies `mesh` (the object above) to `settings`, then validates them. Throws BadInput naming
 /// `origin` and the JSON pointer of a malformed or refused entry (e.g. "scene.json:
