@@ -174,11 +174,11 @@ TEST(SettingsEntryPoints, TheFloatersDynamicsConstantsAreRefusedAlikeBySampleAnd
   };
   const Case cases[] = {
       {R"({"floaters": {"feedback": -1}})", "/floaters/feedback", "set floaters.feedback -1",
-       "must lie in [0, 1000]"},
+       "must lie in [0, 66.6667)"},
       {R"({"floaters": {"equilibrium_speed": 2000}})", "/floaters/equilibrium_speed",
-       "floaters equilibrium_speed=2000", "must lie in [0, 1000] radii per time unit"},
+       "floaters equilibrium_speed=2000", "must lie in (0, 16.6667]"},
       {R"({"floaters": {"estimator_interval": 0}})", "/floaters/estimator_interval",
-       "set floaters.estimator_interval 0", "must lie in [1, 100000] steps"},
+       "set floaters.estimator_interval 0", "must lie in [1, 1000]"},
   };
   int index = 200;
   for (const Case& c : cases) {

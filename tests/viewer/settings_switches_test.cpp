@@ -146,12 +146,12 @@ TEST(SettingsSwitches, BadValuesAreRefusedWithTheSceneFilesWordsAndChangeNothing
     const char* words;
   };
   const Bad cases[] = {
-      {"set floaters.feedback -1", "set: /floaters/feedback: must lie in [0, 1000]"},
-      {"set floaters.feedback 1e9", "set: /floaters/feedback: must lie in [0, 1000]"},
+      {"set floaters.feedback -1", "set: /floaters/feedback: must lie in [0, 66.6667)"},
+      {"set floaters.feedback 1e9", "set: /floaters/feedback: must lie in [0, 66.6667)"},
       {"set floaters.equilibrium_speed -0.5",
-       "set: /floaters/equilibrium_speed: must lie in [0, 1000] radii per time unit"},
+       "set: /floaters/equilibrium_speed: must lie in (0, 16.6667]"},
       {"set floaters.estimator_interval 0",
-       "set: /floaters/estimator_interval: must lie in [1, 100000] steps"},
+       "set: /floaters/estimator_interval: must lie in [1, 1000]"},
       {"set floaters.estimator_interval 2.5",
        "set: /floaters/estimator_interval: expected a whole"},
       {"set floaters.feedback fast", "set: /floaters/feedback: expected a number"},
