@@ -60,9 +60,9 @@ TEST(ViewerState, NewEquationKeepsTunedParametersAndStartsNewOnesAtOne) {
 
 TEST(ViewerState, ParameterOutsideItsRangeWidensTheRange) {
   ViewerState state(kummer_scene(), Mode::kRaytrace);
-  ASSERT_TRUE(state.set_parameter("mu", 5.0));
-  EXPECT_EQ(state.surface().ranges[0].max, 5.0);
-  EXPECT_EQ(state.surface().field.parameter_values()[0], 5.0);
+  ASSERT_TRUE(state.set_parameter("mu", 2e6));
+  EXPECT_EQ(state.surface().ranges[0].max, 2e6);
+  EXPECT_EQ(state.surface().field.parameter_values()[0], 2e6);
 }
 
 TEST(ViewerState, BadActionsBecomeErrorStatusesNotExceptions) {
