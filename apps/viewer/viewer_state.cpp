@@ -176,7 +176,14 @@ bool ViewerState::set_equation(const std::string& text) {
     }
     s.ranges = std::move(ranges);
     s.field.require_parameters();
-    s.clip.update(s.field);  // a clip following the parameters needs them all
+    try {
+      s.clip.update(s.field);  // a clip following the parameters
+    } catch (const BadInput&) {
+      // The new equation lacks a parameter the clip follows: the clip stays as it is now.
+      Clip fixed;
+      for (const auto& spec : s.clip.to_specs(true)) fixed.add(spec);
+      s.clip = std::move(fixed);
+    }
     surface_ = std::move(s);
     equation_error_.clear();
     cancel_now_ = true;

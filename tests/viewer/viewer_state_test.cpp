@@ -78,7 +78,7 @@ TEST(ViewerState, BadActionsBecomeErrorStatusesNotExceptions) {
   EXPECT_FALSE(state.set_speed(-1));
   EXPECT_TRUE(state.status().is_error);
   EXPECT_EQ(state.surface().name, "kummer");
-  EXPECT_EQ(state.surface().clip.to_specs(), std::vector<std::string>{"sphere:3"});
+  EXPECT_EQ(state.surface().clip.to_specs(true), std::vector<std::string>{"sphere:3"});
 }
 
 TEST(ViewerState, NoCommandLineThrowsWhateverItSays) {
