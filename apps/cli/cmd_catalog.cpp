@@ -106,6 +106,8 @@ void run_info(const SurfaceArgs& args, bool as_json) {
     fmt::print("clip:       none (unbounded: give --clip sphere:R for sampling, meshing, "
                "rendering)\n");
   for (const auto& c : s.clip.to_specs()) fmt::print("clip:       {}\n", c);
+  if (s.clip.is_parametric())  // sized by the parameters: what that gives now
+    for (const auto& c : s.clip.to_specs(true)) fmt::print("clip now:   {}\n", c);
   if (!s.singular_points_fn) {
     fmt::print("singular points: none known\n");
   } else {

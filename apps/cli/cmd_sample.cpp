@@ -215,6 +215,7 @@ void run_sample(const SampleArgs& a) {
       throw InvalidArgument("--animate", a.animate,
                             fmt::format("{} has no parameter '{}'", surface.label(), anim->name));
     surface.field.set_parameter(anim_index, anim->from);
+    surface.clip.update(surface.field);
   }
   const FloaterOptions options = options_from(a, scene);
   const Camera camera = with_camera_flag(surface.camera, a.camera);

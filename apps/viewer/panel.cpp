@@ -26,6 +26,10 @@ const ImVec4 kNoteColor(0.95f, 0.75f, 0.3f, 1.0f);
 double slider_bound(double v) {
   return std::isnan(v) ? 0.0 : std::clamp(v, -kMaxParameterMagnitude, kMaxParameterMagnitude);
 }
+// Bounds of one sign at least three decades apart.
+bool uses_log_slider(double lo, double hi) {
+  return (lo > 0 && hi >= 1000 * lo) || (hi < 0 && lo <= 1000 * hi);
+}
 float slider_bound_float(double v) {
   constexpr double kFloatBound = 1e30;
   return static_cast<float>(std::isnan(v) ? 0.0 : std::clamp(v, -kFloatBound, kFloatBound));
@@ -101,8 +105,11 @@ void surface_section(ViewerState& state, PanelState& panel) {
     // is: one beyond the parameter limit is refused there, with the reason in the status line.
     double v = values[i], lo = r.min, hi = r.max;
     const double slider_lo = slider_bound(lo), slider_hi = slider_bound(hi);
+    // A range over decades of one sign gets a logarithmic slider: a linear one would give the
+    // first decades a few pixels (the Kummer family runs from 0.34 to 1.28e6).
+    const bool log_scale = uses_log_slider(slider_lo, slider_hi);
     if (ImGui::SliderScalar(r.name.c_str(), ImGuiDataType_Double, &v, &slider_lo, &slider_hi,
-                            "%.5g"))
+                            "%.5g", log_scale ? ImGuiSliderFlags_Logarithmic : 0))
       state.set_parameter(r.name, v);
     if (ImGui::TreeNode("range")) {
       ImGui::SetNextItemWidth(ImGui::GetContentRegionAvail().x * 0.4f);

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "camera_control.h"
+#include "zeroset/surface/settings.h"
 #include "viewer_state.h"
 
 namespace zeroset::viewer {
@@ -47,6 +48,24 @@ void ViewerState::zoom(double factor) {
 
 void ViewerState::reset_view() {
   surface_.camera = home_camera_;
+  if (mode_ == Mode::kRaytrace) needs_restart_ = true;
+}
+
+void ViewerState::follow_clip(const Clip& next) {
+  if (!next.is_parametric() || !surface_.clip.is_bounded() || !next.is_bounded()) return;
+  Surface after;
+  after.clip = next;
+  const double r0 = surface_.scene_radius(), r1 = after.scene_radius();
+  if (!(r0 > 0 && r1 > 0) || r0 == r1) return;
+  const Vec3 c0 = surface_.bounds().center(), c1 = after.bounds().center();
+  const auto scaled = [&](Camera c) {
+    c = with_explicit_distance(c, r0);
+    c.distance = std::min(c.distance * r1 / r0, kMaxCameraLength);
+    c.target = c1 + (c.target - c0) * (r1 / r0);
+    return c;
+  };
+  surface_.camera = scaled(surface_.camera);
+  home_camera_ = scaled(home_camera_);
   if (mode_ == Mode::kRaytrace) needs_restart_ = true;
 }
 

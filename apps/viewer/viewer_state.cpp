@@ -181,6 +181,14 @@ bool ViewerState::set_equation(const std::string& text) {
     }
     s.ranges = std::move(ranges);
     s.field.require_parameters();
+    try {
+      s.clip.update(s.field);  // a clip following the parameters
+    } catch (const BadInput&) {
+      // The new equation lacks a parameter the clip follows: the clip stays as it is now.
+      Clip fixed;
+      for (const auto& spec : s.clip.to_specs(true)) fixed.add(spec);
+      s.clip = std::move(fixed);
+    }
     surface_ = std::move(s);
     equation_error_.clear();
     cancel_now_ = true;
@@ -223,7 +231,13 @@ bool ViewerState::set_parameter(std::string_view name, double value) {
       throw InvalidArgument(fmt::format("the surface has no parameter '{}'", name));
     if (!std::isfinite(value))
       throw InvalidArgument(std::string(name), fmt::format("{}", value), "must be finite");
-    surface_.field.set_parameter(index, value);
+    Field field = surface_.field;
+    field.set_parameter(index, value);
+    Clip clip = surface_.clip;
+    clip.update(field);  // refused before anything changes
+    follow_clip(clip);
+    surface_.field = std::move(field);
+    surface_.clip = std::move(clip);
     widen_to(surface_.ranges[index], value);
     surface_changed(false);
   });
@@ -245,7 +259,13 @@ bool ViewerState::set_parameter_range(std::string_view name, double min, double 
     const double value = surface_.field.parameter_values()[index];
     const double clamped = std::clamp(value, min, max);
     if (clamped != value) {
-      surface_.field.set_parameter(index, clamped);
+      Field field = surface_.field;
+      field.set_parameter(index, clamped);
+      Clip clip = surface_.clip;
+      clip.update(field);
+      follow_clip(clip);
+      surface_.field = std::move(field);
+      surface_.clip = std::move(clip);
       surface_changed(false);
     }
   });
@@ -257,6 +277,7 @@ bool ViewerState::set_clip(const Clip& clip) {
       throw InvalidArgument("the clip must be bounded: include a sphere, or planes closing a box");
     Surface s = surface_;
     s.clip = clip;
+    s.clip.update(s.field);
     s.bounds();  // throws for an empty box
     surface_ = std::move(s);
     clip_is_substitute_ = false;

@@ -362,6 +362,10 @@ class ViewerState {
   /// Publishes the surface to the floater job: `structure` for a new equation or clip
   /// (FloaterSystem::set_surface), else new parameter values.
   void surface_changed(bool structure);
+  /// Before a parametric clip changes size with the parameters: moves the camera (and the home
+  /// camera) with it, keeping the view direction and scaling the distance and the target's
+  /// offset from the clip's centre by the change of the clip's bounding radius.
+  void follow_clip(const Clip& next);
   void advance_animation(double dt);
   /// advance_animation while there are keyframes (viewer_keyframes.cpp).
   void advance_keyframes(double dt);

@@ -35,7 +35,10 @@ py::dict parameters(const Field& field) {
 void set_parameters(PySurface& s, const std::map<std::string, double>& values) {
   Field field = s.scene.surface.field;
   field.set_parameters(values);
+  Clip clip = s.scene.surface.clip;
+  clip.update(field);  // a clip that follows the parameters (docs/scenes.md)
   s.scene.surface.field = field;
+  s.scene.surface.clip = std::move(clip);
 }
 
 py::dict camera_dict(const Camera& c) {

@@ -253,6 +253,11 @@ bool Field::is_polynomial() const { return tape_->degree >= 0; }
 
 int Field::degree() const { return tape_->degree; }
 
+bool Field::depends_on_position() const {
+  // The compiler keeps what does not vary with x, y, z in uniform registers (negative refs).
+  return tape_->value.outputs.empty() || tape_->value.outputs[0] >= 0;
+}
+
 bool Field::is_expandable() const {
   return is_polynomial() && tape_->degree <= kMaxExpansionDegree;
 }

@@ -74,6 +74,11 @@ void apply_parameters(FloaterState& sys, std::span<const double> q) {
     sys.surface.field.set_parameter(static_cast<int>(k), q[k]);
     for (Evaluator& ev : sys.evaluators) ev.set_parameter(static_cast<int>(k), q[k]);
   }
+  if (sys.surface.clip.is_parametric()) {  // the clip follows the parameters (checked before)
+    sys.surface.clip.update(sys.surface.field);
+    sys.box = sys.surface.bounds();
+    sys.scene_radius = sys.surface.scene_radius();
+  }
 }
 
 void check_parameters(const FloaterState& sys, std::span<const double> q) {
@@ -85,6 +90,13 @@ void check_parameters(const FloaterState& sys, std::span<const double> q) {
     if (!std::isfinite(q[k]))
       throw InvalidArgument(sys.surface.field.parameter_names()[k], fmt::format("{}", q[k]),
                             "a parameter must be finite");
+  if (sys.surface.clip.is_parametric()) {  // refused before anything changes
+    Field f = sys.surface.field;
+    for (std::size_t k = 0; k < q.size(); ++k) f.set_parameter(static_cast<int>(k), q[k]);
+    Clip c = sys.surface.clip;
+    c.update(f);
+    if (!c.is_bounded()) throw BadInput("the clip volume is unbounded at these parameters");
+  }
 }
 
 }  // namespace zeroset::detail

@@ -232,6 +232,16 @@ std::string pov_animation_scene(const Surface& surface, const RenderOptions& opt
     centre.push_back(0.5 * (*lo + *hi));
     half.push_back(0.5 * (*hi - *lo));
   }
+  // The scene's clip is written once, from the surface's values: one sized by a moving
+  // parameter would be wrong in every other frame.
+  for (const ClipFormula& f : surface.clip.formulas)
+    for (const Field& number : f.numbers)
+      for (const KeyTrack* t : animated)
+        if (number.parameter_index(t->name) >= 0)
+          throw BadInput(fmt::format(
+              "POV-Ray animation: the clip '{}' changes with the animated parameter '{}', and "
+              "the scene's clip is fixed; export still scenes, one per frame, instead",
+              f.spec, t->name));
   std::string out;
   out += fmt::format("// {} — a keyframed animation exported by zeroset\n", surface.label());
   out += fmt::format("// F at the first frame = {}\n", first.to_string());

@@ -44,6 +44,17 @@ std::vector<Vec3> kummer_nodes(const Field& f) {
   return out;
 }
 
+// The clip of the paper's figure 1, a sphere holding every node (docs/singular.md, "The
+// Kummer family"): radius max(3, 1.04·(mu - 1)), at least 1.2 times the farthest node's
+// distance max(sqrt(mu), (sqrt(3)/2)·|mu - 1|) for every mu in the range; 3 (the whole bounded
+// surface for mu < 1) up to mu ≈ 3.88, so the picture around the four planes at mu = 3 stays
+// as it was. The language has no max: max(a, b) = (a + b + |a - b|)/2.
+Clip kummer_clip() {
+  Clip c;
+  c.add("sphere:(3 + 1.04*(mu - 1) + abs(1.04*(mu - 1) - 3))/2");
+  return c;
+}
+
 // Barth's sextic: 65 nodes in projective space, 50 of them affine for this equation: the 30
 // points (±1,0,0) and cyclic permutations of (±φ/2, ±1/(2φ), ±1/2) on the unit sphere, and the
 // 20 vertices of a dodecahedron, (±1,±1,±1) and cyclic permutations of (0, ±1/φ, ±φ), at
@@ -95,10 +106,12 @@ std::vector<CatalogEntry> build_catalog() {
       "p = 1 - z - sqrt(2)*x; q = 1 - z + sqrt(2)*x\n"
       "r = 1 + z + sqrt(2)*y; s = 1 + z - sqrt(2)*y\n"
       "(3 - mu)*(x^2 + y^2 + z^2 - mu)^2 - (3*mu - 1)*p*q*r*s",
-      "Quartics with tetrahedral symmetry, mu = nu^2: a double sphere at mu = 1/3, Steiner's "
-      "Roman surface at mu = 1, 16 real nodes for 1 < mu < 3, four planes at mu = 3.",
-      {{"mu", 1.5, 1.0 / 3.0 + 0.01, 3.0}},
-      Clip::sphere(3),
+      "Quartics with tetrahedral symmetry, mu = nu^2: a double sphere at mu = 1/3, four real "
+      "nodes below mu = 1, Steiner's Roman surface at mu = 1, 16 real nodes above it, four "
+      "planes at mu = 3, approaching a tetrahedron as mu grows. The clip sphere grows with mu "
+      "to hold every node.",
+      {{"mu", 1.5, 1.0 / 3.0 + 0.01, 1.28e6}},
+      kummer_clip(),
       cam(30, 20),
       kummer_nodes,
   });
@@ -238,6 +251,7 @@ Surface make_surface(const CatalogEntry& e) {
     s.ranges.push_back({p.name, p.min, p.max});
   }
   s.clip = e.clip;
+  s.clip.update(s.field);
   s.camera = e.camera;
   s.singular_points_fn = e.singular_points;
   return s;

@@ -7,29 +7,13 @@
 #include <cmath>
 #include <initializer_list>
 #include <limits>
+#include <optional>
 
 #include "zeroset/error.h"
+#include "zeroset/expr/parse.h"
 
 namespace zeroset {
 namespace {
-
-std::vector<double> parse_numbers(std::string_view text, std::string_view spec) {
-  std::vector<double> out;
-  size_t pos = 0;
-  while (pos <= text.size()) {
-    size_t comma = text.find(',', pos);
-    if (comma == std::string_view::npos) comma = text.size();
-    std::string item(text.substr(pos, comma - pos));
-    char* end = nullptr;
-    const double v = std::strtod(item.c_str(), &end);
-    if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(v))
-      throw InvalidArgument("--clip", std::string(spec),
-                            fmt::format("'{}' is not a finite number", item));
-    out.push_back(v);
-    pos = comma + 1;
-  }
-  return out;
-}
 
 // Bounding box from the spheres and the axis-aligned planes (infinite where they leave it
 // open). Oblique planes only ever shrink the volume, so the box stays a valid bound.
@@ -98,41 +82,78 @@ Clip Clip::box(const Box3& b) {
   return c;
 }
 
-void Clip::add(std::string_view spec) {
-  const std::string s(spec);
-  const size_t colon = spec.find(':');
-  if (colon == std::string_view::npos) throw InvalidArgument("--clip", s, kClipHelp);
-  const std::string_view kind = spec.substr(0, colon);
-  std::string_view rest = spec.substr(colon + 1);
-  const std::size_t adds = kind == "box" ? 6 : 1;
-  if (spheres.size() + planes.size() + adds > kMaxClipParts)
-    throw InvalidArgument("--clip", s,
-                          fmt::format("a clip has at most {} parts (a sphere or plane is one, a "
-                                      "box six)",
-                                      kMaxClipParts));
-  if (kind == "sphere") {
-    Vec3 center = Vec3::Zero();
-    const size_t at = rest.find('@');
-    if (at != std::string_view::npos) {
-      auto c = parse_numbers(rest.substr(at + 1), spec);
-      if (c.size() != 3) throw InvalidArgument("--clip", s, "the centre needs three numbers");
-      center = Vec3(c[0], c[1], c[2]);
-      rest = rest.substr(0, at);
+namespace {
+
+// The spec's text split at commas outside parentheses (an expression may hold a comma only
+// inside a call, none of the language's functions takes two arguments, yet a stray one should
+// be reported by the expression parser, not split here).
+std::vector<std::string> split_items(std::string_view text) {
+  std::vector<std::string> out;
+  int depth = 0;
+  std::string item;
+  for (char ch : text) {
+    if (ch == '(') ++depth;
+    if (ch == ')') --depth;
+    if (ch == ',' && depth <= 0) {
+      out.push_back(item);
+      item.clear();
+    } else {
+      item += ch;
     }
-    auto r = parse_numbers(rest, spec);
-    if (r.size() != 1 || r[0] <= 0)
+  }
+  out.push_back(item);
+  return out;
+}
+
+// A plain number, or nullopt when the item must be read as an expression.
+std::optional<double> plain_number(const std::string& item, const std::string& spec) {
+  char* end = nullptr;
+  const double v = std::strtod(item.c_str(), &end);
+  if (item.empty()) throw InvalidArgument("--clip", spec, "'' is not a finite number");
+  if (end != item.c_str() + item.size()) return std::nullopt;
+  if (!std::isfinite(v))
+    throw InvalidArgument("--clip", spec, fmt::format("'{}' is not a finite number", item));
+  return v;
+}
+
+Field formula(const std::string& item, const std::string& spec) {
+  ParseResult r = parse_field(item);
+  if (!r.ok())
+    throw InvalidArgument(
+        "--clip", spec,
+        fmt::format("'{}' is neither a number nor an expression of the parameters: {}", item,
+                    r.diagnostics.empty() ? std::string("no expression")
+                                          : r.diagnostics.front().message));
+  if (r.field->depends_on_position())
+    throw InvalidArgument("--clip", spec,
+                          fmt::format("'{}' depends on x, y or z; a clip's numbers may depend "
+                                      "on the surface's parameters only",
+                                      item));
+  return *r.field;
+}
+
+// Checks one spec's numbers and appends its parts (sphere: radius; box: 1 or 6 numbers;
+// plane: 4). `center` is a sphere's centre when given.
+void add_numbers(Clip& clip, std::string_view kind, const std::string& s,
+                 const std::vector<double>& v, const std::vector<double>* center) {
+  if (kind == "sphere") {
+    Vec3 c = Vec3::Zero();
+    if (center) {
+      if (center->size() != 3) throw InvalidArgument("--clip", s, "the centre needs three numbers");
+      c = Vec3((*center)[0], (*center)[1], (*center)[2]);
+    }
+    if (v.size() != 1 || !(v[0] > 0))
       throw InvalidArgument("--clip", s, "a sphere needs one positive radius");
     // Refused, not rescaled: see kMinClipRelativeSize and kMaxClipCoordinate.
-    check_coordinates({r[0], center.x(), center.y(), center.z()}, s);
-    const double smallest = min_size(center.cwiseAbs().maxCoeff());
-    if (r[0] < smallest)
+    check_coordinates({v[0], c.x(), c.y(), c.z()}, s);
+    const double smallest = min_size(c.cwiseAbs().maxCoeff());
+    if (v[0] < smallest)
       throw InvalidArgument("--clip", s,
                             fmt::format("the radius must be at least {:g} times max(1, the "
                                         "centre's largest coordinate), here {:g}",
                                         kMinClipRelativeSize, smallest));
-    spheres.push_back({center, r[0]});
+    clip.spheres.push_back({c, v[0]});
   } else if (kind == "box") {
-    auto v = parse_numbers(rest, spec);
     Box3 b;
     if (v.size() == 1 && v[0] > 0) {
       b = Box3::cube(v[0]);
@@ -145,10 +166,9 @@ void Clip::add(std::string_view spec) {
     }
     check_coordinates({b.lo.x(), b.lo.y(), b.lo.z(), b.hi.x(), b.hi.y(), b.hi.z()}, s);
     check_box(b, s, "the box");
-    Clip c = Clip::box(b);
-    planes.insert(planes.end(), c.planes.begin(), c.planes.end());
-  } else if (kind == "plane") {
-    auto v = parse_numbers(rest, spec);
+    const Clip c = Clip::box(b);
+    clip.planes.insert(clip.planes.end(), c.planes.begin(), c.planes.end());
+  } else {
     if (v.size() != 4) throw InvalidArgument("--clip", s, "a plane needs nx,ny,nz,d");
     Vec3 n(v[0], v[1], v[2]);
     // Scaled to its largest component first, so that neither 1e-300 nor 1e300 components
@@ -159,10 +179,121 @@ void Clip::add(std::string_view spec) {
     const double len = n.norm();
     const double offset = v[3] / largest / len;
     check_coordinates({offset}, s);
-    planes.push_back({n / len, offset});
-  } else {
-    throw InvalidArgument("--clip", s, kClipHelp);
+    clip.planes.push_back({n / len, offset});
   }
+}
+
+}  // namespace
+
+void Clip::add(std::string_view spec) {
+  const std::string s(spec);
+  const size_t colon = spec.find(':');
+  if (colon == std::string_view::npos) throw InvalidArgument("--clip", s, kClipHelp);
+  const std::string_view kind = spec.substr(0, colon);
+  if (kind != "sphere" && kind != "box" && kind != "plane")
+    throw InvalidArgument("--clip", s, kClipHelp);
+  std::string_view rest = spec.substr(colon + 1);
+  const std::size_t adds = kind == "box" ? 6 : 1;
+  if (spheres.size() + planes.size() + adds > kMaxClipParts)
+    throw InvalidArgument("--clip", s,
+                          fmt::format("a clip has at most {} parts (a sphere or plane is one, a "
+                                      "box six)",
+                                      kMaxClipParts));
+  std::vector<std::string> items, center_items;
+  const size_t at = kind == "sphere" ? rest.find('@') : std::string_view::npos;
+  if (at != std::string_view::npos) {
+    center_items = split_items(rest.substr(at + 1));
+    rest = rest.substr(0, at);
+  }
+  items = split_items(rest);
+  std::vector<double> v, center;
+  std::vector<Field> numbers;
+  std::vector<bool> plain;
+  bool parametric = false;
+  for (const auto* list : {&items, &center_items})
+    for (const std::string& item : *list) {
+      const std::optional<double> x = plain_number(item, s);
+      if (!x) parametric = true;
+      plain.push_back(x.has_value());
+      numbers.push_back(x ? Field() : formula(item, s));
+      (list == &items ? v : center).push_back(x.value_or(1));
+    }
+  if (!parametric) {
+    add_numbers(*this, kind, s, v, at != std::string_view::npos ? &center : nullptr);
+    return;
+  }
+  // The shape is checked now (placeholders for the values, which update() sets).
+  if (kind == "sphere" && (v.size() != 1 || (at != std::string_view::npos && center.size() != 3)))
+    throw InvalidArgument("--clip", s,
+                          "a sphere needs one radius and, after '@', three centre numbers");
+  if (kind == "box" && v.size() != 1 && v.size() != 6)
+    throw InvalidArgument("--clip", s, "a box needs one positive half size or six numbers");
+  if (kind == "plane" && v.size() != 4)
+    throw InvalidArgument("--clip", s, "a plane needs nx,ny,nz,d");
+  // Plain numbers are kept as constant fields, so that update() reads every number alike.
+  for (std::size_t i = 0; i < numbers.size(); ++i)
+    if (plain[i])
+      numbers[i] = compile_field(i < items.size() ? items[i] : center_items[i - items.size()]);
+  ClipFormula f{s, std::move(numbers), kind == "sphere" ? spheres.size() : planes.size(),
+                kind == "sphere"};
+  formulas.push_back(std::move(f));
+  if (kind == "sphere") {
+    spheres.push_back({});
+  } else {
+    planes.resize(planes.size() + adds);
+  }
+}
+
+void Clip::update(const Field& field) {
+  if (formulas.empty()) return;
+  const auto& names = field.parameter_names();
+  const auto& values = field.parameter_values();
+  for (ClipFormula& f : formulas) {
+    std::vector<double> v;
+    for (Field& number : f.numbers) {
+      for (const std::string& name : number.parameter_names()) {
+        const int k = field.parameter_index(name);
+        if (k < 0) {
+          std::string have;
+          for (const auto& n : names) have += (have.empty() ? "" : ", ") + n;
+          throw InvalidArgument(
+              "--clip", f.spec,
+              fmt::format("'{}' is not a parameter of the surface{}", name,
+                          have.empty() ? " (it has none)" : " (it has: " + have + ")"));
+        }
+        if (!std::isfinite(values[k]))
+          throw InvalidArgument("--clip", f.spec,
+                                fmt::format("the parameter '{}' has no value", name));
+        number.set_parameter(name, values[k]);
+      }
+      Evaluator ev(number);
+      const double x = ev.value(Vec3::Zero());
+      if (!std::isfinite(x))
+        throw InvalidArgument("--clip", f.spec,
+                              fmt::format("'{}' is not a finite number at the parameters' "
+                                          "values ({})",
+                                          number.source(), x));
+      v.push_back(x);
+    }
+    const std::string_view kind = std::string_view(f.spec).substr(0, f.spec.find(':'));
+    const bool has_center = f.sphere && f.numbers.size() == 4;
+    std::vector<double> center;
+    if (has_center) center.assign(v.begin() + 1, v.end()), v.resize(1);
+    Clip part;
+    try {
+      add_numbers(part, kind, f.spec, v, has_center ? &center : nullptr);
+    } catch (const InvalidArgument& e) {
+      std::string at;
+      for (std::size_t k = 0; k < names.size() && at.size() < 200; ++k)
+        at += fmt::format("{}{} = {:g}", at.empty() ? "" : ", ", names[k], values[k]);
+      throw InvalidArgument(fmt::format("{} (at {})", e.what(), at));
+    }
+    if (f.sphere)
+      spheres[f.first] = part.spheres.front();
+    else
+      std::copy(part.planes.begin(), part.planes.end(), planes.begin() + f.first);
+  }
+  check_extent();
 }
 
 void Clip::check_extent() const {
@@ -291,18 +422,34 @@ bool Clip::ray_interval(const Vec3& o, const Vec3& d, double t_min, double& t0,
   return t0 < t1;
 }
 
-std::vector<std::string> Clip::to_specs() const {
+std::vector<std::string> Clip::to_specs(bool values) const {
+  // Parts a parametric spec sets are written as that spec.
+  std::vector<bool> sphere_set(spheres.size()), plane_set(planes.size());
+  for (const auto& f : formulas) {
+    if (values) break;
+    if (f.sphere)
+      sphere_set[f.first] = true;
+    else
+      std::fill_n(plane_set.begin() + f.first, f.spec.starts_with("box") ? 6 : 1, true);
+  }
   std::vector<std::string> out;
-  for (const auto& s : spheres) {
+  for (std::size_t i = 0; i < spheres.size(); ++i) {
+    if (sphere_set[i]) continue;
+    const SphereClip& s = spheres[i];
     if (s.center.isZero())
       out.push_back(fmt::format("sphere:{}", s.radius));
     else
       out.push_back(
           fmt::format("sphere:{}@{},{},{}", s.radius, s.center.x(), s.center.y(), s.center.z()));
   }
-  for (const auto& h : planes)
+  for (std::size_t i = 0; i < planes.size(); ++i) {
+    if (plane_set[i]) continue;
+    const HalfSpaceClip& h = planes[i];
     out.push_back(
         fmt::format("plane:{},{},{},{}", h.normal.x(), h.normal.y(), h.normal.z(), h.offset));
+  }
+  if (!values)
+    for (const auto& f : formulas) out.push_back(f.spec);
   return out;
 }
 

@@ -92,6 +92,7 @@ const KeyTrack* Keyframes::param(const std::string& name) const {
 
 Surface Keyframes::at(Surface surface, double time) const {
   for (const KeyTrack& t : params) surface.field.set_parameter(t.name, t.value(time));
+  surface.clip.update(surface.field);  // a clip that follows the parameters
   for (const KeyTrack& t : camera) *camera_field(surface.camera, t.name) = t.value(time);
   return surface;
 }

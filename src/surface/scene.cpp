@@ -164,9 +164,12 @@ void apply_overrides(Scene& scene, const SurfaceOverrides& o) {
   if (!o.clip_specs.empty()) {
     Clip c;
     for (const auto& spec : o.clip_specs) c.add(spec);
-    c.check_extent();
     s.clip = c;
   }
+  // A parametric clip (given here or by the scene) at the final parameter values; checks the
+  // extent of every clip given here.
+  s.clip.update(s.field);
+  if (!o.clip_specs.empty()) s.clip.check_extent();
   s.fit_ranges();  // a typed equation comes without ranges
 }
 
@@ -333,7 +336,12 @@ Scene scene_from_json(json j, const std::string& origin) {
       }
     }
     try {
-      c.check_extent();
+      // A parametric clip is sized by the file's parameter values; one whose parameters get
+      // their values later (--param) is sized then (resolve_scene).
+      if (!c.is_parametric())
+        c.check_extent();
+      else if (s.field.missing_parameters().empty())
+        c.update(s.field);
     } catch (const BadInput& e) {
       fail(origin, "/clip", e.what());
     }

@@ -99,7 +99,7 @@ TEST(HostileInputs, ClipVolumesMustKeepComputationsFinite) {
   const std::string d = fresh_dir("hostile_clips");
   expect_refused(d, "sample sphere --clip sphere:1e-300@1,0,0 -o OUT",
                  {"--clip", "sphere:1e-300@1,0,0", "at least 1e-06 times max(1"}, "out.ply");
-  expect_refused(d, "sample sphere --clip sphere:1e100 -o OUT", {"--clip", "range [-1e+06, 1e+06]"},
+  expect_refused(d, "sample sphere --clip sphere:1e100 -o OUT", {"--clip", "range [-1e+07, 1e+07]"},
                  "out.ply");
   expect_refused(d, "mesh sphere --clip box:0,0,0,1,1,1e-12 -o OUT", {"too small"}, "out.obj");
   expect_refused(d, "mesh sphere --clip sphere:1 --clip plane:1,0,0,-5 -o OUT", {"empty"},

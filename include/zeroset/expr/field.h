@@ -55,6 +55,9 @@ class Field {
   bool is_polynomial() const;
   /// Total degree in x, y, z; -1 when not a polynomial.
   int degree() const;
+  /// True when F depends on x, y, z at all; false for an expression of the parameters and
+  /// constants only (a clip size, docs/scenes.md).
+  bool depends_on_position() const;
   /// The highest degree polynomial() expands: a dense degree-24 polynomial has 2925 terms, and
   /// one product of two of them already takes a few milliseconds.
   static constexpr int kMaxExpansionDegree = 24;
