@@ -173,7 +173,7 @@ TEST(SettingsSwitches, BadValuesAreRefusedWithTheSceneFilesWordsAndChangeNothing
       {"set floaters 4", "expected floaters.KEY or mesh.KEY"},
       {"set floaters. 4", "expected floaters.KEY or mesh.KEY"},
       {"mesh grid=fine", "mesh: /mesh/grid: expected auto, dense or sparse"},
-      {"floaters feedback=-1", "floaters: /floaters/feedback: must lie in [0, 1000]"},
+      {"floaters feedback=-1", "floaters: /floaters/feedback: must lie in [0, 66.6667)"},
   };
   ViewerState state(catalog_scene("kummer"), Mode::kMesh, 1);
   const json before = state.scene().settings;
