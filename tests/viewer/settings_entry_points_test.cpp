@@ -165,7 +165,8 @@ TEST(SettingsEntryPoints, EachBadValueIsRefusedWithTheSameWordsEverywhere) {
 }
 
 TEST(SettingsEntryPoints, TheFloatersDynamicsConstantsAreRefusedAlikeBySampleAndTheViewer) {
-  // No flag sets them: the scene file as `zeroset sample` and the viewer read it, and `set`.
+  // Through the scene file as `zeroset sample` and the viewer read it, and through `set` (the
+  // flags --feedback, --equilibrium-speed and --estimator-interval are tested with the CLI).
   struct Case {
     const char* settings;
     const char* pointer;
