@@ -133,6 +133,72 @@ Anchor anchor_of(const Network& net, const SingularSetIndex& index,
   return {.curve = c, .arc = arc};
 }
 
+// The place on curve c nearest to p, when within `reach` (the plain loop over its segments).
+Anchor anchor_on_curve(const Network& net, std::uint32_t c, const Vec3& p, double reach) {
+  const Network::Curve& curve = net.curves[c];
+  Anchor best;
+  double best_d = reach;
+  for (size_t i = 0; i + 1 < curve.verts.size(); ++i) {
+    const Vec3& a = net.pos[curve.verts[i]];
+    const Vec3 ab = net.pos[curve.verts[i + 1]] - a;
+    const double len2 = ab.squaredNorm();
+    const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+    const double d = (a + t * ab - p).norm();
+    if (d <= best_d) best_d = d, best = {.curve = c, .arc = curve.arc[i] + t * (curve.arc[i + 1] - curve.arc[i])};
+  }
+  return best;
+}
+
+// A closed chain turned to start where a run of anchors on one curve starts (if it has more
+// than one run): runs are read from the first vertex on, and one split at the chain's start
+// would be joined as two, covering the curve edges between them twice.
+void start_at_run(std::vector<std::uint32_t>& verts, std::vector<Vec3>& points, std::vector<Anchor>& anchors) {
+  const size_t n = anchors.size();
+  auto same = [&](size_t a, size_t b) {
+    return anchors[a].special == anchors[b].special && (anchors[a].special != kNone || anchors[a].curve == anchors[b].curve);
+  };
+  size_t shift = 0;
+  while (shift < n && same(shift, (shift + n - 1) % n)) ++shift;
+  if (shift == 0 || shift == n) return;
+  std::rotate(verts.begin(), verts.begin() + static_cast<long>(shift), verts.end());
+  std::rotate(points.begin(), points.begin() + static_cast<long>(shift), points.end());
+  std::rotate(anchors.begin(), anchors.begin() + static_cast<long>(shift), anchors.end());
+}
+
+// Where a chain passes between two curves that meet (near a triple point, in the sector of a
+// sheet between them), a vertex about as close to both can be anchored to the other curve
+// than both its neighbours. Its two rim edges would then be joined through the meeting point
+// and back, covering the same curve edges twice in opposite directions (a sixth triangle on
+// them, one facing against ∇F). Such a short run (at most `short_run` long in arc length,
+// with the runs on both sides anchored to one other curve) is anchored to that curve instead.
+void merge_short_runs(const Network& net, const std::vector<Vec3>& points, bool closed_chain,
+                      double short_run, double reach, std::vector<Anchor>& anchors) {
+  const size_t n = anchors.size();
+  if (n < 3) return;
+  auto curve_at = [&](size_t j) { return anchors[j].special != kNone ? kNone : anchors[j].curve; };
+  size_t k = 0;
+  while (k < n) {
+    const std::uint32_t c = curve_at(k);
+    size_t end = k;
+    while (end < n && curve_at(end) == c) ++end;
+    if (c == kNone || (!closed_chain && (k == 0 || end == n)) || (k == 0 && end == n)) {
+      k = end;
+      continue;
+    }
+    const size_t before = (k + n - 1) % n, after = end % n;
+    const std::uint32_t other = curve_at(before);
+    double lo = anchors[k].arc, hi = lo;
+    for (size_t j = k; j < end; ++j) lo = std::min(lo, anchors[j].arc), hi = std::max(hi, anchors[j].arc);
+    if (other != kNone && other != c && curve_at(after) == other && hi - lo <= short_run) {
+      std::vector<Anchor> moved;
+      for (size_t j = k; j < end; ++j) moved.push_back(anchor_on_curve(net, other, points[j], reach));
+      if (std::all_of(moved.begin(), moved.end(), [](const Anchor& a) { return a.ok(); }))
+        std::copy(moved.begin(), moved.end(), anchors.begin() + static_cast<long>(k));
+    }
+    k = end;
+  }
+}
+
 // The curve vertex nearest to an arc length.
 std::uint32_t vertex_at_arc(const Network::Curve& c, double arc) {
   if (c.closed) arc = std::fmod(std::fmod(arc, c.length()) + c.length(), c.length());
@@ -471,11 +537,17 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
         }
       }
       if (!stats.failure.empty()) break;
+      std::vector<std::uint32_t> verts = ch.verts;
+      std::vector<Vec3> points;
+      for (std::uint32_t v : verts) points.push_back(mesh.positions[v]);
+      if (ch.closed) start_at_run(verts, points, anchors);
+      merge_short_runs(net, points, ch.closed, reach, index.reach(), anchors);
+      if (ch.closed) start_at_run(verts, points, anchors);
       const std::vector<std::uint32_t> target = chain_targets(net, anchors, ch.closed, reach);
-      const size_t edges = ch.closed ? ch.verts.size() : ch.verts.size() - 1;
+      const size_t edges = ch.closed ? verts.size() : verts.size() - 1;
       for (size_t e = 0; e < edges; ++e) {
-        const size_t j = (e + 1) % ch.verts.size();
-        const std::uint32_t u = ch.verts[e], v = ch.verts[j];
+        const size_t j = (e + 1) % verts.size();
+        const std::uint32_t u = verts[e], v = verts[j];
         if (!graph_path(net, target[e], target[j], 512, path)) {
           stats.failure = fmt::format("the cut near ({:.4g}, {:.4g}, {:.4g}) could not be joined to a curve",
                                       mesh.positions[u].x(), mesh.positions[u].y(), mesh.positions[u].z());
