@@ -172,11 +172,6 @@ void run_mesh(const MeshArgs& a) {
   const int max_steps = io.max_steps;
   check_grid_memory(surface, po, "--resolution");
 
-  // Searched for --stats as well: it costs milliseconds, next to the mesh's seconds.
-  std::optional<SingularSet> singular;
-  if (a.show_singular || !a.stats.empty()) singular = singular_set_if_bounded(surface);
-  const SingularSet* overlay = a.show_singular && singular ? &*singular : nullptr;
-
   const FieldSurvey survey = survey_and_warn(surface);
   const auto t0 = std::chrono::steady_clock::now();
   PolygonizeStats ps;
@@ -188,7 +183,6 @@ void run_mesh(const MeshArgs& a) {
   for (size_t k = 0; k < names.size(); ++k) params[names[k]] = surface.field.parameter_values()[k];
   stats["parameters"] = params;
   stats["clip"] = surface.clip.to_specs();
-  stats["singular_set"] = singular_stats(singular);
   stats["field"] = survey_json(survey);
   stats["polygonize"] = {
       {"resolution", resolution},
@@ -219,10 +213,25 @@ void run_mesh(const MeshArgs& a) {
       {"triangles", mesh.triangle_count()}};
   if (mesh.empty() && !survey.vanishes_identically())  // that was said
     say(fmt::format("{}: the grid of {} cells found no surface inside the clip", surface.label(), resolution));
+  // One search of the singular set serves the crossings, the warning about a singular sheet,
+  // --stats and --show-singular: the crossings' (traced at the mesh's edge length) when they
+  // run, else one of its own for --stats and --show-singular (milliseconds, next to the
+  // mesh's seconds).
+  std::optional<SingularSet> singular;
+  std::optional<CrossingStats> crossings;
+  if (settings.crossings && !mesh.empty() && ps.cell_size > 0) {
+    SingularSet found;
+    crossings = mesh_crossings(mesh, surface, ps.cell_size, {}, &found);
+    singular = std::move(found);
+  } else if (a.show_singular || !a.stats.empty()) {
+    singular = singular_set_if_bounded(surface);
+  }
+  const SingularSet* overlay = a.show_singular && singular ? &*singular : nullptr;
+  stats["singular_set"] = singular_stats(singular);
   // F ≡ 0 was warned about; its "sheet" of vanishing ∇F is the whole clip, nothing to add.
   if (!survey.vanishes_identically()) warn_if_singular_sheet(surface, singular);
-  if (settings.crossings && !mesh.empty()) {
-    const CrossingStats cs = mesh_crossings(mesh, surface, ps.cell_size);
+  if (crossings) {
+    const CrossingStats& cs = *crossings;
     stats["crossings"] = {{"crossing_curves", cs.crossing_curves},
                           {"isolated_curves", cs.isolated_curves},
                           {"curve_vertices", cs.curve_vertices},
