@@ -514,6 +514,37 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
         kept.push_back(t);
       }
     }
+    // A kept tongue one triangle wide (along the bisector of a narrow sector of a sheet
+    // between two curves that meet) would be joined from each of its sides to the curve
+    // across it, and some of the joining triangles would turn over: triangles with two or
+    // three edges on the cut (the tongue's tip, then the next one) are cut too. Not near a
+    // free end of a curve (a pinch point), where the two sheets fold together and marching
+    // cubes has lost one of them: cutting there would take the other away too.
+    std::vector<Vec3> free_ends;
+    for (std::uint32_t v = 0; v < net.pos.size(); ++v)
+      if (net.free_end[v]) free_ends.push_back(net.pos[v]);
+    auto near_free_end = [&](const std::array<std::uint32_t, 3>& t) {
+      for (const Vec3& q : free_ends)
+        for (std::uint32_t v : t)
+          if ((mesh.positions[v] - q).norm() < kFreeEndReach * tube) return true;
+      return false;
+    };
+    for (int pass = 0; pass < 16; ++pass) {
+      std::vector<std::array<std::uint32_t, 3>> still;
+      std::vector<std::array<std::uint32_t, 3>> tips;
+      for (const auto& t : kept) {
+        int on_rim = 0;
+        for (int k = 0; k < 3; ++k)
+          on_rim += removed_edges.count(edge_key(t[static_cast<size_t>((k + 1) % 3)], t[static_cast<size_t>(k)])) > 0;
+        (on_rim >= 2 && !near_free_end(t) ? tips : still).push_back(t);
+      }
+      if (tips.empty()) break;
+      for (const auto& t : tips) {
+        ++stats.removed_triangles;
+        for (int k = 0; k < 3; ++k) removed_edges.insert(edge_key(t[static_cast<size_t>(k)], t[static_cast<size_t>((k + 1) % 3)]));
+      }
+      kept = std::move(still);
+    }
     // The rim: edges of kept triangles whose other triangle was removed.
     std::vector<std::array<std::uint32_t, 2>> rim;
     for (const auto& t : kept)

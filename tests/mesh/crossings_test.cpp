@@ -111,9 +111,9 @@ std::array<Vec3, 2> sheet_directions(Evaluator& ev, const Vec3& p, const Vec3& t
 struct Expect {
   int min_crossing_curves = 1;
   bool triple_line = false;  // edges on the curve may carry six triangles
-  // Checks that do not hold yet on every surface (docs/meshing.md, "Crossings": limits).
-  bool edge_counts = true;
-  bool orientation = true;
+  // Triangles facing against ∇F allowed away from the singular set: a check that does not
+  // hold yet on every surface (docs/meshing.md, "Crossings": limits).
+  int max_flipped = 0;
   // How far the independently traced curve may be from the mesh, in mean edge lengths; 0:
   // 1e-6 of the scene radius (straight curves lie on the mesh's chords exactly; a curved one
   // is a chord's sagitta away between the mesh's vertices).
@@ -186,11 +186,6 @@ void check_crossing_mesh(const Surface& s, int cells, const Expect& expect = {})
       if (near_special(mid)) continue;
       const int n = count[{std::min(a, b), std::max(a, b)}];
       ++curve_edges;
-      if (!expect.edge_counts) {
-        EXPECT_GE(n, 4) << "curve edge at " << mid.transpose();
-        if (n >= 4) ++four;
-        continue;
-      }
       if (n == 4 || (expect.triple_line && n == 6)) ++four;
       else ADD_FAILURE() << "curve edge at " << mid.transpose() << " has " << n << " triangles";
     }
@@ -214,8 +209,7 @@ void check_crossing_mesh(const Surface& s, int cells, const Expect& expect = {})
     const Vec3 n = (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]);
     if (n.dot(ev.sample(c, true, false).gradient) < 0) ++flipped;
   }
-  if (expect.orientation) EXPECT_EQ(flipped, 0);
-  else EXPECT_LE(flipped, 20);
+  EXPECT_LE(flipped, expect.max_flipped);
   const MeshQuality q = measure_quality(m, s);
   EXPECT_LE(q.percent_below_30, 10.0);
 }
@@ -232,14 +226,12 @@ TEST(Crossings, WhitneyUmbrella) {
   check_crossing_mesh(s, 96);
 }
 
-// Near one of the triple points a few curve edges get a sixth triangle and a few triangles
-// face against grad F: both are checked loosely here until the join there is fixed.
+// Four planes: six double lines through four triple points, each sheet cut into narrow (60°)
+// and wide sectors around them.
 TEST(Crossings, KummerFourPlanes) {
   const Surface s = test::kummer(3, 3);
-  const Expect expect{.min_crossing_curves = 6, .edge_counts = false, .orientation = false};
-  // At rest after about 210 steps at 64 cells; at 56 and 80 cells the improver needs about as
-  // many steps as its limit of 300 or more (docs/meshing.md, "Crossings": limits).
-  check_crossing_mesh(s, 64, expect);
+  check_crossing_mesh(s, 64, {.min_crossing_curves = 6});
+  check_crossing_mesh(s, 96, {.min_crossing_curves = 6});
 }
 
 TEST(Crossings, SphereCrossingACylinderAlongTwoCircles) {
