@@ -502,8 +502,12 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
     const SingularSetIndex index(crossing, 3 * tube);
     // The tube: triangles with a corner closer than `tube` to a crossing curve.
     const size_t nv = mesh.positions.size();
-    std::vector<std::uint8_t> near(nv, 0);
-    for (size_t v = 0; v < nv; ++v) near[v] = index.distance(mesh.positions[v]) < tube;
+    std::vector<std::uint8_t> near(nv, 0), reachable(nv, 0);
+    for (size_t v = 0; v < nv; ++v) {
+      const double d = index.distance(mesh.positions[v]);
+      near[v] = d < tube;
+      reachable[v] = std::isfinite(d);
+    }
     std::vector<std::array<std::uint32_t, 3>> kept;
     std::unordered_set<std::uint64_t> removed_edges;
     for (const auto& t : mesh.triangles) {
@@ -529,21 +533,35 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
           if ((mesh.positions[v] - q).norm() < kFreeEndReach * tube) return true;
       return false;
     };
+    // Only triangles with a corner within the index's reach of a curve can be on the cut.
+    std::vector<size_t> candidates;
+    for (size_t i = 0; i < kept.size(); ++i)
+      if (std::any_of(kept[i].begin(), kept[i].end(), [&](std::uint32_t v) { return reachable[v]; }))
+        candidates.push_back(i);
+    std::vector<std::uint8_t> cut(kept.size(), 0);
     for (int pass = 0; pass < 16; ++pass) {
-      std::vector<std::array<std::uint32_t, 3>> still;
-      std::vector<std::array<std::uint32_t, 3>> tips;
-      for (const auto& t : kept) {
+      std::vector<size_t> tips;
+      for (size_t i : candidates) {
+        if (cut[i]) continue;
+        const auto& t = kept[i];
         int on_rim = 0;
         for (int k = 0; k < 3; ++k)
           on_rim += removed_edges.count(edge_key(t[static_cast<size_t>((k + 1) % 3)], t[static_cast<size_t>(k)])) > 0;
-        (on_rim >= 2 && !near_free_end(t) ? tips : still).push_back(t);
+        if (on_rim >= 2 && !near_free_end(t)) tips.push_back(i);
       }
       if (tips.empty()) break;
-      for (const auto& t : tips) {
+      for (size_t i : tips) {
+        cut[i] = 1;
         ++stats.removed_triangles;
+        const auto& t = kept[i];
         for (int k = 0; k < 3; ++k) removed_edges.insert(edge_key(t[static_cast<size_t>(k)], t[static_cast<size_t>((k + 1) % 3)]));
       }
-      kept = std::move(still);
+    }
+    {
+      size_t w = 0;
+      for (size_t i = 0; i < kept.size(); ++i)
+        if (!cut[i]) kept[w++] = kept[i];
+      kept.resize(w);
     }
     // The rim: edges of kept triangles whose other triangle was removed.
     std::vector<std::array<std::uint32_t, 2>> rim;
