@@ -301,6 +301,9 @@ TEST(ViewerWindow, SingularSetNotesForASquareAndAnUnboundedSurface) {
       EXPECT_NE(note.find(c.words), std::string::npos) << note;
       EXPECT_GT(note_pixels(read_image(c.shot)), 100) << c.surface << ": the note is shown";
     }
+    // The commands warn about a sheet where F = G^2; so does the viewer's log.
+    EXPECT_EQ(r.output.find("warning: F = G^2") != std::string::npos, c.words == "F = G^2")
+        << r.output;
   }
 }
 
