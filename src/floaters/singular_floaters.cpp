@@ -2,6 +2,7 @@
 // along each curve, the set found again when the parameters have come to rest.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "floater_state_detail.h"
@@ -33,8 +34,11 @@ constexpr double kIsolatedStray = 0.5;
 // chain knows; below 1, because the sheets keep settling after the last look.
 constexpr double kChainToSheets = 0.85;
 // The sheets' spacing at a place: the mean nearest-neighbour distance of this many free
-// floaters nearest to it (measure_singular_coverage's measure).
+// floaters nearest to it (measure_singular_coverage's measure), when they are all within this
+// many chain spacings. Farther sheets set no bound there (an isolated curve far from any sheet),
+// and the search stays short; the gaps near the sheets that are split spread along the chain.
 constexpr std::size_t kSpacingNeighbours = 8;
+constexpr double kSpacingReach = 8;
 
 // The set serves the β estimator and the floaters held on it.
 bool uses_set(const FloaterState& sys) {
@@ -217,8 +221,11 @@ SingularEvents split_chain_gaps(FloaterState& sys) {
     if (nn[j] < 0) nn[j] = grid.nearest(sheets[j], sheets, j).second;
     return nn[j];
   };
+  const double reach = kSpacingReach * sys.rail_spacing;
   auto spacing = [&](const Vec3& q) {
-    const auto near = grid.k_nearest(q, sheets, kSpacingNeighbours);
+    const auto near = grid.k_nearest(q, sheets, kSpacingNeighbours, reach);
+    // Fewer than that within reach: a spacing of one or two floaters says little.
+    if (near.size() < kSpacingNeighbours) return std::numeric_limits<double>::infinity();
     double sum = 0;
     for (std::uint32_t j : near) sum += nearest_of(j);
     return sum / static_cast<double>(near.size());
@@ -234,12 +241,21 @@ SingularEvents split_chain_gaps(FloaterState& sys) {
     if (list.empty() || curve.length() == 0) continue;
     std::sort(list.begin(), list.end());
     if (curve.closed) list.push_back(list.front() + curve.length());
+    // The sheets' spacing at each floater and held point of the chain; a gap takes the
+    // smaller of its ends'. An isolated curve has no sheet of its own: the sheets it meets
+    // (at a pinch point) are its scale all along, the smallest spacing found on it.
+    std::vector<double> at_point(list.size());
+    for (std::size_t k = 0; k < list.size(); ++k)
+      at_point[k] = curve.closed && k + 1 == list.size() ? at_point[0]
+                                                         : spacing(curve.at(curve.keep(list[k])));
+    if (curve.kind == CurveKind::kIsolated)
+      std::fill(at_point.begin(), at_point.end(),
+                *std::min_element(at_point.begin(), at_point.end()));
     for (std::size_t k = 0; k + 1 < list.size(); ++k) {
       const double a = list[k], b = list[k + 1];
       const double mid = curve.keep(0.5 * (a + b));
-      const double local = std::min({spacing(curve.at(curve.keep(a))), spacing(curve.at(mid)),
-                                     spacing(curve.at(curve.keep(b)))});
-      if (b - a > kChainToSheets * local) wanted.push_back({curve.at(mid), static_cast<std::int32_t>(c), mid});
+      if (b - a > kChainToSheets * std::min(at_point[k], at_point[k + 1]))
+        wanted.push_back({curve.at(mid), static_cast<std::int32_t>(c), mid});
     }
   }
   const auto room = static_cast<std::size_t>(share) - std::min(held, static_cast<std::size_t>(share));
