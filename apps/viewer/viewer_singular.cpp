@@ -85,7 +85,8 @@ bool ViewerState::update_singular() {
       const bool had_sheet = singular_ && singular_->set.has_singular_sheet;
       singular_ = std::move(f);
       is_new = true;
-      if (singular_->set.has_singular_sheet && !had_sheet) set_status("warning: " + singular_->note);
+      if (singular_->set.has_singular_sheet && !had_sheet)
+        set_status("warning: " + singular_->note);
     }
     // A search that is still running finishes first (its result is one parameter edit old)
     // unless the equation or clip changed: so a moving slider shows a set at every search.

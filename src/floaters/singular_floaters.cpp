@@ -258,18 +258,21 @@ SingularEvents split_chain_gaps(FloaterState& sys) {
         wanted.push_back({curve.at(mid), static_cast<std::int32_t>(c), mid});
     }
   }
-  const auto room = static_cast<std::size_t>(share) - std::min(held, static_cast<std::size_t>(share));
+  const auto room =
+      static_cast<std::size_t>(share) - std::min(held, static_cast<std::size_t>(share));
   if (wanted.size() > room) wanted.resize(room);
   if (wanted.empty()) return events;
   // At the cap: the free floaters with the nearest neighbours go.
-  const std::size_t free_slots = sys.opt.max_count - std::min(sys.opt.max_count, floater_count(sys));
+  const std::size_t free_slots =
+      sys.opt.max_count - std::min(sys.opt.max_count, floater_count(sys));
   if (wanted.size() > free_slots) {
     const std::size_t excess = std::min(wanted.size() - free_slots, sheets.size());
     std::vector<std::uint32_t> order(sheets.size());
     std::iota(order.begin(), order.end(), 0u);
-    std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(excess), order.end(),
-                      [&](std::uint32_t x, std::uint32_t y) {
-                        return nearest_of(x) < nearest_of(y) || (nearest_of(x) == nearest_of(y) && x < y);
+    std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(excess),
+                      order.end(), [&](std::uint32_t x, std::uint32_t y) {
+                        return nearest_of(x) < nearest_of(y) ||
+                               (nearest_of(x) == nearest_of(y) && x < y);
                       });
     std::vector<std::uint32_t> gone;
     for (std::size_t k = 0; k < excess; ++k) gone.push_back(sheet_index[order[k]]);
