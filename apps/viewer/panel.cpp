@@ -462,6 +462,13 @@ void draw_panel(ViewerState& state, PanelState& panel, float height) {
     ImGui::TextWrapped("%s", status.text.c_str());
     ImGui::PopStyleColor();
   }
+  // The field's warning stays in view while it holds, whatever the last status says.
+  if (const std::string& warning = state.field_warning();
+      !warning.empty() && status.text != "warning: " + warning) {
+    ImGui::PushStyleColor(ImGuiCol_Text, kErrorColor);
+    ImGui::TextWrapped("warning: %s", warning.c_str());
+    ImGui::PopStyleColor();
+  }
   surface_section(state, panel);
   keyframes_section(state, panel);
   mode_section(state);

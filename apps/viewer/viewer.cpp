@@ -291,10 +291,13 @@ int run_viewer(const ViewerOptions& options) {
   GlView gl_view;
   bool show_ui = options.show_ui;
   Host host(window.get(), show_ui, options.quiet);
-  if (is_scripted)
+  if (is_scripted) {
     state.set_status_sink([&host](const StatusLine& s) {
       host.print((s.is_error ? "error: " : "") + s.text);
     });
+    // The surface given on the command line was surveyed before the log existed.
+    if (!state.field_warning().empty()) host.print("warning: " + state.field_warning());
+  }
   Input input;
 
   int failures = 0;

@@ -81,8 +81,12 @@ bool ViewerState::update_singular() {
     }
   } else {
     if (auto f = singular_box_.take(); f && f->surface_version >= singular_floor_) {
+      // A sheet where F = G² is what the commands warn about: the log says it when it appears.
+      const bool had_sheet = singular_ && singular_->set.has_singular_sheet;
       singular_ = std::move(f);
       is_new = true;
+      if (singular_->set.has_singular_sheet && !had_sheet)
+        set_status("warning: " + singular_->note);
     }
     // A search that is still running finishes first (its result is one parameter edit old)
     // unless the equation or clip changed: so a moving slider shows a set at every search.

@@ -18,6 +18,7 @@
 #include "zeroset/mesh/mesh_io.h"
 #include "zeroset/render/pov_export.h"
 #include "zeroset/surface/catalog.h"
+#include "zeroset/surface/field_survey.h"
 
 namespace zeroset::viewer {
 
@@ -297,6 +298,13 @@ bool ViewerState::set_clip_specs(const std::vector<std::string>& specs) {
 void ViewerState::surface_changed(bool structure) {
   needs_restart_ = true;
   ++surface_version_;
+  // The commands' survey (milliseconds): said once when it changes, kept for the panel.
+  const std::string warning =
+      survey_warning(surface_, survey_field(surface_)).value_or(std::string());
+  if (warning != field_warning_) {
+    field_warning_ = warning;
+    if (!warning.empty()) set_status("warning: " + warning);
+  }
   if (structure) {
     // The set of another equation or clip must not be drawn on this one.
     singular_floor_ = surface_version_;

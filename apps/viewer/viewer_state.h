@@ -194,6 +194,10 @@ class ViewerState {
   void set_status_sink(std::function<void(const StatusLine&)> sink) { sink_ = std::move(sink); }
   const StatusLine& status() const { return status_; }
   void set_status(std::string text, bool is_error = false);
+  /// What the commands warn about the current field over its clip (survey_warning: F vanishes
+  /// identically, or is undefined on part of it), or empty. A new warning is also a status
+  /// line "warning: ...", so the log has it.
+  const std::string& field_warning() const { return field_warning_; }
 
   // ---- surface -------------------------------------------------------------------------------
   /// Parses `text`; on error the diagnostics (with caret) go to equation_error() and the
@@ -408,6 +412,7 @@ class ViewerState {
   // status
   StatusLine status_;
   std::function<void(const StatusLine&)> sink_;
+  std::string field_warning_;
 
   // timing
   double last_update_s_ = -1;

@@ -333,8 +333,9 @@ struct SingularEvents {
 // indexes it; floaters held on it are not placed yet.
 void find_singular(FloaterState& sys);
 // Every estimator_interval steps: finds the set again once the parameters have been still for
-// that long, places floaters on its points and curves where none are, and removes free
-// floaters that have strayed onto an isolated curve (no sheet carries them there).
+// that long, places floaters on its points and curves where none are, splits gaps along the
+// curves wider than the sheets' spacing around them, and removes free floaters that have
+// strayed onto an isolated curve (no sheet carries them there).
 SingularEvents keep_singular_floaters(FloaterState& sys);
 // The parameters or the surface change: floaters held on the old set's points and curves go,
 // and the set is stale until found again. Returns how many floaters were removed.

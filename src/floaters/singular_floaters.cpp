@@ -1,8 +1,12 @@
 // Floaters held on the singular set (docs/algorithms.md B.7): one on each special point, a chain
 // along each curve, the set found again when the parameters have come to rest.
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <numeric>
 
 #include "floater_state_detail.h"
+#include "spatial_hash_detail.h"
 #include "zeroset/detail/segment.h"
 
 namespace zeroset::detail {
@@ -24,6 +28,17 @@ constexpr double kReachNominal = 4;
 // A free floater closer than this fraction of the spacing to an isolated curve has left every
 // sheet: it is removed (the curve's own floaters sample it).
 constexpr double kIsolatedStray = 0.5;
+// A gap along a chain wider than this fraction of the spacing of the sheets' floaters around it
+// gets one more floater. The sheets set the scale a sampling is judged by, and near a pinch
+// point, where two half-sheets fold together, they pack tighter than any global rule for the
+// chain knows; below 1, because the sheets keep settling after the last look.
+constexpr double kChainToSheets = 0.85;
+// The sheets' spacing at a place: the mean nearest-neighbour distance of this many free
+// floaters nearest to it (measure_singular_coverage's measure), when they are all within this
+// many chain spacings. Farther sheets set no bound there (an isolated curve far from any sheet),
+// and the search stays short; the gaps near the sheets that are split spread along the chain.
+constexpr std::size_t kSpacingNeighbours = 8;
+constexpr double kSpacingReach = 8;
 
 // The set serves the β estimator and the floaters held on it.
 bool uses_set(const FloaterState& sys) {
@@ -172,6 +187,110 @@ SingularEvents place(FloaterState& sys) {
   return events;
 }
 
+// Splits every gap along a chain that is wider than kChainToSheets times the spacing of the
+// free floaters around it: one floater at its middle per gap and upkeep (the chain's dynamics
+// spread it), within the held share. At the cap the free floaters where the sheets are
+// densest make room. The chains are placed while the sheets are still sparse; this lets them
+// follow as the sheets fill in and tighten. Returns the numbers inserted and removed.
+SingularEvents split_chain_gaps(FloaterState& sys) {
+  SingularEvents events;
+  if (sys.rails.empty()) return events;
+  std::vector<Vec3> sheets;
+  std::vector<std::uint32_t> sheet_index;
+  std::size_t held = 0;
+  for (std::size_t i = 0; i < floater_count(sys); ++i) {
+    if (sys.pinned[i] == kFree) {
+      sheets.push_back(sys.pos[i]);
+      sheet_index.push_back(static_cast<std::uint32_t>(i));
+    } else if (sys.pinned[i] >= kOnPoint) {
+      ++held;
+    }
+  }
+  const double share = kHeldShare * static_cast<double>(sys.opt.max_count);
+  if (sheets.size() < 2 || static_cast<double>(held) >= share) return events;
+  Box3 box{sheets[0], sheets[0]};
+  for (const Vec3& p : sheets) {
+    box.lo = box.lo.cwiseMin(p);
+    box.hi = box.hi.cwiseMax(p);
+  }
+  const double extent = std::max(box.size().maxCoeff(), 1e-12 * sys.scene_radius);
+  SpatialHash grid;
+  grid.build(sheets, box, 1.5 * extent / std::sqrt(static_cast<double>(sheets.size())));
+  std::vector<double> nn(sheets.size(), -1);
+  auto nearest_of = [&](std::uint32_t j) {
+    if (nn[j] < 0) nn[j] = grid.nearest(sheets[j], sheets, j).second;
+    return nn[j];
+  };
+  const double reach = kSpacingReach * sys.rail_spacing;
+  auto spacing = [&](const Vec3& q) {
+    const auto near = grid.k_nearest(q, sheets, kSpacingNeighbours, reach);
+    // Fewer than that within reach: a spacing of one or two floaters says little.
+    if (near.size() < kSpacingNeighbours) return std::numeric_limits<double>::infinity();
+    double sum = 0;
+    for (std::uint32_t j : near) sum += nearest_of(j);
+    return sum / static_cast<double>(near.size());
+  };
+  std::vector<std::vector<double>> on(sys.rails.size());
+  for (std::size_t i = 0; i < floater_count(sys); ++i)
+    if (sys.pinned[i] == kOnCurve) on[static_cast<std::size_t>(sys.rail[i])].push_back(sys.arc[i]);
+  std::vector<Seat> wanted;
+  for (std::size_t c = 0; c < sys.rails.size(); ++c) {
+    const RailCurve& curve = sys.rails[c];
+    std::vector<double>& list = on[c];
+    list.insert(list.end(), curve.fixed.begin(), curve.fixed.end());
+    if (list.empty() || curve.length() == 0) continue;
+    std::sort(list.begin(), list.end());
+    if (curve.closed) list.push_back(list.front() + curve.length());
+    // The sheets' spacing at each floater and held point of the chain; a gap takes the
+    // smaller of its ends'. An isolated curve has no sheet of its own: the sheets it meets
+    // (at a pinch point) are its scale all along, the smallest spacing found on it.
+    std::vector<double> at_point(list.size());
+    for (std::size_t k = 0; k < list.size(); ++k)
+      at_point[k] = curve.closed && k + 1 == list.size() ? at_point[0]
+                                                         : spacing(curve.at(curve.keep(list[k])));
+    if (curve.kind == CurveKind::kIsolated)
+      std::fill(at_point.begin(), at_point.end(),
+                *std::min_element(at_point.begin(), at_point.end()));
+    for (std::size_t k = 0; k + 1 < list.size(); ++k) {
+      const double a = list[k], b = list[k + 1];
+      const double mid = curve.keep(0.5 * (a + b));
+      if (b - a > kChainToSheets * std::min(at_point[k], at_point[k + 1]))
+        wanted.push_back({curve.at(mid), static_cast<std::int32_t>(c), mid});
+    }
+  }
+  const auto room =
+      static_cast<std::size_t>(share) - std::min(held, static_cast<std::size_t>(share));
+  if (wanted.size() > room) wanted.resize(room);
+  if (wanted.empty()) return events;
+  // At the cap: the free floaters with the nearest neighbours go.
+  const std::size_t free_slots =
+      sys.opt.max_count - std::min(sys.opt.max_count, floater_count(sys));
+  if (wanted.size() > free_slots) {
+    const std::size_t excess = std::min(wanted.size() - free_slots, sheets.size());
+    std::vector<std::uint32_t> order(sheets.size());
+    std::iota(order.begin(), order.end(), 0u);
+    std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(excess),
+                      order.end(), [&](std::uint32_t x, std::uint32_t y) {
+                        return nearest_of(x) < nearest_of(y) ||
+                               (nearest_of(x) == nearest_of(y) && x < y);
+                      });
+    std::vector<std::uint32_t> gone;
+    for (std::size_t k = 0; k < excess; ++k) gone.push_back(sheet_index[order[k]]);
+    std::sort(gone.begin(), gone.end());
+    remove_floaters(sys, gone);
+    events.removed = gone.size();
+  }
+  for (const Seat& s : wanted) {
+    if (floater_count(sys) >= sys.opt.max_count) break;
+    push_floater(sys, s.p, sys.rail_sigma, singular_factor(sys.opt));
+    sys.pinned.back() = kOnCurve;
+    sys.rail.back() = s.curve;
+    sys.arc.back() = s.arc;
+    ++events.inserted;
+  }
+  return events;
+}
+
 // Free floaters that have come onto an isolated curve: no sheet passes there, so they have left
 // the surface's sheets (F has a strict extremum across the curve and pulls them in).
 std::size_t remove_isolated_strays(FloaterState& sys) {
@@ -280,6 +399,8 @@ SingularEvents keep_singular_floaters(FloaterState& sys) {
   if (!sys.singular_placed) {
     events = place(sys);
     sys.singular_placed = true;
+  } else {
+    events = split_chain_gaps(sys);
   }
   events.removed += remove_isolated_strays(sys);
   return events;

@@ -341,7 +341,7 @@ std::pair<std::int64_t, double> SpatialHash::nearest(const Vec3& p, std::span<co
 }
 
 std::vector<std::uint32_t> SpatialHash::k_nearest(const Vec3& p, std::span<const Vec3> points,
-                                                  std::size_t k) const {
+                                                  std::size_t k, double reach) const {
   std::vector<std::pair<double, std::uint32_t>> found;
   if (order_.empty() || k == 0) return {};
   k = std::min(k, order_.size());
@@ -358,11 +358,14 @@ std::vector<std::uint32_t> SpatialHash::k_nearest(const Vec3& p, std::span<const
                        found.end());
       if (std::sqrt(found[k - 1].first) <= static_cast<double>(ring - 1) * cell_) break;
     }
+    // Every point within reach is in the rings visited so far.
+    if (static_cast<double>(ring - 1) * cell_ > reach) break;
     if (!visit_ring(c, ring, visit)) break;
   }
   std::sort(found.begin(), found.end());
   std::vector<std::uint32_t> out;
-  for (std::size_t i = 0; i < std::min(k, found.size()); ++i) out.push_back(found[i].second);
+  for (std::size_t i = 0; i < std::min(k, found.size()) && found[i].first <= reach * reach; ++i)
+    out.push_back(found[i].second);
   return out;
 }
 

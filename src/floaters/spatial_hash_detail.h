@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <type_traits>
 #include <utility>
@@ -88,9 +89,11 @@ class SpatialHash {
   /// span given to build().
   std::pair<std::int64_t, double> nearest(const Vec3& p, std::span<const Vec3> points,
                                           std::int64_t skip) const;
-  /// Input indices of the k points nearest to p (fewer when there are fewer), nearest first.
-  std::vector<std::uint32_t> k_nearest(const Vec3& p, std::span<const Vec3> points,
-                                       std::size_t k) const;
+  /// Input indices of the k points nearest to p (fewer when there are fewer), nearest first;
+  /// only points within `reach` of p (the search ends there: bounded work far from the points).
+  std::vector<std::uint32_t> k_nearest(
+      const Vec3& p, std::span<const Vec3> points, std::size_t k,
+      double reach = std::numeric_limits<double>::infinity()) const;
 
  private:
   static constexpr int kBits = 21;

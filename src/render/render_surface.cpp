@@ -12,6 +12,7 @@
 #include "zeroset/error.h"
 #include "zeroset/render/raycast.h"
 #include "zeroset/render/render.h"
+#include "zeroset/surface/field_survey.h"
 
 namespace zeroset {
 namespace {
@@ -129,6 +130,11 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
   cast_options.roots.refine_tolerance = 1e-9;
   std::vector<SurfaceRayCaster> casters;
   for (int w = 0; w < threads; ++w) casters.emplace_back(surface, view.eye, cast_options);
+  // F ≡ 0: every point of the clip is on F = 0 and there is no surface to see. The polynomial
+  // path already misses every ray (F restricts to the zero polynomial); interval arithmetic
+  // would find "roots" on every ray and draw the clip. The survey (docs/architecture.md) is
+  // the one test of it, so every picture of such a field is empty alike.
+  const bool no_surface = survey_field(surface).vanishes_identically();
   struct Worker {
     long long rays = 0, hits = 0, singular = 0;
     // Hit parameters of the band's previous and current row of rays (NaN: no hit), each
@@ -190,8 +196,11 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
           const auto first_ray = ray_s.begin(), last_ray = ray_s.begin() + columns;
           const int begin =
               static_cast<int>(std::lower_bound(first_ray, last_ray, s_min) - first_ray);
-          const int end = std::max(
-              begin, static_cast<int>(std::upper_bound(first_ray, last_ray, s_max) - first_ray));
+          const int end =
+              no_surface ? begin
+                         : std::max(begin, static_cast<int>(
+                                               std::upper_bound(first_ray, last_ray, s_max) -
+                                               first_ray));
           double* t = w.current.data() + 2;
           const double* up = w.above.data() + 2;
           std::fill(t, t + begin, kNoHit);

@@ -33,6 +33,27 @@ TEST(RaycastNonFinite, AnUndefinedFieldCostsABoundedBudgetPerRay) {
   EXPECT_EQ(st.hits, 0);
 }
 
+// F ≡ 0 is no surface, whichever path casts the rays: no hit, the picture is the background
+// (interval arithmetic alone would find F = 0 on every ray and draw the clip).
+TEST(RaycastNonFinite, AVanishingFieldShowsNoSurface) {
+  for (const char* eq : {"sin(x) - sin(x)", "0*exp(x)", "x - x"}) {
+    SCOPED_TRACE(eq);
+    const Surface s = equation(eq, Clip::sphere(2));
+    RenderOptions o;
+    o.width = o.height = 32;
+    o.threads = 1;
+    RenderStats st;
+    const Image image = render_surface(s, o, &st);
+    EXPECT_EQ(st.hits, 0);
+    EXPECT_GT(st.rays, 0);
+    const Image blank = render_surface(equation("x^2 + y^2 + z^2 + 1", Clip::sphere(2)), o);
+    ASSERT_EQ(image.rgb.size(), blank.rgb.size());
+    for (int y = 0; y < image.height; ++y)
+      for (int x = 0; x < image.width; ++x)
+        for (int c = 0; c < 3; ++c) ASSERT_EQ(image.pixel(x, y)[c], blank.pixel(x, y)[c]);
+  }
+}
+
 // A field defined along every ray needs far less than the budget: nothing is given up.
 TEST(RaycastNonFinite, DefinedFieldsGiveUpNoRay) {
   for (const char* eq : {"sin(3*x) + sin(3*y) + sin(3*z)", "sqrt(x^2 + y^2 + 0.01) - 0.5 - z^2",

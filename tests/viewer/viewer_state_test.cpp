@@ -3,11 +3,14 @@
 // keeps every failure a status message.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <random>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include "run_frames.h"
 #include "viewer_state.h"
@@ -43,6 +46,27 @@ TEST(ViewerState, MalformedEquationShowsCaretAndKeepsTheLastGoodSurface) {
   EXPECT_TRUE(state.equation_error().empty());
   EXPECT_FALSE(state.status().is_error);
   EXPECT_EQ(state.surface().field.source(), "x^2 + y^2 - z^2");
+}
+
+// The commands' warning about the field (F ≡ 0 here) is a status line, so the log has it, and
+// stays available to the panel while it holds.
+TEST(ViewerState, WarnsLikeTheCommandsWhenFVanishesIdentically) {
+  ViewerState state(kummer_scene(), Mode::kRaytrace);
+  EXPECT_TRUE(state.field_warning().empty()) << state.field_warning();
+  std::vector<std::string> log;
+  state.set_status_sink([&](const StatusLine& line) { log.push_back(line.text); });
+  for (const char* eq : {"sin(x) - sin(x)", "0*exp(x)"}) {
+    SCOPED_TRACE(eq);
+    log.clear();
+    ASSERT_TRUE(state.set_equation(eq));
+    EXPECT_NE(state.field_warning().find("vanishes identically"), std::string::npos);
+    const bool logged = std::any_of(log.begin(), log.end(), [](const std::string& l) {
+      return l.rfind("warning: ", 0) == 0 && l.find("vanishes identically") != std::string::npos;
+    });
+    EXPECT_TRUE(logged);
+  }
+  ASSERT_TRUE(state.set_equation("x^2 + y^2 + z^2 - 1"));
+  EXPECT_TRUE(state.field_warning().empty()) << state.field_warning();
 }
 
 TEST(ViewerState, NewEquationKeepsTunedParametersAndStartsNewOnesAtOne) {

@@ -123,6 +123,24 @@ TEST(ViewerWindow, FloatersOnKummerShowBothSidesAndFollowMu) {
   check_mode("floaters", "floaters max_count=3000 seed=2\n", "steps 150\n");
 }
 
+// F ≡ 0 for a field that is no polynomial: the log says what the commands say, and the
+// ray-traced view is empty (interval arithmetic alone would draw the clip).
+TEST(ViewerWindow, AVanishingFieldIsWarnedAboutAndDrawsNothing) {
+  if (!has_xvfb()) GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb)";
+  const std::string dir = temp_dir();
+  const std::string first = dir + "/vanishing-sin.png", second = dir + "/vanishing-exp.png";
+  const std::string script = write_script(
+      "vanishing.txt", "mode raytrace\nwait\nscreenshot " + first +
+                           "\nequation 0*exp(x)\nwait\nscreenshot " + second + "\n");
+  const auto r = view("'sin(x) - sin(x)' --clip sphere:2 --size 800x500 --script " + script);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* eq : {"warning: sin(x) - sin(x): F vanishes identically",
+                         "warning: 0*exp(x): F vanishes identically"})
+    EXPECT_NE(r.output.find(eq), std::string::npos) << r.output;
+  for (const std::string& shot : {first, second})
+    EXPECT_LT(census(read_image(shot), 360).surface, 0.001) << shot;
+}
+
 TEST(ViewerWindow, MalformedEquationShowsTheErrorAndTheViewerKeepsRunning) {
   if (!has_xvfb()) GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb)";
   const std::string dir = temp_dir();
@@ -283,6 +301,9 @@ TEST(ViewerWindow, SingularSetNotesForASquareAndAnUnboundedSurface) {
       EXPECT_NE(note.find(c.words), std::string::npos) << note;
       EXPECT_GT(note_pixels(read_image(c.shot)), 100) << c.surface << ": the note is shown";
     }
+    // The commands warn about a sheet where F = G^2; so does the viewer's log.
+    EXPECT_EQ(r.output.find("warning: F = G^2") != std::string::npos, c.words == "F = G^2")
+        << r.output;
   }
 }
 
