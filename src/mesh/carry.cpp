@@ -314,6 +314,9 @@ CarryResult carry_mesh(const Mesh& mesh, const Surface& from, const Surface& to,
   ImproveOptions improve = options.improve;
   improve.threads = options.threads;
   improve.max_steps = options.improve_steps;
+  // Edge flips are the dearest part of a step (a serial pass over every edge): one pass undoes
+  // the stretching of a small move; the springs do the rest.
+  improve.flip_steps = std::min(improve.flip_steps, 1);
   MeshImprover improver(std::move(out), to, improve);
   for (int i = 0; i < options.improve_steps && !improver.converged() && !stop.stop_requested(); ++i)
     improver.step();
