@@ -312,7 +312,7 @@ CarryResult carry_mesh(const Mesh& mesh, const Surface& from, const Surface& to,
 
   // A few improver steps on the new surface, then its final projection.
   ImproveOptions improve = options.improve;
-  improve.threads = options.threads;
+  improve.threads = workers;  // its final normals too: not every core for a small mesh
   improve.max_steps = options.improve_steps;
   // Edge flips are the dearest part of a step (a serial pass over every edge): one pass undoes
   // the stretching of a small move; the springs do the rest.
@@ -324,6 +324,16 @@ CarryResult carry_mesh(const Mesh& mesh, const Surface& from, const Surface& to,
   improver.finish();
   r.improve = improver.stats();
   out = improver.take_mesh();
+  // The improver holds the singular points it finds itself; one it missed may have let its
+  // vertex drift. Node vertices stay on their nodes (the checks below see any harm).
+  bool node_moved = false;
+  for (size_t v = 0; v < nv; ++v) {
+    if (node_of[v] < 0) continue;
+    const Vec3& node = new_set.points[static_cast<size_t>(match[static_cast<size_t>(node_of[v])])];
+    node_moved |= out.positions[v] != node;
+    out.positions[v] = node;
+  }
+  if (node_moved) compute_field_normals(out, to, workers);
 
   // The checks away from the singular set (its neighbourhood as the new points give it).
   fr = vertex_frame(out, new_set.points);

@@ -21,16 +21,18 @@ Surface with_parameter(Surface s, const std::string& name, double value) {
   return s;
 }
 
+// One thread throughout: on a busy machine an OpenMP team spins at every barrier while one of
+// its threads waits for a core, and these meshes are small.
 Mesh improved_mesh(const Surface& s, int cells) {
-  Mesh m = polygonize(s, {.cells = cells});
-  improve_mesh(m, s, {.max_steps = 60});
+  Mesh m = polygonize(s, {.cells = cells, .threads = 1});
+  improve_mesh(m, s, {.max_steps = 60, .threads = 1});
   return m;
 }
 
 // Measured independently of the carrier: the mesh lies on F = 0 and no triangle away from
 // the singular points faces against ∇F. Returns how many known singular points are vertices.
 int expect_on_surface(const Mesh& m, const Surface& s, const std::string& where) {
-  const MeshQuality q = measure_quality(m, s);
+  const MeshQuality q = measure_quality(m, s, {.threads = 1});
   EXPECT_EQ(q.flipped_triangles, 0u) << where;
   EXPECT_LT(q.max_residual, 1e-9 * q.mean_edge_length) << where;
   EXPECT_EQ(q.zero_area_triangles, 0u) << where;
@@ -45,14 +47,14 @@ TEST(Carry, KummerFollowsASweepOfMu) {
   // grows from about one edge across to several, so somewhere its few triangles no longer
   // suffice and a rebuild is due; every other step is carried.
   Surface s = with_parameter(test::catalog_surface("kummer"), "mu", 1.2);
-  Mesh m = improved_mesh(s, 32);
+  Mesh m = improved_mesh(s, 24);
   int nodes = expect_on_surface(m, s, "start");
   EXPECT_EQ(nodes, 16);
   int carried = 0;
   for (int i = 1; i <= 40; ++i) {
     const Surface next = with_parameter(s, "mu", 1.2 + 0.8 * i / 40);
     const std::string where = "step " + std::to_string(i);
-    CarryResult r = carry_mesh(m, s, next);
+    CarryResult r = carry_mesh(m, s, next, {.threads = 1});
     if (r.carried()) {
       ++carried;
       EXPECT_EQ(r.mesh.vertex_count(), m.vertex_count()) << where;
@@ -66,7 +68,7 @@ TEST(Carry, KummerFollowsASweepOfMu) {
       // Only quality may fail here: the singular set keeps its sixteen nodes.
       EXPECT_NE(r.failure, CarryFailure::kSingularSet) << where << ": " << r.reason;
       EXPECT_TRUE(r.mesh.empty());
-      m = improved_mesh(next, 32);
+      m = improved_mesh(next, 24);
       nodes = expect_on_surface(m, next, where);
     }
     s = next;
@@ -83,10 +85,10 @@ TEST(Carry, SphereRadiusWithAClipCurve) {
   Mesh m = improved_mesh(s, 16);
   for (int i = 1; i <= 10; ++i) {
     const Surface next = with_parameter(s, "r", 1 + 0.5 * i / 10);
-    CarryResult r = carry_mesh(m, s, next);
+    CarryResult r = carry_mesh(m, s, next, {.threads = 1});
     ASSERT_TRUE(r.carried()) << "step " << i << ": " << r.reason;
     expect_on_surface(r.mesh, next, "step " + std::to_string(i));
-    const MeshQuality q = measure_quality(r.mesh, next);
+    const MeshQuality q = measure_quality(r.mesh, next, {.threads = 1});
     EXPECT_GT(q.boundary_vertices, 0u);
     EXPECT_LT(q.max_boundary_clip_value, 1e-9);
     m = std::move(r.mesh);
@@ -99,7 +101,7 @@ TEST(Carry, KummerRefusesWhereNodesAppear) {
   Surface s = with_parameter(test::catalog_surface("kummer"), "mu", 0.9);
   Mesh m = improved_mesh(s, 24);
   const Surface next = with_parameter(s, "mu", 1.1);
-  const CarryResult r = carry_mesh(m, s, next);
+  const CarryResult r = carry_mesh(m, s, next, {.threads = 1});
   EXPECT_EQ(r.failure, CarryFailure::kSingularSet);
   EXPECT_NE(r.reason.find("4 → 16"), std::string::npos) << r.reason;
   EXPECT_TRUE(r.mesh.empty());
@@ -115,7 +117,7 @@ TEST(Carry, TorusChangingTopologyIsRebuilt) {
   for (int i = 1; i <= 11 && refused == 0; ++i) {
     // R = 1 itself (a node at the origin) is stepped over.
     const Surface next = with_parameter(s, "R", 1.3 - 0.6 * i / 11);
-    CarryResult r = carry_mesh(m, s, next);
+    CarryResult r = carry_mesh(m, s, next, {.threads = 1});
     if (!r.carried()) {
       ++refused;
       EXPECT_LT(next.field.parameter_values()[0], 1.0) << r.reason;

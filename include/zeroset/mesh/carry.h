@@ -5,7 +5,7 @@
 /// parameter this way, and rebuilds from scratch only when carrying fails.
 ///
 /// Each free vertex moves by the floaters' parameter term dx = −(F_q·Δq) ∇F/|∇F|² (evaluated on
-/// the old surface, docs/algorithms.md A.1) and is then Newton-projected onto the new F = 0;
+/// the old surface, docs/algorithms.md A.4) and is then Newton-projected onto the new F = 0;
 /// vertices near a node are moved with the node instead (∇F vanishes there), node vertices go
 /// to the new node exactly, boundary vertices onto the new curve F = 0 ∩ G = 0, vertices of a
 /// singular curve back onto ∇F = 0. Carrying fails, and says why, where the mesh cannot follow:
