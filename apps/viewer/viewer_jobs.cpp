@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <thread>
 
 #include <fmt/core.h>
 
@@ -21,6 +22,9 @@ using json = nlohmann::json;
 // re-settle through the φF term) rather than through the F_q·q̇ term, which is a first-order
 // prediction and overshoots for large steps.
 constexpr double kGlideFraction = 0.05;
+
+// A carried mesh is improved further only when no new parameter value came for this long.
+constexpr auto kCarriedRestDelay = std::chrono::milliseconds(250);
 
 // Frame rate estimate smoothing (exponential, per frame).
 constexpr double kFpsSmoothing = 0.1;
@@ -175,7 +179,8 @@ void ViewerState::count_mesh_update(const MeshFrame& m, double now_s) {
   if (is_new_job && m.carried) ++mesh_carried_;
   if (is_new_job && !m.carried && !m.rebuild_reason.empty()) ++mesh_rebuilt_;
   // An improved mesh: a carried one, or the end of a rebuild's improvement.
-  const bool is_improved = (is_new_job && m.carried) || (m.is_final && m.improver_steps > 0);
+  const bool is_improved =
+      (is_new_job && m.carried) || (!m.carried && m.is_final && m.improver_steps > 0);
   if (is_improved) mesh_update_times_.push_back(now_s);
   std::erase_if(mesh_update_times_, [&](double t) { return t < now_s - kMeshRateWindow; });
 }
@@ -344,6 +349,39 @@ void ViewerState::start_mesh_job() {
       frame.mesh = std::move(mesh);
       if (!with_curves) frame.hidden_curves = std::move(frame.mesh.curves), frame.mesh.curves = {};
     };
+    // Step by step so the user watches the vertices move; a copy goes to the UI whenever it
+    // has taken the previous one. `frame` is the first frame (already filled in).
+    auto improve_on = [&](Mesh mesh, std::shared_ptr<MeshFrame> frame) {
+      const int steps_before = frame->improver_steps;
+      frame->is_final = !is_improving || (frame->carried && frame->improve.converged);
+      const bool is_final = frame->is_final;
+      box->post(frame);
+      if (is_final) return;
+      if (frame->carried) {
+        // While a parameter moves the next value comes within a frame or two and cancels
+        // this job: improving meanwhile would only take the core that draws.
+        const auto until = std::chrono::steady_clock::now() + kCarriedRestDelay;
+        while (!stop.stop_requested() && std::chrono::steady_clock::now() < until)
+          std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        if (stop.stop_requested()) return;
+      }
+      MeshImprover improver(std::move(mesh), surface, improve);
+      for (int step = 1; !stop.stop_requested(); ++step) {
+        const ImproveStats& stats = improver.step();
+        const bool is_done = improver.converged() || steps_before + step >= improve.max_steps;
+        if (is_done) improver.finish();
+        if (is_done || wants_frame->exchange(false)) {
+          auto next = std::make_shared<MeshFrame>(*frame);
+          set_mesh(*next, improver.mesh());
+          compute_field_normals(next->mesh, surface, threads);
+          next->improve = stats;
+          next->improver_steps = steps_before + step;
+          next->is_final = is_done;
+          box->post(std::move(next));
+        }
+        if (is_done) return;
+      }
+    };
     std::string reason;
     if (previous) {
       Mesh from = previous->mesh;
@@ -352,16 +390,16 @@ void ViewerState::start_mesh_job() {
       CarryResult r = carry_mesh(from, previous->surface, surface, carry, stop);
       if (stop.stop_requested()) return;
       if (r.carried()) {
+        // Shown at once; while the parameters stay, the improver goes on to rest from here.
         auto frame = new_frame();
-        set_mesh(*frame, std::move(r.mesh));
+        set_mesh(*frame, r.mesh);
         frame->polygonize = previous->polygonize;
         frame->crossings = previous->crossings;
         frame->improve = r.improve;
         frame->improver_steps = r.improve.steps;
-        frame->is_final = true;
         frame->carried = true;
         frame->carry_seconds = r.seconds;
-        box->post(std::move(frame));
+        improve_on(std::move(r.mesh), std::move(frame));
         return;
       }
       reason = std::move(r.reason);
@@ -381,31 +419,8 @@ void ViewerState::start_mesh_job() {
     set_mesh(*frame, mesh);
     frame->polygonize = polygonize_stats;
     frame->crossings = crossings;
-    frame->is_final = !is_improving;
     frame->rebuild_reason = reason;
-    box->post(std::move(frame));
-    if (!is_improving) return;
-    // Step by step so the user watches the vertices move; a copy goes to the UI whenever it
-    // has taken the previous one.
-    MeshImprover improver(std::move(mesh), surface, improve);
-    for (int step = 1; !stop.stop_requested(); ++step) {
-      const ImproveStats& stats = improver.step();
-      const bool is_done = improver.converged() || step >= improve.max_steps;
-      if (is_done) improver.finish();
-      if (is_done || wants_frame->exchange(false)) {
-        auto next = new_frame();
-        set_mesh(*next, improver.mesh());
-        compute_field_normals(next->mesh, surface, threads);
-        next->polygonize = polygonize_stats;
-        next->crossings = crossings;
-        next->improve = stats;
-        next->improver_steps = step;
-        next->is_final = is_done;
-        next->rebuild_reason = reason;
-        box->post(std::move(next));
-      }
-      if (is_done) return;
-    }
+    improve_on(std::move(mesh), std::move(frame));
   });
 }
 
