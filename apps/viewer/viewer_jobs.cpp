@@ -386,7 +386,8 @@ void ViewerState::start_mesh_job() {
     if (previous) {
       Mesh from = previous->mesh;
       if (!previous->hidden_curves.empty()) from.curves = previous->hidden_curves;
-      CarryOptions carry{.improve_steps = kCarryImproveSteps, .improve = improve, .threads = threads};
+      const CarryOptions carry{
+          .improve_steps = kCarryImproveSteps, .improve = improve, .threads = threads};
       CarryResult r = carry_mesh(from, previous->surface, surface, carry, stop);
       if (stop.stop_requested()) return;
       if (r.carried()) {
@@ -471,8 +472,9 @@ ViewerStats ViewerState::stats() const {
                     : !mesh_->rebuild_reason.empty() ? "rebuilt: " + mesh_->rebuild_reason
                                                      : "built";
   }
+  const double since = last_update_s_ - kMeshRateWindow;
   const auto recent = std::count_if(mesh_update_times_.begin(), mesh_update_times_.end(),
-                                    [&](double t) { return t >= last_update_s_ - kMeshRateWindow; });
+                                    [&](double t) { return t >= since; });
   s.mesh_updates_per_second = static_cast<double>(recent) / kMeshRateWindow;
   s.mesh_carried = mesh_carried_;
   s.mesh_rebuilt = mesh_rebuilt_;

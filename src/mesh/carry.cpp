@@ -5,8 +5,6 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <limits>
-#include <numbers>
 
 #include <fmt/core.h>
 
@@ -152,7 +150,8 @@ bool project_onto_singular_curve(Evaluator& ev, Vec3& p, double tolerance) {
     const CriticalStep c = critical_step(s.gradient, s.hessian);
     if (!c.step.allFinite()) return false;
     p -= c.step;
-    if (c.step.norm() < tolerance) return std::abs(ev.value(p)) < 1e3 * tolerance * (1 + s.hessian.norm());
+    if (c.step.norm() < tolerance)
+      return std::abs(ev.value(p)) < 1e3 * tolerance * (1 + s.hessian.norm());
   }
   return false;
 }
@@ -161,16 +160,26 @@ bool project_onto_singular_curve(Evaluator& ev, Vec3& p, double tolerance) {
 
 std::string_view to_string(CarryFailure failure) {
   switch (failure) {
-    case CarryFailure::kNone: return "carried";
-    case CarryFailure::kEquation: return "equation";
-    case CarryFailure::kSingularSet: return "singular set";
-    case CarryFailure::kProjection: return "projection";
-    case CarryFailure::kLongMove: return "long move";
-    case CarryFailure::kClip: return "clip";
-    case CarryFailure::kFlipped: return "flipped";
-    case CarryFailure::kAngle: return "angle";
-    case CarryFailure::kResidual: return "residual";
-    case CarryFailure::kStopped: return "stopped";
+    case CarryFailure::kNone:
+      return "carried";
+    case CarryFailure::kEquation:
+      return "equation";
+    case CarryFailure::kSingularSet:
+      return "singular set";
+    case CarryFailure::kProjection:
+      return "projection";
+    case CarryFailure::kLongMove:
+      return "long move";
+    case CarryFailure::kClip:
+      return "clip";
+    case CarryFailure::kFlipped:
+      return "flipped";
+    case CarryFailure::kAngle:
+      return "angle";
+    case CarryFailure::kResidual:
+      return "residual";
+    case CarryFailure::kStopped:
+      return "stopped";
   }
   return "?";
 }
@@ -182,7 +191,8 @@ CarryResult carry_mesh(const Mesh& mesh, const Surface& from, const Surface& to,
   const size_t nv = mesh.vertex_count();
   for (const auto& t : mesh.triangles)
     for (std::uint32_t v : t)
-      if (v >= nv) throw InvalidArgument("mesh", fmt::format("vertex {}", v), "refers to a missing vertex");
+      if (v >= nv)
+        throw InvalidArgument("mesh", fmt::format("vertex {}", v), "refers to a missing vertex");
   if (from.field.source() != to.field.source() ||
       from.field.parameter_names() != to.field.parameter_names())
     return failed(CarryFailure::kEquation, "another equation", t0);
@@ -194,16 +204,16 @@ CarryResult carry_mesh(const Mesh& mesh, const Surface& from, const Surface& to,
   const SingularInfo old_set = singular_info(from, options);
   const SingularInfo new_set = singular_info(to, options);
   if (old_set.points.size() != new_set.points.size())
-    return failed(CarryFailure::kSingularSet, fmt::format("singular points: {} → {}",
-                                                          old_set.points.size(),
-                                                          new_set.points.size()), t0);
+    return failed(
+        CarryFailure::kSingularSet,
+        fmt::format("singular points: {} → {}", old_set.points.size(), new_set.points.size()), t0);
   if (old_set.curves != new_set.curves)
     return failed(CarryFailure::kSingularSet,
                   fmt::format("singular curves: {} → {}", old_set.curves, new_set.curves), t0);
   VertexFrame fr = vertex_frame(mesh, old_set.points);
   const double h = fr.mean_edge;
-  const std::vector<int> match = match_points(old_set.points, new_set.points,
-                                              options.max_move_edges * h * 4);
+  const std::vector<int> match =
+      match_points(old_set.points, new_set.points, options.max_move_edges * h * 4);
   if (match.size() != old_set.points.size())
     return failed(CarryFailure::kSingularSet, "a singular point jumped", t0);
   if (stop.stop_requested()) return failed(CarryFailure::kStopped, "stopped", t0);
@@ -237,77 +247,81 @@ CarryResult carry_mesh(const Mesh& mesh, const Surface& from, const Surface& to,
   detail::ExceptionTrap trap;
   const long long n = static_cast<long long>(nv);
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 256)
-  for (long long vv = 0; vv < n; ++vv) trap.run([&] {
-    if (failure.load(std::memory_order_relaxed) != 0) return;
-    const size_t v = static_cast<size_t>(vv);
-    const Vec3 start = mesh.positions[v];
-    Vec3 p = start, predicted = start;
-    const double limit = options.max_move_edges * fr.edge[v];
-    auto fail = [&](CarryFailure why) {
-      int none = 0;
-      if (failure.compare_exchange_strong(none, static_cast<int>(why))) failed_vertex = vv;
-    };
-    const int nearest = fr.nearest_node[v];
-    if (node_of[v] >= 0) {
-      p = new_set.points[static_cast<size_t>(match[static_cast<size_t>(node_of[v])])];
-    } else if (fr.on_curve[v]) {
-      if (!project_onto_singular_curve(new_pool.local(), p, tolerance)) return fail(CarryFailure::kProjection);
-    } else {
-      // The predictor: the parameter term, blended into the node's own move within
-      // kNodeReach edges of a node (fully the node's within half of that), so that
-      // neighbours do not get moves of a different kind.
-      double w = 0;
-      Vec3 node_move = Vec3::Zero();
-      if (nearest >= 0) {
-        const size_t k = static_cast<size_t>(nearest);
-        node_move = new_set.points[static_cast<size_t>(match[k])] - old_set.points[k];
-        const double d = (start - old_set.points[k]).norm(), reach = kNodeReach * h;
-        w = std::clamp(2 * (reach - d) / reach, 0.0, 1.0);
+  for (long long vv = 0; vv < n; ++vv)
+    trap.run([&] {
+      if (failure.load(std::memory_order_relaxed) != 0) return;
+      const size_t v = static_cast<size_t>(vv);
+      const Vec3 start = mesh.positions[v];
+      Vec3 p = start, predicted = start;
+      const double limit = options.max_move_edges * fr.edge[v];
+      auto fail = [&](CarryFailure why) {
+        int none = 0;
+        if (failure.compare_exchange_strong(none, static_cast<int>(why))) failed_vertex = vv;
+      };
+      const int nearest = fr.nearest_node[v];
+      if (node_of[v] >= 0) {
+        p = new_set.points[static_cast<size_t>(match[static_cast<size_t>(node_of[v])])];
+      } else if (fr.on_curve[v]) {
+        if (!project_onto_singular_curve(new_pool.local(), p, tolerance))
+          return fail(CarryFailure::kProjection);
+      } else {
+        // The predictor: the parameter term, blended into the node's own move within
+        // kNodeReach edges of a node (fully the node's within half of that), so that
+        // neighbours do not get moves of a different kind.
+        double w = 0;
+        Vec3 node_move = Vec3::Zero();
+        if (nearest >= 0) {
+          const size_t k = static_cast<size_t>(nearest);
+          node_move = new_set.points[static_cast<size_t>(match[k])] - old_set.points[k];
+          const double d = (start - old_set.points[k]).norm(), reach = kNodeReach * h;
+          w = std::clamp(2 * (reach - d) / reach, 0.0, 1.0);
+        }
+        Vec3 term = Vec3::Zero();
+        if (w < 1) {
+          const FieldSample s = old_pool.local().sample(start, false, true);
+          double fq = 0;
+          for (size_t k = 0; k < dq.size() && k < s.dq.size(); ++k) fq += s.dq[k] * dq[k];
+          const double g2 = s.gradient.squaredNorm();
+          if (g2 > 0 && std::isfinite(fq) && std::isfinite(g2)) term = -(fq / g2) * s.gradient;
+        }
+        p += w * node_move + (1 - w) * term;
+        predicted = p;
+        const bool on_clip = out.is_boundary.size() == nv && out.is_boundary[v] && has_clip &&
+                             std::abs(from.clip.value(start)) <= 1e-7 * (1 + start.norm());
+        if (on_clip) {
+          p = project_onto_clip_curve(new_pool.local(), to.clip, p, limit);
+          Vec3 g;
+          const double f = new_pool.local().value_gradient(p, g);
+          if (!has_residual(f, g.norm()) || residual(f, g.norm()) > options.max_residual_edges * h)
+            return fail(CarryFailure::kClip);
+        } else if (!project_onto_surface(new_pool.local(), p, tolerance, 2 * limit)) {
+          return fail(CarryFailure::kProjection);
+        }
       }
-      Vec3 term = Vec3::Zero();
-      if (w < 1) {
-        const FieldSample s = old_pool.local().sample(start, false, true);
-        double fq = 0;
-        for (size_t k = 0; k < dq.size() && k < s.dq.size(); ++k) fq += s.dq[k] * dq[k];
-        const double g2 = s.gradient.squaredNorm();
-        if (g2 > 0 && std::isfinite(fq) && std::isfinite(g2)) term = -(fq / g2) * s.gradient;
-      }
-      p += w * node_move + (1 - w) * term;
-      predicted = p;
-      const bool on_clip = out.is_boundary.size() == nv && out.is_boundary[v] && has_clip &&
-                           std::abs(from.clip.value(start)) <= 1e-7 * (1 + start.norm());
-      if (on_clip) {
-        p = project_onto_clip_curve(new_pool.local(), to.clip, p, limit);
-        Vec3 g;
-        const double f = new_pool.local().value_gradient(p, g);
-        if (!has_residual(f, g.norm()) ||
-            residual(f, g.norm()) > options.max_residual_edges * h)
-          return fail(CarryFailure::kClip);
-      } else if (!project_onto_surface(new_pool.local(), p, tolerance, 2 * limit)) {
-        return fail(CarryFailure::kProjection);
-      }
-    }
-    // The prediction is first order: where Newton has to correct it by more than a fraction
-    // of an edge, the surface did not just move here (a new sheet, a pinch) or moved too far.
-    moved[v] = (p - start).norm();
-    if (!((p - predicted).norm() <= limit) && node_of[v] < 0) return fail(CarryFailure::kLongMove);
-    if (has_clip && !(out.is_boundary.size() == nv && out.is_boundary[v]) &&
-        to.clip.value(p) > 1e-9 * (1 + p.norm()))
-      return fail(CarryFailure::kClip);
-    out.positions[v] = p;
-  });
+      // The prediction is first order: where Newton has to correct it by more than a fraction
+      // of an edge, the surface did not just move here (a new sheet, a pinch) or moved too far.
+      moved[v] = (p - start).norm();
+      if (!((p - predicted).norm() <= limit) && node_of[v] < 0)
+        return fail(CarryFailure::kLongMove);
+      if (has_clip && !(out.is_boundary.size() == nv && out.is_boundary[v]) &&
+          to.clip.value(p) > 1e-9 * (1 + p.norm()))
+        return fail(CarryFailure::kClip);
+      out.positions[v] = p;
+    });
   trap.rethrow();
   if (const auto why = static_cast<CarryFailure>(failure.load()); why != CarryFailure::kNone) {
     const long long v = failed_vertex.load();
     const char* what = why == CarryFailure::kLongMove ? "was corrected by more than {} edge"
                        : why == CarryFailure::kClip   ? "left the clip curve"
                                                       : "found no surface nearby";
-    return failed(why, fmt::format(fmt::runtime(fmt::format("a vertex {}", what)),
-                                   options.max_move_edges) +
-                           (v >= 0 ? fmt::format(" (vertex {})", v) : std::string()),
-                  t0);
+    return failed(
+        why,
+        fmt::format(fmt::runtime(fmt::format("a vertex {}", what)), options.max_move_edges) +
+            (v >= 0 ? fmt::format(" (vertex {})", v) : std::string()),
+        t0);
   }
-  for (size_t v = 0; v < nv; ++v) r.max_move_edges = std::max(r.max_move_edges, moved[v] / fr.edge[v]);
+  for (size_t v = 0; v < nv; ++v)
+    r.max_move_edges = std::max(r.max_move_edges, moved[v] / fr.edge[v]);
   if (stop.stop_requested()) return failed(CarryFailure::kStopped, "stopped", t0);
 
   // A few improver steps on the new surface, then its final projection.
@@ -373,8 +387,8 @@ CarryResult carry_mesh(const Mesh& mesh, const Surface& from, const Surface& to,
   detail::values_gradients(new_pool, workers, centroids, fc, gc);
   for (size_t i = 0; i < checked.size(); ++i) {
     const auto& tri = out.triangles[checked[i]];
-    const Vec3 normal = detail::area_normal(out.positions[tri[0]], out.positions[tri[1]],
-                                            out.positions[tri[2]]);
+    const Vec3 normal =
+        detail::area_normal(out.positions[tri[0]], out.positions[tri[1]], out.positions[tri[2]]);
     if (gc[i].allFinite() && normal.dot(gc[i]) < 0) ++r.flipped_triangles;
   }
   r.smallest_angle_deg = checked.empty() ? 0 : smallest_after;
@@ -389,8 +403,8 @@ CarryResult carry_mesh(const Mesh& mesh, const Surface& from, const Surface& to,
     return refuse(CarryFailure::kFlipped,
                   fmt::format("{} triangles face against ∇F", r.flipped_triangles));
   if (smallest_after < options.min_angle_deg && smallest_after < smallest_before)
-    return refuse(CarryFailure::kAngle,
-                  fmt::format("smallest angle {:.2g}° (was {:.2g}°)", smallest_after, smallest_before));
+    return refuse(CarryFailure::kAngle, fmt::format("smallest angle {:.2g}° (was {:.2g}°)",
+                                                    smallest_after, smallest_before));
   if (!(worst <= options.max_residual_edges * h))
     return refuse(CarryFailure::kResidual,
                   fmt::format("|F|/|∇F| = {:.2g} edge lengths left", h > 0 ? worst / h : worst));

@@ -8,6 +8,7 @@
 #include "mesh_test_support.h"
 #include "zeroset/error.h"
 #include "zeroset/mesh/carry.h"
+#include "zeroset/mesh/crossings.h"
 #include "zeroset/mesh/improve.h"
 #include "zeroset/mesh/polygonize.h"
 #include "zeroset/mesh/quality.h"
@@ -96,6 +97,33 @@ TEST(Carry, SphereRadiusWithAClipCurve) {
   }
 }
 
+TEST(Carry, ACrossingCurveMovesWithItsSheets) {
+  // Two planes z − c = ±x cross on the line x = 0, z = c: its vertices (mesh_crossings makes
+  // them shared by the four sheets) go back onto the line as c moves.
+  Surface s = test::equation("(z - c)^2 - x^2", Clip::sphere(1));
+  s = with_parameter(s, "c", 0);
+  PolygonizeStats ps;
+  Mesh m = polygonize(s, {.cells = 16, .threads = 1}, &ps);
+  ASSERT_GT(mesh_crossings(m, s, ps.cell_size).crossing_curves, 0);
+  improve_mesh(m, s, {.max_steps = 30, .threads = 1});
+  ASSERT_FALSE(m.curves.empty());
+  for (int i = 1; i <= 8; ++i) {
+    const double c = 0.2 * i / 8;
+    const Surface next = with_parameter(s, "c", c);
+    CarryResult r = carry_mesh(m, s, next, {.threads = 1});
+    ASSERT_TRUE(r.carried()) << "c = " << c << ": " << r.reason;
+    ASSERT_EQ(r.mesh.curves.size(), m.curves.size());
+    for (const MeshCurve& curve : r.mesh.curves)
+      for (std::uint32_t v : curve.vertices) {
+        const Vec3& p = r.mesh.positions[v];
+        EXPECT_LT(std::abs(p.x()), 1e-9) << "c = " << c;
+        EXPECT_LT(std::abs(p.z() - c), 1e-9) << "c = " << c;
+      }
+    m = std::move(r.mesh);
+    s = next;
+  }
+}
+
 TEST(Carry, KummerRefusesWhereNodesAppear) {
   // Below mu = 1 four real nodes, above it sixteen: the mesh must be rebuilt there.
   Surface s = with_parameter(test::catalog_surface("kummer"), "mu", 0.9);
@@ -152,9 +180,8 @@ TEST(Carry, ASphereGrowingOutOfItsClipIsRebuilt) {
 }
 
 TEST(Carry, ATwistedSheetIsNotFollowedByNewtonAlone) {
-  // F = z − q·x: the plane turns about the y axis. Far from the axis the first-order move is
-  // exact (F is linear in q), so a big turn is carried only as far as the checks allow: a
-  // turn of the plane through a right angle is never carried.
+  // F = z cos q − x sin q: the plane turns about the y axis. Turned through a right angle in
+  // one go, no vertex is near where its first-order move leads: never carried.
   Surface s = test::equation("z*cos(q) - x*sin(q)", Clip::sphere(1));
   s = with_parameter(s, "q", 0);
   const Mesh m = improved_mesh(s, 16);

@@ -460,7 +460,8 @@ TEST(ViewerWindow, AnimatedMeshIsCarriedAndRebuiltWhereNodesAppear) {
       "mode mesh\nmesh cells=24\nrange mu 1.2 2.0\nparam mu 1.3\nwait\n"
       "speed 0.05\nplay mu\nsleep 3\nstats\npause\n"
       "param mu 0.9\nwait\nparam mu 1.1\nwait\nstats\n";
-  const auto r = view("kummer --no-ui --size 300x300 --script " + write_script("live-mesh.txt", text));
+  const auto r =
+      view("kummer --no-ui --size 300x300 --script " + write_script("live-mesh.txt", text));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::vector<nlohmann::json> stats;
   std::istringstream lines(r.output);

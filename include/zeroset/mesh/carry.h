@@ -11,8 +11,8 @@
 /// singular curve back onto ∇F = 0. Carrying fails, and says why, where the mesh cannot follow:
 /// the equation or the number of singular points or curves changed, a vertex's projection fails
 /// or corrects the first-order prediction by more than a fraction of an edge, the clip now cuts
-/// the mesh elsewhere, or the result is worse than a rebuild (triangles facing against ∇F away from the singular set, a
-/// collapsed angle, a residual left).
+/// the mesh elsewhere, or the result is worse than a rebuild (triangles facing against ∇F away
+/// from the singular set, a collapsed angle, a residual left).
 #include <cstdint>
 #include <stop_token>
 #include <string>
@@ -45,29 +45,30 @@ struct CarryOptions {
 
 /// Why carrying failed.
 enum class CarryFailure : std::uint8_t {
-  kNone,           ///< carried
-  kEquation,       ///< the field is another one (a different equation)
-  kSingularSet,    ///< singular points or curves appeared or disappeared
-  kProjection,     ///< a vertex found no point of the new surface nearby
-  kLongMove,       ///< Newton corrected a vertex by more than max_move_edges of its edges
-  kClip,           ///< the clip cuts the mesh elsewhere (a vertex left it, the curve moved off)
-  kFlipped,        ///< triangles face against ∇F away from the singular set
-  kAngle,          ///< the smallest angle collapsed
-  kResidual,       ///< vertices were left off F = 0
-  kStopped,        ///< the stop token was requested
+  kNone,         ///< carried
+  kEquation,     ///< the field is another one (a different equation)
+  kSingularSet,  ///< singular points or curves appeared or disappeared
+  kProjection,   ///< a vertex found no point of the new surface nearby
+  kLongMove,     ///< Newton corrected a vertex by more than max_move_edges of its edges
+  kClip,         ///< the clip cuts the mesh elsewhere (a vertex left it, the curve moved off)
+  kFlipped,      ///< triangles face against ∇F away from the singular set
+  kAngle,        ///< the smallest angle collapsed
+  kResidual,     ///< vertices were left off F = 0
+  kStopped,      ///< the stop token was requested
 };
 std::string_view to_string(CarryFailure failure);
 
 struct CarryResult {
   CarryFailure failure = CarryFailure::kNone;
-  std::string reason;  ///< what failed, in words, e.g. "singular points: 4 → 16"; empty when carried
-  Mesh mesh;           ///< the carried mesh (normals ∇F/|∇F|); empty when carrying failed
-  double max_move_edges = 0;     ///< largest vertex move, in the vertex's mean edge lengths
-  double max_residual = 0;       ///< max |F|/|∇F| away from the singular set, after
-  double smallest_angle_deg = 0; ///< smallest angle away from the singular set, after
+  std::string
+      reason;  ///< what failed, in words, e.g. "singular points: 4 → 16"; empty when carried
+  Mesh mesh;   ///< the carried mesh (normals ∇F/|∇F|); empty when carrying failed
+  double max_move_edges = 0;      ///< largest vertex move, in the vertex's mean edge lengths
+  double max_residual = 0;        ///< max |F|/|∇F| away from the singular set, after
+  double smallest_angle_deg = 0;  ///< smallest angle away from the singular set, after
   long long flipped_triangles = 0;
-  int node_vertices = 0;         ///< vertices put onto the new singular points
-  ImproveStats improve;          ///< of the improver steps
+  int node_vertices = 0;  ///< vertices put onto the new singular points
+  ImproveStats improve;   ///< of the improver steps
   double seconds = 0;
   bool carried() const { return failure == CarryFailure::kNone; }
 };
