@@ -386,8 +386,9 @@ void ViewerState::start_mesh_job() {
     if (previous) {
       Mesh from = previous->mesh;
       if (!previous->hidden_curves.empty()) from.curves = previous->hidden_curves;
-      const CarryOptions carry{
-          .improve_steps = kCarryImproveSteps, .improve = improve, .threads = threads};
+      const CarryOptions carry{.improve_steps = std::min(kCarryImproveSteps, improve.max_steps),
+                               .improve = improve,
+                               .threads = threads};
       CarryResult r = carry_mesh(from, previous->surface, surface, carry, stop);
       if (stop.stop_requested()) return;
       if (r.carried()) {
