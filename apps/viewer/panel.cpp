@@ -198,6 +198,8 @@ void mesh_settings(ViewerState& state) {
   const auto frame = state.mesh();
   ImGui::Text("%zu vertices, %zu triangles", st.mesh_vertices, st.mesh_triangles);
   if (frame) {
+    // Whether the last parameter change carried the mesh or rebuilt it (and why).
+    ImGui::TextWrapped("%s, %.1f updates/s", st.mesh_update.c_str(), st.mesh_updates_per_second);
     ImGui::Text("marching cubes %.0f ms", 1000 * frame->polygonize.seconds_total);
     const CrossingStats& c = frame->crossings;
     if (c.crossing_curves > 0 && c.failure.empty())

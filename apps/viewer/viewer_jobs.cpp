@@ -3,9 +3,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <thread>
+
+#include <fmt/core.h>
 
 #include "viewer_state.h"
 #include "viewer_state_detail.h"
+#include "zeroset/mesh/carry.h"
 #include "zeroset/mesh/improve.h"
 #include "zeroset/mesh/mesh_ops.h"
 
@@ -18,6 +22,9 @@ using json = nlohmann::json;
 // re-settle through the φF term) rather than through the F_q·q̇ term, which is a first-order
 // prediction and overshoots for large steps.
 constexpr double kGlideFraction = 0.05;
+
+// A carried mesh is improved further only when no new parameter value came for this long.
+constexpr auto kCarriedRestDelay = std::chrono::milliseconds(250);
 
 // Frame rate estimate smoothing (exponential, per frame).
 constexpr double kFpsSmoothing = 0.1;
@@ -65,7 +72,11 @@ json ViewerStats::to_json() const {
       j["mesh"] = {{"vertices", mesh_vertices},
                    {"triangles", mesh_triangles},
                    {"improver_steps", improver_steps},
-                   {"polygonize_seconds", polygonize_seconds}};
+                   {"polygonize_seconds", polygonize_seconds},
+                   {"updates_per_second", mesh_updates_per_second},
+                   {"carried", mesh_carried},
+                   {"rebuilt", mesh_rebuilt},
+                   {"last_update", mesh_update}};
       break;
     case Mode::kRaytrace:
       j["raytrace"] = {{"divisor", preview_divisor}, {"seconds", preview_seconds}};
@@ -148,6 +159,7 @@ bool ViewerState::collect_results(double now_s) {
   // interval: with software OpenGL drawing them can cost more than computing them.
   if (now_s - last_live_frame_s_ < live_frame_interval_s_) return is_new;
   if (auto m = mesh_box_.take()) {
+    count_mesh_update(*m, now_s);
     mesh_ = std::move(m);
     mesh_wants_frame_->store(true);
     last_live_frame_s_ = now_s;
@@ -160,6 +172,17 @@ bool ViewerState::collect_results(double now_s) {
     is_new = true;
   }
   return is_new;
+}
+
+void ViewerState::count_mesh_update(const MeshFrame& m, double now_s) {
+  const bool is_new_job = !mesh_ || mesh_->generation != m.generation;
+  if (is_new_job && m.carried) ++mesh_carried_;
+  if (is_new_job && !m.carried && !m.rebuild_reason.empty()) ++mesh_rebuilt_;
+  // An improved mesh: a carried one, or the end of a rebuild's improvement.
+  const bool is_improved =
+      (is_new_job && m.carried) || (!m.carried && m.is_final && m.improver_steps > 0);
+  if (is_improved) mesh_update_times_.push_back(now_s);
+  std::erase_if(mesh_update_times_, [&](double t) { return t < now_s - kMeshRateWindow; });
 }
 
 void ViewerState::start_preview_job() {
@@ -302,11 +325,87 @@ void ViewerState::start_mesh_job() {
   const bool with_curves = mesh_settings_.curves;
   const Surface surface = surface_;
   const std::uint64_t generation = generation_;
+  const std::uint64_t structure = mesh_structure_;
   Mailbox<MeshFrame>* box = &mesh_box_;
   std::shared_ptr<std::atomic<bool>> wants_frame = mesh_wants_frame_;
   wants_frame->store(true);
   const int threads = threads_;
+  // Only the parameters changed since the mesh on screen was made: carry it (docs/viewer.md,
+  // live meshes), rebuilding only when that fails.
+  std::shared_ptr<const MeshFrame> previous;
+  if (is_improving && mesh_ && mesh_->structure == structure && !mesh_->mesh.empty() &&
+      mesh_->surface.field.parameter_values() != surface.field.parameter_values())
+    previous = mesh_;
   worker_.submit([=](std::stop_token stop) {
+    auto new_frame = [&]() {
+      auto frame = std::make_shared<MeshFrame>();
+      frame->surface = surface;
+      frame->structure = structure;
+      frame->generation = generation;
+      return frame;
+    };
+    // The frame shows the curves only when the settings say so; carrying needs them always.
+    auto set_mesh = [&](MeshFrame& frame, Mesh mesh) {
+      frame.mesh = std::move(mesh);
+      if (!with_curves) frame.hidden_curves = std::move(frame.mesh.curves), frame.mesh.curves = {};
+    };
+    // Step by step so the user watches the vertices move; a copy goes to the UI whenever it
+    // has taken the previous one. `frame` is the first frame (already filled in).
+    auto improve_on = [&](Mesh mesh, std::shared_ptr<MeshFrame> frame) {
+      const int steps_before = frame->improver_steps;
+      frame->is_final = !is_improving || (frame->carried && frame->improve.converged);
+      const bool is_final = frame->is_final;
+      box->post(frame);
+      if (is_final) return;
+      if (frame->carried) {
+        // While a parameter moves the next value comes within a frame or two and cancels
+        // this job: improving meanwhile would only take the core that draws.
+        const auto until = std::chrono::steady_clock::now() + kCarriedRestDelay;
+        while (!stop.stop_requested() && std::chrono::steady_clock::now() < until)
+          std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        if (stop.stop_requested()) return;
+      }
+      MeshImprover improver(std::move(mesh), surface, improve);
+      for (int step = 1; !stop.stop_requested(); ++step) {
+        const ImproveStats& stats = improver.step();
+        const bool is_done = improver.converged() || steps_before + step >= improve.max_steps;
+        if (is_done) improver.finish();
+        if (is_done || wants_frame->exchange(false)) {
+          auto next = std::make_shared<MeshFrame>(*frame);
+          set_mesh(*next, improver.mesh());
+          compute_field_normals(next->mesh, surface, threads);
+          next->improve = stats;
+          next->improver_steps = steps_before + step;
+          next->is_final = is_done;
+          box->post(std::move(next));
+        }
+        if (is_done) return;
+      }
+    };
+    std::string reason;
+    if (previous) {
+      Mesh from = previous->mesh;
+      if (!previous->hidden_curves.empty()) from.curves = previous->hidden_curves;
+      const CarryOptions carry{.improve_steps = std::min(kCarryImproveSteps, improve.max_steps),
+                               .improve = improve,
+                               .threads = threads};
+      CarryResult r = carry_mesh(from, previous->surface, surface, carry, stop);
+      if (stop.stop_requested()) return;
+      if (r.carried()) {
+        // Shown at once; while the parameters stay, the improver goes on to rest from here.
+        auto frame = new_frame();
+        set_mesh(*frame, r.mesh);
+        frame->polygonize = previous->polygonize;
+        frame->crossings = previous->crossings;
+        frame->improve = r.improve;
+        frame->improver_steps = r.improve.steps;
+        frame->carried = true;
+        frame->carry_seconds = r.seconds;
+        improve_on(std::move(r.mesh), std::move(frame));
+        return;
+      }
+      reason = std::move(r.reason);
+    }
     // A resolution whose grid would not fit in memory is refused (the message goes to the
     // panel) instead of taking the viewer down.
     check_grid_memory(surface, options, "cells");
@@ -318,37 +417,12 @@ void ViewerState::start_mesh_job() {
             ? CrossingStats{}
             : mesh_crossings(mesh, surface, polygonize_stats.cell_size, {}, nullptr, stop);
     if (stop.stop_requested()) return;
-    auto frame = std::make_shared<MeshFrame>();
-    frame->mesh = mesh;
-    if (!with_curves) frame->mesh.curves.clear();
+    auto frame = new_frame();
+    set_mesh(*frame, mesh);
     frame->polygonize = polygonize_stats;
     frame->crossings = crossings;
-    frame->is_final = !is_improving;
-    frame->generation = generation;
-    box->post(std::move(frame));
-    if (!is_improving) return;
-    // Step by step so the user watches the vertices move; a copy goes to the UI whenever it
-    // has taken the previous one.
-    MeshImprover improver(std::move(mesh), surface, improve);
-    for (int step = 1; !stop.stop_requested(); ++step) {
-      const ImproveStats& stats = improver.step();
-      const bool is_done = improver.converged() || step >= improve.max_steps;
-      if (is_done) improver.finish();
-      if (is_done || wants_frame->exchange(false)) {
-        auto next = std::make_shared<MeshFrame>();
-        next->mesh = improver.mesh();
-        if (!with_curves) next->mesh.curves.clear();
-        compute_field_normals(next->mesh, surface, threads);
-        next->polygonize = polygonize_stats;
-        next->crossings = crossings;
-        next->improve = stats;
-        next->improver_steps = step;
-        next->is_final = is_done;
-        next->generation = generation;
-        box->post(std::move(next));
-      }
-      if (is_done) return;
-    }
+    frame->rebuild_reason = reason;
+    improve_on(std::move(mesh), std::move(frame));
   });
 }
 
@@ -394,7 +468,17 @@ ViewerStats ViewerState::stats() const {
     s.mesh_triangles = mesh_->mesh.triangle_count();
     s.improver_steps = mesh_->improver_steps;
     s.polygonize_seconds = mesh_->polygonize.seconds_total;
+    s.mesh_update = mesh_->carried                  ? fmt::format("carried in {:.0f} ms",
+                                                                  1000 * mesh_->carry_seconds)
+                    : !mesh_->rebuild_reason.empty() ? "rebuilt: " + mesh_->rebuild_reason
+                                                     : "built";
   }
+  const double since = last_update_s_ - kMeshRateWindow;
+  const auto recent = std::count_if(mesh_update_times_.begin(), mesh_update_times_.end(),
+                                    [&](double t) { return t >= since; });
+  s.mesh_updates_per_second = static_cast<double>(recent) / kMeshRateWindow;
+  s.mesh_carried = mesh_carried_;
+  s.mesh_rebuilt = mesh_rebuilt_;
   if (preview_) {
     s.preview_divisor = preview_->divisor;
     s.preview_seconds = preview_->stats.seconds;

@@ -76,6 +76,7 @@ void check_live_limits(const MeshSettings& m) {
 void ViewerState::set_mode(Mode mode) {
   if (mode == mode_) return;
   mode_ = mode;
+  ++mesh_structure_;
   cancel_now_ = true;
   needs_restart_ = true;
   fresh_floaters_ = true;
@@ -176,6 +177,7 @@ bool ViewerState::set_mesh_settings(const MeshSettings& settings) {
     validate_settings(settings);
     check_live_limits(settings);
     mesh_settings_ = settings;
+    ++mesh_structure_;
     if (mode_ == Mode::kMesh) {
       needs_restart_ = true;
       cancel_now_ = true;

@@ -306,6 +306,7 @@ void ViewerState::surface_changed(bool structure) {
     if (!warning.empty()) set_status("warning: " + warning);
   }
   if (structure) {
+    ++mesh_structure_;  // another equation or clip: a mesh is not carried across
     // The set of another equation or clip must not be drawn on this one.
     singular_floor_ = surface_version_;
     singular_ = nullptr;

@@ -84,6 +84,16 @@ struct MeshFrame {
   int improver_steps = 0;       ///< steps applied to `mesh` so far
   bool is_final = false;        ///< no more steps will follow for this generation
   std::uint64_t generation = 0;
+  /// What the mesh lies on (its parameter values): a parameter change carries it from here.
+  Surface surface;
+  /// The mesh settings and surface structure it was made for (ViewerState's mesh_structure_):
+  /// only a mesh of the current structure is carried.
+  std::uint64_t structure = 0;
+  /// The singular curves when the settings leave them out of `mesh` (carrying needs them).
+  std::vector<MeshCurve> hidden_curves;
+  bool carried = false;         ///< carried from the previous mesh (docs/viewer.md, live meshes)
+  double carry_seconds = 0;     ///< the carrying's time
+  std::string rebuild_reason;   ///< why carrying failed when it was tried and this was rebuilt
 };
 
 /// A parameter animation: the parameter runs through its range at `speed` ranges per second,
@@ -125,6 +135,10 @@ inline constexpr MeshSettings kLiveMeshDefaults{.cells = 64,
                                                 .boundary = BoundaryMode::kConstrained};
 /// Improver steps at most when "improve" is auto (each step is drawn).
 inline constexpr int kLiveImproveSteps = 200;
+/// Improver steps after carrying a mesh to new parameter values (docs/viewer.md, live meshes).
+inline constexpr int kCarryImproveSteps = 3;
+/// Seconds over which the mesh update rate is counted.
+inline constexpr double kMeshRateWindow = 2;
 
 /// Refuses settings beyond the viewer's live limits with SettingError ("max_count", "cells"),
 /// saying which limit and that the command line takes more.
@@ -155,6 +169,12 @@ struct ViewerStats {
   std::size_t mesh_triangles = 0;
   int improver_steps = 0;
   double polygonize_seconds = 0;
+  /// Improved meshes shown per second (carried ones, and rebuilds once improved) over the
+  /// last kMeshRateWindow seconds, and how many were carried or rebuilt so far.
+  double mesh_updates_per_second = 0;
+  std::size_t mesh_carried = 0;
+  std::size_t mesh_rebuilt = 0;
+  std::string mesh_update;  ///< "carried in 12 ms", "rebuilt: <reason>" or "built"
   // ray tracing
   int preview_divisor = 0;  ///< 0: nothing yet
   double preview_seconds = 0;
@@ -382,6 +402,8 @@ class ViewerState {
   void start_floater_job();
   void start_mesh_job();
   bool collect_results(double now_s);
+  // Counts a mesh frame taken for drawing: carried, rebuilt, improved (for stats()).
+  void count_mesh_update(const MeshFrame& m, double now_s);
   void restart_if_needed();
   /// The singular set's job: collects its result and starts it again when the surface changed
   /// (viewer_singular.cpp). Returns true when there is something new to draw.
@@ -439,6 +461,10 @@ class ViewerState {
   std::shared_ptr<const PreviewFrame> preview_;
   std::shared_ptr<const FloaterFrame> floaters_;
   std::shared_ptr<const MeshFrame> mesh_;
+  // Counts changes a mesh cannot be carried across (equation, clip spec, mesh settings, mode).
+  std::uint64_t mesh_structure_ = 0;
+  std::size_t mesh_carried_ = 0, mesh_rebuilt_ = 0;
+  std::vector<double> mesh_update_times_;  // when improved meshes were shown, the last window
   // The singular set runs on its own worker beside the mode's job (the floater job never
   // ends). Parameter edits let a running search finish (its result lags by one edit) and
   // start the next with the newest values; a new equation or clip cancels it at once.

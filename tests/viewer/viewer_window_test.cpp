@@ -469,5 +469,37 @@ TEST(ViewerWindow, ScriptSetsEveryMeshAndFloaterSetting) {
   }
 }
 
+
+// ---- live meshes: carried along an animation, rebuilt where the nodes change ------------------
+
+// mu animates on Kummer in mesh mode: the stats lines show meshes carried from one value to the
+// next (not rebuilt), and a jump across mu = 1, where 4 nodes become 16, rebuilds with that
+// reason (docs/viewer.md, "Live meshes").
+TEST(ViewerWindow, AnimatedMeshIsCarriedAndRebuiltWhereNodesAppear) {
+  if (!has_xvfb()) GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb)";
+  const std::string text =
+      "mode mesh\nmesh cells=24\nrange mu 1.2 2.0\nparam mu 1.3\nwait\n"
+      "speed 0.05\nplay mu\nsleep 3\nstats\npause\n"
+      "param mu 0.9\nwait\nparam mu 1.1\nwait\nstats\n";
+  const auto r =
+      view("kummer --no-ui --size 300x300 --script " + write_script("live-mesh.txt", text));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::vector<nlohmann::json> stats;
+  std::istringstream lines(r.output);
+  for (std::string line; std::getline(lines, line);)
+    if (line.starts_with("{\"")) stats.push_back(nlohmann::json::parse(line));
+  ASSERT_EQ(stats.size(), 2u) << r.output;
+  const nlohmann::json& live = stats[0]["mesh"];
+  EXPECT_GT(live["carried"].get<int>(), 2) << r.output;
+  EXPECT_GT(live["updates_per_second"].get<double>(), 0) << r.output;
+  EXPECT_GT(live["triangles"].get<long>(), 500) << r.output;
+  const std::string last = live["last_update"].get<std::string>();
+  EXPECT_TRUE(last.starts_with("carried in ") || last.starts_with("rebuilt: ")) << last;
+  const nlohmann::json& jump = stats[1]["mesh"];
+  EXPECT_GT(jump["rebuilt"].get<int>(), live["rebuilt"].get<int>()) << r.output;
+  EXPECT_EQ(jump["last_update"].get<std::string>(), "rebuilt: singular points: 4 → 16")
+      << r.output;
+}
+
 }  // namespace
 }  // namespace zeroset
