@@ -308,6 +308,7 @@ long long Remesher::flip_pass(Wanted wanted) {
       drop_from(a, t2), drop_from(b, t1);
       mesh.triangles[t1] = n1, mesh.triangles[t2] = n2;
       vt[d].push_back(t1), vt[c].push_back(t2);
+      if (!valence.empty()) --valence[a], --valence[b], ++valence[c], ++valence[d];
       ++n;
     }
   }
@@ -315,24 +316,32 @@ long long Remesher::flip_pass(Wanted wanted) {
 }
 
 long long Remesher::valence_flips() {
-  return flip_pass([&](std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d) {
-    int before = 0, after = 0;
-    const std::uint32_t vs[4] = {a, b, c, d};
-    const int delta[4] = {-1, -1, 1, 1};
-    std::vector<std::uint32_t> nb;
-    for (int i = 0; i < 4; ++i) {
-      const int target = valence_target(vs[i]);
-      if (target == kAnyValence) continue;
-      neighbours(vs[i], nb);
-      const int val = static_cast<int>(nb.size());
-      before += std::abs(val - target);
-      after += std::abs(val + delta[i] - target);
-    }
-    // A vertex may not drop below three neighbours.
-    std::vector<std::uint32_t> na;
-    neighbours(a, na), neighbours(b, nb);
-    return after < before && na.size() > 3 && nb.size() > 3;
-  });
+  // Targets and valences once per pass (flip_pass keeps the valences up to date).
+  const size_t n = mesh.positions.size();
+  std::vector<int> target(n, kAnyValence);
+  valence.assign(n, 0);
+  for (std::uint32_t v = 0; v < n; ++v) {
+    if (!alive_vertex[v] || vt[v].empty()) continue;
+    target[v] = valence_target(v);
+    // A disc has as many neighbours as triangles, half a disc one more.
+    if (target[v] != kAnyValence)
+      valence[v] = static_cast<int>(vt[v].size()) + (target[v] == 4 ? 1 : 0);
+  }
+  const long long flips =
+      flip_pass([&](std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d) {
+        int before = 0, after = 0;
+        const std::uint32_t vs[4] = {a, b, c, d};
+        const int delta[4] = {-1, -1, 1, 1};
+        for (int i = 0; i < 4; ++i) {
+          if (target[vs[i]] == kAnyValence) continue;
+          before += std::abs(valence[vs[i]] - target[vs[i]]);
+          after += std::abs(valence[vs[i]] + delta[i] - target[vs[i]]);
+        }
+        // A vertex may not drop below three neighbours.
+        return after < before && valence[a] > 3 && valence[b] > 3;
+      });
+  valence.clear();
+  return flips;
 }
 
 long long Remesher::delaunay_flips() {

@@ -29,6 +29,8 @@ constexpr int kFixedBandIterations = 5;
 constexpr double kBandGrowth = 0.03;
 // Relaxation steps at most once the connectivity is at rest.
 constexpr int kMaxSettleSteps = 200;
+// Batched Newton steps onto F = 0 per relaxation step (then one at a time where needed).
+constexpr int kBatchNewtonSteps = 3;
 
 inline std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
   if (a > b) std::swap(a, b);
@@ -53,7 +55,8 @@ struct Remesher {
   std::unordered_set<std::uint64_t> curve_edges;
   std::vector<std::uint8_t> on_curve;  // vertex of a singular curve or node
   double L = 0, lo = 0, hi = 0, min_area = 0;
-  double hi_collapse = 0;  // no collapse makes an edge longer than this (4/3 L)
+  double hi_collapse = 0;
+  std::vector<int> valence;  // during valence_flips: neighbours per vertex, kept up to date  // no collapse makes an edge longer than this (4/3 L)
 
   Remesher(Mesh& m, const Surface& s, const RemeshOptions& o)
       : mesh(m), surface(s), opt(o),
@@ -88,15 +91,11 @@ struct Remesher {
     out.erase(std::unique(out.begin(), out.end()), out.end());
   }
 
+  // 6 inside, 4 on a border (the clip curve or a held open border), none on a singular curve
+  // or point (their rings are not discs).
   int valence_target(std::uint32_t v) const {
     if (on_curve[v]) return kAnyValence;
-    // Border vertices (clip or open border) have half a disc.
-    for (std::uint32_t t : vt[v])
-      for (std::uint32_t w : mesh.triangles[t]) {
-        std::uint32_t et[2];
-        if (w != v && edge_tris(v, w, et) == 1) return 4;
-      }
-    return 6;
+    return kind[v] == kFree ? 6 : 4;
   }
 
   // ---- set-up and topology passes (remesh.cpp)

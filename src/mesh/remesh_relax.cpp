@@ -88,7 +88,7 @@ void Remesher::border_targets(std::vector<Vec3>& target, std::vector<std::uint8_
   };
   // Chains from a vertex that does not slide.
   for (std::uint32_t v = 0; v < n; ++v) {
-    if (!alive_vertex[v] || kind[v] == kClip || vt[v].empty()) continue;
+    if (!alive_vertex[v] || kind[v] != kLocked || vt[v].empty()) continue;
     for (std::uint32_t t : vt[v])
       for (std::uint32_t w : mesh.triangles[t])
         if (w != v && kind[w] == kClip && !done[w] &&
@@ -110,11 +110,18 @@ void Remesher::border_targets(std::vector<Vec3>& target, std::vector<std::uint8_
 // onto F = 0 (the curve). Moves that would turn a triangle over or flatten it are undone.
 // Returns the largest move over L.
 double Remesher::relax() {
+  ++stats.relax_steps;
   const long long n = static_cast<long long>(mesh.positions.size());
-  std::vector<Vec3> next = mesh.positions;
   std::vector<Vec3> border_target(mesh.positions.size());
   std::vector<std::uint8_t> has_target(mesh.positions.size(), 0);
   border_targets(border_target, has_target);
+  // F and ∇F in batches (much cheaper per point than one at a time): at the current positions
+  // for the tangent planes, then at the moved ones for Newton's steps onto F = 0.
+  std::vector<double> f;
+  std::vector<Vec3> g;
+  values_gradients(pool, workers, mesh.positions, f, g);
+  std::vector<Vec3> next = mesh.positions, start(mesh.positions.size());
+  std::vector<std::uint8_t> moving(mesh.positions.size(), 0);
   ExceptionTrap trap;
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 256)
   for (long long vv = 0; vv < n; ++vv) trap.run([&] {
@@ -124,31 +131,60 @@ double Remesher::relax() {
     Vec3 c = Vec3::Zero();
     if (kind[v] == kClip) {
       if (!has_target[v]) return;
-      c = border_target[v];
-    } else {
-      double area = 0;
-      for (std::uint32_t t : vt[v]) {
-        const Tri& tr = mesh.triangles[t];
-        const Vec3 &x = mesh.positions[tr[0]], &y = mesh.positions[tr[1]],
-                   &z = mesh.positions[tr[2]];
-        const double a = area_normal(x, y, z).norm();
-        c += a * (x + y + z) / 3, area += a;
-      }
-      if (!(area > 0)) return;
-      c /= area;
+      Vec3 q = border_target[v];
+      if (project(true, q, 0.5 * L) && surface.clip.contains(q, 1e-9 * L)) next[v] = q;
+      return;
     }
-    Vec3 g;
-    pool.local().value_gradient(p, g);
+    double area = 0;
+    for (std::uint32_t t : vt[v]) {
+      const Tri& tr = mesh.triangles[t];
+      const Vec3 &x = mesh.positions[tr[0]], &y = mesh.positions[tr[1]],
+                 &z = mesh.positions[tr[2]];
+      const double a = area_normal(x, y, z).norm();
+      c += a * (x + y + z) / 3, area += a;
+    }
+    if (!(area > 0) || !(g[v].norm() > 0) || !g[v].allFinite()) return;
+    c /= area;
+    const Vec3 u = g[v].normalized();
     Vec3 d = c - p;
-    if (kind[v] == kFree) {
-      if (!(g.norm() > 0) || !g.allFinite()) return;
-      const Vec3 u = g.normalized();
-      d -= d.dot(u) * u;
+    d -= d.dot(u) * u;
+    start[v] = next[v] = p + d;
+    moving[v] = 1;
+  });
+  trap.rethrow();
+  // Newton's method onto F = 0 for the free vertices, all at once.
+  std::vector<std::uint8_t> done(mesh.positions.size(), 0);
+  for (int it = 0; it < kBatchNewtonSteps + 1; ++it) {
+    values_gradients(pool, workers, next, f, g);
+    const bool last = it == kBatchNewtonSteps;
+#pragma omp parallel for num_threads(workers) schedule(static)
+    for (long long v = 0; v < n; ++v) {
+      if (!moving[v] || done[v]) continue;
+      const double gn = g[v].norm();
+      if (!has_residual(f[v], gn)) {
+        moving[v] = 0;
+        continue;
+      }
+      if (residual(f[v], gn) <= 1e-14 * (1 + next[v].norm())) {
+        done[v] = 1;
+        continue;
+      }
+      if (!last) next[v] += surface_newton_step(f[v], g[v]);
     }
-    Vec3 q = p + d;
-    if (project(kind[v] == kClip, q, 0.5 * L) &&
-        (surface.clip.is_empty_spec() || surface.clip.contains(q, 1e-9 * L)))
-      next[v] = q;
+  }
+  trap.run([&] {
+    for (long long vv = 0; vv < n; ++vv) {
+      const auto v = static_cast<std::uint32_t>(vv);
+      if (!moving[v]) continue;
+      // Not there yet after the batched steps (rare): one at a time from the start.
+      if (!done[v]) {
+        Vec3 q = start[v];
+        if (project(false, q, 0.5 * L)) next[v] = q, done[v] = 1;
+      }
+      const bool ok = done[v] && (next[v] - start[v]).norm() <= 0.5 * L &&
+                      (surface.clip.is_empty_spec() || surface.clip.contains(next[v], 1e-9 * L));
+      if (!ok) next[v] = mesh.positions[v];
+    }
   });
   trap.rethrow();
   return apply_guarded(next);

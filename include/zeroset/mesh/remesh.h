@@ -43,6 +43,7 @@ struct RemeshStats {
   long long collapses = 0;
   long long flips = 0;            ///< valence and Delaunay flips
   long long refused_collapses = 0;
+  long long relax_steps = 0;      ///< relaxation steps, over all iterations
   long long reverted_moves = 0;   ///< relaxation moves undone because a triangle would turn over
   double target_edge = 0;
   double last_max_move = 0;       ///< largest relaxation move of the last iteration, in L
