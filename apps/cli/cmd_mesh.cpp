@@ -276,6 +276,7 @@ void run_mesh(const MeshArgs& a) {
                         {"reverted_moves", rs.reverted_moves},
                         {"last_max_move_in_target_edges", rs.last_max_move},
                         {"singular_points_held", held},
+                        {"missed_singular_points", rs.missed_singular_points},
                         {"max_residual", rs.max_residual},
                         {"undefined_vertices", rs.undefined_vertices},
                         {"boundary", std::string(to_string(settings.boundary))},

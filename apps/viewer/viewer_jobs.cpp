@@ -7,6 +7,7 @@
 #include "viewer_state.h"
 #include "viewer_state_detail.h"
 #include "zeroset/mesh/improve.h"
+#include "zeroset/mesh/remesh.h"
 #include "zeroset/mesh/mesh_ops.h"
 
 namespace zeroset::viewer {
@@ -298,6 +299,9 @@ void ViewerState::start_mesh_job() {
   ImproveOptions improve = improve_options(mesh_settings_, kLiveImproveSteps);
   improve.threads = threads_;
   const bool is_improving = improve.max_steps > 0;
+  RemeshOptions remesh_opts = remesh_options(mesh_settings_);
+  remesh_opts.threads = threads_;
+  const bool remeshing = mesh_settings_.improver == Improver::kRemesh;
   const bool with_crossings = mesh_settings_.crossings;
   const bool with_curves = mesh_settings_.curves;
   const Surface surface = surface_;
@@ -327,6 +331,26 @@ void ViewerState::start_mesh_job() {
     frame->generation = generation;
     box->post(std::move(frame));
     if (!is_improving) return;
+    if (remeshing) {
+      // The remesher changes the connectivity as it goes: one frame when it is done.
+      const RemeshStats rs = remesh(mesh, surface, remesh_opts, stop);
+      if (stop.stop_requested()) return;
+      auto next = std::make_shared<MeshFrame>();
+      next->mesh = std::move(mesh);
+      if (!with_curves) next->mesh.curves.clear();
+      next->polygonize = polygonize_stats;
+      next->crossings = crossings;
+      next->improve.steps = rs.iterations;
+      next->improve.converged = rs.converged;
+      next->improve.max_residual = rs.max_residual;
+      next->improve.seconds = rs.seconds;
+      next->improve.singular_points = rs.singular_points;
+      next->improver_steps = rs.iterations;
+      next->is_final = true;
+      next->generation = generation;
+      box->post(std::move(next));
+      return;
+    }
     // Step by step so the user watches the vertices move; a copy goes to the UI whenever it
     // has taken the previous one.
     MeshImprover improver(std::move(mesh), surface, improve);

@@ -71,51 +71,65 @@ void Remesher::setup() {
 }
 
 // The nearest vertex goes exactly onto each isolated singular point and stays there.
-void Remesher::lock_singular_points() {
+void Remesher::find_singular_points() {
   if (!opt.find_singular_points || !surface.clip.is_bounded()) return;
   // The surface's own exact points first (the catalog's nodes), then those found.
-  std::vector<Vec3> points;
   for (const Vec3& q : surface.singular_points())
-    if (surface.clip.contains(q)) points.push_back(q);
+    if (surface.clip.contains(q)) pending.push_back(q);
   const SingularSet set = find_singular_set(surface);
   for (const SingularPoint& sp : set.points) {
     if (sp.kind == SingularPointKind::kClipEnd) continue;
-    if (std::none_of(points.begin(), points.end(), [&](const Vec3& q) {
+    if (std::none_of(pending.begin(), pending.end(), [&](const Vec3& q) {
           return (q - sp.position).norm() < 1e-6 * L;
         }))
-      points.push_back(sp.position);
+      pending.push_back(sp.position);
   }
-  for (const Vec3& q : points) {
-    std::uint32_t best = kNone;
-    double best_d = std::numeric_limits<double>::infinity();
+}
+
+void Remesher::hold_pending_points() {
+  std::vector<Vec3> left;
+  std::vector<std::pair<double, std::uint32_t>> near;
+  std::vector<Vec3> before;
+  for (const Vec3& q : pending) {
+    near.clear();
     for (std::uint32_t v = 0; v < mesh.positions.size(); ++v) {
       if (!alive_vertex[v] || vt[v].empty()) continue;
       const double d = (mesh.positions[v] - q).norm();
-      if (d < best_d) best_d = d, best = v;
+      if (d <= 2 * L) near.emplace_back(d, v);
     }
-    if (best == kNone || best_d > 1.5 * L) continue;
-    if (best_d == 0 || (on_curve[best] && best_d < 1e-9 * L)) {
-      kind[best] = kLocked, on_curve[best] = 1;
-      stats.singular_points.push_back(mesh.positions[best]);
+    std::sort(near.begin(), near.end());
+    // A vertex there already (on a singular curve, say): it holds the point.
+    if (!near.empty() && (near[0].first == 0 || (on_curve[near[0].second] &&
+                                                 near[0].first < 1e-9 * L))) {
+      kind[near[0].second] = kLocked, on_curve[near[0].second] = 1;
+      stats.singular_points.push_back(mesh.positions[near[0].second]);
       continue;
     }
-    if (kind[best] != kFree) continue;  // a curve or border vertex: not ours to move
-    const Vec3 old = mesh.positions[best];
-    std::vector<Vec3> before;
-    for (std::uint32_t t : vt[best]) before.push_back(normal(mesh.triangles[t]));
-    mesh.positions[best] = q;
-    bool ok = true;
-    for (size_t k = 0; k < vt[best].size(); ++k) {
-      const Vec3 n = normal(mesh.triangles[vt[best][k]]);
-      if (!(n.norm() > min_area && n.dot(before[k]) > 0)) ok = false;
+    // Else the nearest free vertex that can move there without turning a triangle over.
+    bool held = false;
+    for (const auto& [d, v] : near) {
+      if (kind[v] != kFree) continue;  // a curve or border vertex: not ours to move
+      const Vec3 old = mesh.positions[v];
+      before.clear();
+      for (std::uint32_t t : vt[v]) before.push_back(normal(mesh.triangles[t]));
+      mesh.positions[v] = q;
+      bool ok = true;
+      for (size_t k = 0; k < vt[v].size() && ok; ++k) {
+        const Vec3 n = normal(mesh.triangles[vt[v][k]]);
+        ok = n.norm() > min_area && n.dot(before[k]) > 0;
+      }
+      if (!ok) {
+        mesh.positions[v] = old;
+        continue;
+      }
+      kind[v] = kLocked, on_curve[v] = 1;
+      stats.singular_points.push_back(q);
+      held = true;
+      break;
     }
-    if (!ok) {
-      mesh.positions[best] = old;
-      continue;
-    }
-    kind[best] = kLocked, on_curve[best] = 1;
-    stats.singular_points.push_back(q);
+    if (!held) left.push_back(q);
   }
+  pending.swap(left);
 }
 
 std::vector<std::array<std::uint32_t, 2>> Remesher::edges_where(bool longer) const {
@@ -389,7 +403,8 @@ RemeshStats remesh(Mesh& mesh, const Surface& surface, const RemeshOptions& opti
     r.stats.converged = true;
     return r.stats;
   }
-  r.lock_singular_points();
+  r.find_singular_points();
+  r.hold_pending_points();
   RemeshStats& st = r.stats;
   // Splits and collapses can undo each other where relaxation stretches an edge across a
   // threshold and back, so after a few iterations the band [lo, hi] widens a little at each
@@ -406,6 +421,8 @@ RemeshStats remesh(Mesh& mesh, const Surface& surface, const RemeshOptions& opti
     st.splits += splits, st.collapses += collapses, st.flips += flips;
     st.iterations = it + 1;
     st.last_max_move = moved;
+    // A point no vertex could take yet: the mesh around it has changed, try again.
+    if (!r.pending.empty()) r.hold_pending_points();
     if (splits + collapses + flips == 0) {
       topology_at_rest = true;
       break;
@@ -431,6 +448,7 @@ RemeshStats remesh(Mesh& mesh, const Surface& surface, const RemeshOptions& opti
       break;
     }
   }
+  st.missed_singular_points = static_cast<long long>(r.pending.size());
   st.converged = topology_at_rest && flips_at_rest && moves_at_rest;
   r.final_projection();
   r.compact();

@@ -56,6 +56,7 @@ struct Remesher {
   std::vector<std::uint8_t> on_curve;  // vertex of a singular curve or node
   double L = 0, lo = 0, hi = 0, min_area = 0;
   double hi_collapse = 0;
+  std::vector<Vec3> pending;  // singular points no vertex holds yet
   std::vector<int> valence;  // during valence_flips: neighbours per vertex, kept up to date  // no collapse makes an edge longer than this (4/3 L)
 
   Remesher(Mesh& m, const Surface& s, const RemeshOptions& o)
@@ -100,8 +101,11 @@ struct Remesher {
 
   // ---- set-up and topology passes (remesh.cpp)
   void setup();
-  // The nearest vertex goes exactly onto each isolated singular point and stays there.
-  void lock_singular_points();
+  // The isolated singular points to hold (into `pending`).
+  void find_singular_points();
+  // The nearest vertex that can goes exactly onto each pending point and stays there; points
+  // no vertex could take stay pending.
+  void hold_pending_points();
   std::vector<std::array<std::uint32_t, 2>> edges_where(bool longer) const;
   std::uint32_t add_vertex(const Vec3& p, Kind k);
   std::uint32_t add_triangle(const Tri& t);

@@ -49,6 +49,7 @@ Checked remesh_and_check(Mesh& m, const Surface& s, const RemeshOptions& o = {})
   c.stats = remesh(m, s, o);
   c.after = measure_quality(m, s);
   EXPECT_TRUE(c.stats.converged) << "not at rest after " << c.stats.iterations << " iterations";
+  EXPECT_EQ(c.stats.missed_singular_points, 0);
   const DegenerateCount d = count_degenerate(m);
   EXPECT_EQ(d.zero_area_triangles, 0u);
   EXPECT_EQ(d.coincident_vertices, 0u);

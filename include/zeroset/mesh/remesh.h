@@ -48,6 +48,9 @@ struct RemeshStats {
   double target_edge = 0;
   double last_max_move = 0;       ///< largest relaxation move of the last iteration, in L
   std::vector<Vec3> singular_points;  ///< points held exactly by a vertex
+  /// Isolated singular points found that no vertex could take without turning a triangle
+  /// over (0 on every surface tested).
+  long long missed_singular_points = 0;
   double max_residual = 0;        ///< max |F|/|∇F| over the vertices that move (not the locked)
   long long undefined_vertices = 0;
   double seconds = 0;
