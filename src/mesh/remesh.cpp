@@ -304,10 +304,10 @@ long long Remesher::flip_pass(Wanted wanted) {
       for (int i = 0; i < 3; ++i)
         if (o[i] == b && o[(i + 1) % 3] == a) d = o[(i + 2) % 3];
       if (d == kNone || d == c) continue;  // misoriented pair, or a doubled triangle
+      if (!wanted(a, b, c, d)) continue;  // first: the cheapest test that rules most out
       std::uint32_t cd[2];
       if (edge_tris(c, d, cd) != 0) continue;
       const auto& p = mesh.positions;
-      if (!wanted(a, b, c, d)) continue;
       const Tri n1{a, d, c}, n2{d, b, c};
       const Vec3 o1 = normal(tr), o2 = normal(o), m1 = normal(n1), m2 = normal(n2);
       const Vec3 sum = o1 + o2;
