@@ -195,13 +195,18 @@ double Remesher::relax() {
 double Remesher::apply_guarded(std::vector<Vec3>& next) {
   const long long nt = static_cast<long long>(mesh.triangles.size());
   std::vector<std::uint8_t> bad(mesh.triangles.size(), 0);
-  for (int round = 0; round < 20; ++round) {
+  // Each round undoes at least one move (a bad triangle has a moved corner: unmoved ones are
+  // not judged), so this ends, with no bad triangle left.
+  for (;;) {
     long long count = 0;
 #pragma omp parallel for num_threads(workers) schedule(static) reduction(+ : count)
     for (long long t = 0; t < nt; ++t) {
       bad[t] = 0;
       if (!alive_tri[t]) continue;
       const Tri& tr = mesh.triangles[t];
+      if (next[tr[0]] == mesh.positions[tr[0]] && next[tr[1]] == mesh.positions[tr[1]] &&
+          next[tr[2]] == mesh.positions[tr[2]])
+        continue;
       const Vec3 before = normal(tr);
       const Vec3 after = area_normal(next[tr[0]], next[tr[1]], next[tr[2]]);
       if (!(after.norm() > min_area && after.dot(before) > 0.5 * after.norm() * before.norm()))
