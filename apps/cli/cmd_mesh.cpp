@@ -17,6 +17,7 @@
 #include "zeroset/mesh/mesh_io.h"
 #include "zeroset/mesh/polygonize.h"
 #include "zeroset/mesh/quality.h"
+#include "zeroset/mesh/remesh.h"
 #include "zeroset/mesh/settings.h"
 #include "zeroset/render/render.h"
 
@@ -30,6 +31,7 @@ struct MeshArgs {
   int refine_steps = PolygonizeOptions{}.refine_steps;
   std::string improve = "auto";
   std::string boundary = "constrain";
+  std::string improver = "paper";
   bool no_curvature = false;
   bool no_singularity = false;
   bool no_flips = false;
@@ -47,6 +49,7 @@ struct MeshArgs {
   CLI::Option* resolution_opt = nullptr;
   CLI::Option* improve_opt = nullptr;
   CLI::Option* boundary_opt = nullptr;
+  CLI::Option* improver_opt = nullptr;
   CLI::Option* grid_opt = nullptr;
   CLI::Option* refine_steps_opt = nullptr;
   CLI::Option* curvature_weight_opt = nullptr;
@@ -66,6 +69,7 @@ MeshSettings settings_from(const MeshArgs& a, const Scene& scene) {
         if (a.resolution_opt->count()) m.cells = a.resolution;
         if (a.improve_opt->count()) apply_improve(a.improve, m);
         if (a.boundary_opt->count()) m.boundary = parse_boundary(a.boundary);
+        if (a.improver_opt->count()) m.improver = parse_improver(a.improver);
         if (a.grid_opt->count()) m.grid = parse_grid(a.grid);
         if (a.refine_steps_opt->count()) m.refine_steps = a.refine_steps;
         if (a.curvature_weight_opt->count()) m.curvature_weight = a.curvature_weight;
@@ -81,6 +85,7 @@ MeshSettings settings_from(const MeshArgs& a, const Scene& scene) {
       {{"cells", "--resolution"},
        {"improve", "--improve"},
        {"boundary", "--boundary"},
+       {"improver", "--improver"},
        {"grid", "--grid"},
        {"refine_steps", "--refine-steps"},
        {"curvature_weight", "--curvature-weight"}});
@@ -257,7 +262,36 @@ void run_mesh(const MeshArgs& a) {
     write_picture(surface, mesh, a.png_raw, width, height, a.wireframe, overlay);
 
   ImproveStats is;
-  if (max_steps > 0 && !mesh.empty()) {
+  RemeshStats rs;
+  const bool remeshing = settings.improver == Improver::kRemesh;
+  if (max_steps > 0 && !mesh.empty() && remeshing) {
+    RemeshOptions ro = remesh_options(settings);
+    ro.threads = global_flags().threads;
+    rs = remesh(mesh, surface, ro);
+    is.steps = rs.iterations, is.converged = rs.converged, is.seconds = rs.seconds;
+    is.undefined_vertices = rs.undefined_vertices;
+    nlohmann::json held = nlohmann::json::array();
+    for (const Vec3& p : rs.singular_points) held.push_back(vec_json(p));
+    stats["improve"] = {{"improver", "remesh"},
+                        {"iterations", rs.iterations},
+                        {"max_iterations", ro.max_iterations},
+                        {"converged", rs.converged},
+                        {"target_edge", rs.target_edge},
+                        {"splits", rs.splits},
+                        {"collapses", rs.collapses},
+                        {"flips", rs.flips},
+                        {"refused_collapses", rs.refused_collapses},
+                        {"relax_steps", rs.relax_steps},
+                        {"reverted_moves", rs.reverted_moves},
+                        {"last_max_move_in_target_edges", rs.last_max_move},
+                        {"singular_points_held", held},
+                        {"missed_singular_points", rs.missed_singular_points},
+                        {"max_residual", rs.max_residual},
+                        {"undefined_vertices", rs.undefined_vertices},
+                        {"boundary", std::string(to_string(settings.boundary))},
+                        {"find_singular_points", ro.find_singular_points},
+                        {"seconds", rs.seconds}};
+  } else if (max_steps > 0 && !mesh.empty()) {
     Progress progress("improving", global_flags().quiet);
     MeshImprover improver(std::move(mesh), surface, io);
     for (int k = 0; k < max_steps && !improver.converged(); ++k) {
@@ -270,7 +304,8 @@ void run_mesh(const MeshArgs& a) {
     mesh = improver.take_mesh();
     nlohmann::json found = nlohmann::json::array();
     for (const Vec3& p : is.singular_points) found.push_back(vec_json(p));
-    stats["improve"] = {{"steps", is.steps},
+    stats["improve"] = {{"improver", "paper"},
+                        {"steps", is.steps},
                         {"max_steps", max_steps},
                         {"converged", is.converged},
                         {"last_max_move_in_mean_edges", is.max_move},
@@ -320,7 +355,8 @@ void run_mesh(const MeshArgs& a) {
                                  surface.label(), mesh.vertex_count(), mesh.triangle_count(),
                                  ps.sparse ? "sparse" : "dense", resolution, ps.seconds_total);
   if (max_steps > 0)
-    line += fmt::format("; improved in {} steps ({:.2f} s{})", is.steps, is.seconds,
+    line += fmt::format("; {} in {} {} ({:.2f} s{})", remeshing ? "remeshed" : "improved",
+                        is.steps, remeshing ? "iterations" : "steps", is.seconds,
                         is.converged || mesh.empty() ? ""
                                                      : ", stopped at the step limit, not at rest");
   say(line);
@@ -368,6 +404,13 @@ void register_mesh_command(CLI::App& app) {
                       "auto (until every vertex is slower than the threshold), off, or at most "
                       "STEPS steps")
           ->type_name("auto|off|STEPS")
+          ->capture_default_str();
+  args->improver_opt =
+      cmd->add_option("--improver", args->improver,
+                      "paper: the spring-mass improver of the paper; remesh: isotropic "
+                      "remeshing (split, collapse, flip, relax) with singular points, singular "
+                      "curves and the clip curve kept exactly")
+          ->type_name("paper|remesh")
           ->capture_default_str();
   args->boundary_opt =
       cmd->add_option("--boundary", args->boundary,

@@ -210,6 +210,12 @@ const std::vector<SettingWidget>& setting_widgets() {
        .tooltip = "Run the paper's improver (section 4) after marching cubes: a spring-mass "
                   "system on F = 0 that evens out the triangles and pulls vertices into creases "
                   "and singular points."},
+      {.object = "mesh", .key = "improver", .label = "Improver", .kind = K::kChoice,
+       .choices = "paper|remesh",
+       .tooltip = "paper: the spring-mass improver of the paper, step by step. remesh: "
+                  "isotropic remeshing (split long edges, collapse short ones, flip towards "
+                  "valence 6, relax in the tangent plane) with singular points, singular curves "
+                  "and the clip curve kept exactly; shown when done."},
       {.object = "mesh", .key = "boundary", .label = "Boundary", .kind = K::kChoice,
        .choices = "constrain|fix",
        .tooltip = "Boundary vertices fixed where marching cubes cut them, or sliding along the "

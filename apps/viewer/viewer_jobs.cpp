@@ -11,6 +11,7 @@
 #include "viewer_state_detail.h"
 #include "zeroset/mesh/carry.h"
 #include "zeroset/mesh/improve.h"
+#include "zeroset/mesh/remesh.h"
 #include "zeroset/mesh/mesh_ops.h"
 
 namespace zeroset::viewer {
@@ -321,6 +322,9 @@ void ViewerState::start_mesh_job() {
   ImproveOptions improve = improve_options(mesh_settings_, kLiveImproveSteps);
   improve.threads = threads_;
   const bool is_improving = improve.max_steps > 0;
+  RemeshOptions remesh_opts = remesh_options(mesh_settings_);
+  remesh_opts.threads = threads_;
+  const bool remeshing = mesh_settings_.improver == Improver::kRemesh;
   const bool with_crossings = mesh_settings_.crossings;
   const bool with_curves = mesh_settings_.curves;
   const Surface surface = surface_;
@@ -364,6 +368,23 @@ void ViewerState::start_mesh_job() {
         while (!stop.stop_requested() && std::chrono::steady_clock::now() < until)
           std::this_thread::sleep_for(std::chrono::milliseconds(5));
         if (stop.stop_requested()) return;
+      }
+      if (remeshing) {
+        // The remesher changes the connectivity as it goes: one frame when it is done.
+        const RemeshStats rs = remesh(mesh, surface, remesh_opts, stop);
+        if (stop.stop_requested()) return;
+        auto next = std::make_shared<MeshFrame>(*frame);
+        set_mesh(*next, std::move(mesh));
+        compute_field_normals(next->mesh, surface, threads);
+        next->improve.steps = rs.iterations;
+        next->improve.converged = rs.converged;
+        next->improve.max_residual = rs.max_residual;
+        next->improve.seconds = rs.seconds;
+        next->improve.singular_points = rs.singular_points;
+        next->improver_steps = steps_before + rs.iterations;
+        next->is_final = true;
+        box->post(std::move(next));
+        return;
       }
       MeshImprover improver(std::move(mesh), surface, improve);
       for (int step = 1; !stop.stop_requested(); ++step) {

@@ -8,6 +8,7 @@
 #include "zeroset/mesh/adjacency.h"
 #include "zeroset/mesh/crossings.h"
 #include "zeroset/mesh/improve.h"
+#include "zeroset/mesh/remesh.h"
 #include "zeroset/mesh/mesh_io.h"
 #include "zeroset/mesh/polygonize.h"
 #include "zeroset/mesh/quality.h"
@@ -29,6 +30,7 @@ struct MeshArgs {
   std::optional<int> resolution;
   std::optional<std::string> improve;  // "auto", "off" or a number of steps
   std::optional<std::string> boundary;
+  std::optional<std::string> improver;  // "paper" or "remesh"
   std::optional<std::string> grid;
   std::optional<int> refine_steps;
   std::optional<bool> curvature, singularity, flips, find_singular, crossings, curves;
@@ -45,6 +47,7 @@ MeshSettings settings_from(const MeshArgs& a, const PySurface& s) {
   if (a.resolution) m.cells = *a.resolution;
   if (a.improve) apply_improve(*a.improve, m);
   if (a.boundary) m.boundary = parse_boundary(*a.boundary);
+  if (a.improver) m.improver = parse_improver(*a.improver);
   if (a.grid) m.grid = parse_grid(*a.grid);
   if (a.refine_steps) m.refine_steps = *a.refine_steps;
   if (a.curvature_weight) m.curvature_weight = *a.curvature_weight;
@@ -118,6 +121,7 @@ py::tuple make_mesh(const PySurface& s, const MeshArgs& a) {
   PolygonizeStats ps;
   std::optional<CrossingStats> cs;
   ImproveStats is;
+  RemeshStats rs;
   std::optional<MeshQuality> before, after;
   std::optional<MeshTopology> topology_before, topology_after;
   double seconds = 0;
@@ -132,7 +136,13 @@ py::tuple make_mesh(const PySurface& s, const MeshArgs& a) {
       before = measure_quality(mesh, surface, qo);
       topology_before = mesh_topology(mesh);
     }
-    if (max_steps > 0 && !mesh.empty() && !stop.stop_requested()) {
+    if (max_steps > 0 && !mesh.empty() && !stop.stop_requested() &&
+        settings.improver == Improver::kRemesh) {
+      RemeshOptions ro = remesh_options(settings);
+      ro.threads = a.threads;
+      rs = remesh(mesh, surface, ro, stop);
+      if (stop.stop_requested()) return;
+    } else if (max_steps > 0 && !mesh.empty() && !stop.stop_requested()) {
       MeshImprover improver(std::move(mesh), surface, io);
       for (int k = 0; k < max_steps && !improver.converged(); ++k) {
         if (stop.stop_requested()) return;
@@ -154,8 +164,16 @@ py::tuple make_mesh(const PySurface& s, const MeshArgs& a) {
   stats["surface"] = surface.label();
   stats["polygonize"] = polygonize_dict(ps, settings.cells, mesh);
   if (cs) stats["crossings"] = crossings_dict(*cs);
-  if (max_steps > 0) {
+  if (max_steps > 0 && settings.improver == Improver::kRemesh) {
+    stats["improve"] = py::dict(
+        "improver"_a = "remesh", "iterations"_a = rs.iterations, "converged"_a = rs.converged,
+        "target_edge"_a = rs.target_edge, "splits"_a = rs.splits, "collapses"_a = rs.collapses,
+        "flips"_a = rs.flips, "relax_steps"_a = rs.relax_steps,
+        "max_residual"_a = rs.max_residual, "seconds"_a = rs.seconds,
+        "boundary"_a = std::string(to_string(settings.boundary)));
+  } else if (max_steps > 0) {
     py::dict d = improve_dict(is, max_steps);
+    d["improver"] = "paper";
     d["boundary"] = std::string(to_string(settings.boundary));
     stats["improve"] = d;
   }
@@ -228,10 +246,12 @@ void bind_mesh(py::module_& m) {
                     std::optional<bool> curvature, std::optional<double> curvature_weight,
                     std::optional<bool> singularity, std::optional<bool> flips,
                     std::optional<bool> find_singular, std::optional<bool> crossings,
-                    std::optional<bool> curves, bool quality, int threads) {
+                    std::optional<bool> curves, std::optional<std::string> improver,
+                    bool quality, int threads) {
     MeshArgs a{.resolution = resolution,
                .improve = improve,
                .boundary = boundary,
+               .improver = improver,
                .grid = grid,
                .refine_steps = refine_steps,
                .curvature = curvature,

@@ -282,10 +282,12 @@ class Surface:
     # --- stages
     def mesh(self, resolution=None, improve=None, boundary=None, grid=None, refine_steps=None,
              curvature=None, curvature_weight=None, singularity=None, flips=None,
-             find_singular=None, crossings=None, curves=None, quality=False, threads=0):
+             find_singular=None, crossings=None, curves=None, improver=None, quality=False,
+             threads=0):
         """Polygonizes and improves the surface as `zeroset mesh` does (its options by the same
         names, each None for the scene file's value or else the default: resolution 128;
-        improve "auto", "off", True, False or a number of steps; boundary "constrain" or
+        improve "auto", "off", True, False or a number of steps; improver "paper" (the
+        spring-mass improver) or "remesh" (isotropic remeshing); boundary "constrain" or
         "fix"; grid "auto", "dense" or "sparse"; refine_steps 12; curvature_weight 8, the
         curvature estimator's kappa_d; the switches True). quality=True adds the quality
         figures before and after improvement to the stats. Returns a Mesh, which unpacks as
@@ -307,7 +309,7 @@ class Surface:
             self._s, None if resolution is None else _count(resolution, "resolution", 1), improve,
             boundary, grid, None if refine_steps is None else _count(refine_steps, "refine_steps"),
             switch(curvature), curvature_weight, switch(singularity), switch(flips),
-            switch(find_singular), switch(crossings), switch(curves), bool(quality),
+            switch(find_singular), switch(crossings), switch(curves), improver, bool(quality),
             _count(threads, "threads"))
         return Mesh(m, stats)
 

@@ -60,6 +60,14 @@ ImproveOptions improve_options(const MeshSettings& m, int auto_steps) {
   return o;
 }
 
+RemeshOptions remesh_options(const MeshSettings& m) {
+  RemeshOptions o;
+  if (m.max_improve_steps) o.max_iterations = std::min(o.max_iterations, *m.max_improve_steps);
+  o.boundary = m.boundary;
+  o.find_singular_points = m.find_singular;
+  return o;
+}
+
 void apply_improve(std::string_view text, MeshSettings& m) {
   const std::string t(text);
   if (text == "auto") {
@@ -88,6 +96,16 @@ std::string_view to_string(BoundaryMode mode) {
   return mode == BoundaryMode::kFixed ? "fix" : "constrain";
 }
 
+Improver parse_improver(std::string_view text) {
+  if (text == "paper") return Improver::kPaper;
+  if (text == "remesh") return Improver::kRemesh;
+  throw SettingError("improver", std::string(text), "expected paper or remesh");
+}
+
+std::string_view to_string(Improver improver) {
+  return improver == Improver::kRemesh ? "remesh" : "paper";
+}
+
 GridMode parse_grid(std::string_view text) {
   if (text == "auto") return GridMode::kAuto;
   if (text == "dense") return GridMode::kDense;
@@ -110,7 +128,7 @@ void apply_mesh_settings(const json& mesh, MeshSettings& settings, const std::st
   json_read::known_keys(mesh,
                         {"cells", "improve", "boundary", "grid", "refine_steps", "curvature",
                          "curvature_weight", "singularity", "flips", "find_singular", "crossings",
-                         "curves"},
+                         "curves", "improver"},
                         origin, base);
   MeshSettings m = settings;
   try {
@@ -139,6 +157,9 @@ void apply_mesh_settings(const json& mesh, MeshSettings& settings, const std::st
     if (mesh.contains("boundary"))
       m.boundary =
           parse_boundary(json_read::string(mesh["boundary"], origin, base + "/boundary"));
+    if (mesh.contains("improver"))
+      m.improver =
+          parse_improver(json_read::string(mesh["improver"], origin, base + "/improver"));
     if (mesh.contains("grid"))
       m.grid = parse_grid(json_read::string(mesh["grid"], origin, base + "/grid"));
     if (mesh.contains("refine_steps"))
@@ -172,7 +193,8 @@ json mesh_settings_to_json(const MeshSettings& m) {
           {"flips", m.flips},
           {"find_singular", m.find_singular},
           {"crossings", m.crossings},
-          {"curves", m.curves}};
+          {"curves", m.curves},
+          {"improver", std::string(to_string(m.improver))}};
 }
 
 }  // namespace zeroset

@@ -61,6 +61,37 @@ TEST_F(MeshCli, ReadsTheMeshSettingsTheViewerSaves) {
   EXPECT_FALSE(flagged.contains("improve"));
 }
 
+TEST_F(MeshCli, RemeshesWithTheImproverFlagOrTheSceneKey) {
+  auto improve = [&](const std::string& args) {
+    const auto r = run(args + " -o " + path("k.ply") + " --stats " + path("k.json"));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    std::ifstream in(path("k.json"));
+    return nlohmann::json::parse(in);
+  };
+  const nlohmann::json j = improve("kummer --param mu=1.5 --resolution 24 --improver remesh");
+  const nlohmann::json& imp = j["improve"];
+  EXPECT_EQ(imp["improver"], "remesh");
+  EXPECT_TRUE(imp["converged"].get<bool>());
+  EXPECT_GT(imp["splits"].get<long long>(), 0);
+  EXPECT_GT(imp["collapses"].get<long long>(), 0);
+  EXPECT_GT(imp["flips"].get<long long>(), 0);
+  EXPECT_GT(imp["iterations"].get<int>(), 0);
+  EXPECT_GT(imp["seconds"].get<double>(), 0);
+  EXPECT_GT(j["quality_after"]["mean_min_angle_deg"].get<double>(),
+            j["quality_before"]["mean_min_angle_deg"].get<double>());
+  EXPECT_EQ(j["quality_after"]["zero_area_triangles"].get<size_t>(), 0u);
+  // The scene file's key, and the flag winning over it.
+  std::ofstream(path("scene.json"))
+      << R"({"name": "sphere", "mesh": {"cells": 12, "improver": "remesh"}})";
+  EXPECT_EQ(improve(path("scene.json"))["improve"]["improver"], "remesh");
+  EXPECT_EQ(improve(path("scene.json") + " --improver paper")["improve"]["improver"], "paper");
+  std::ofstream(path("bad.json"))
+      << R"({"name": "sphere", "mesh": {"cells": 12, "improver": "springs"}})";
+  const auto r = run(path("bad.json") + " -o " + path("b.obj"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("/mesh/improver"), std::string::npos) << r.output;
+}
+
 TEST_F(MeshCli, RefineStepsZeroIsLinearInterpolationOffTheSurface) {
   // Linear interpolation leaves the vertices of a sphere inside it, off F = 0 by about h²;
   // the default refinement puts them on it to rounding.
@@ -85,6 +116,7 @@ TEST_F(MeshCli, BadInputExitsWithTwoAndWritesNothing) {
         std::string("sphere -o ") + path("a.xyz"), std::string("sphere -o ") + path("nodir/a.obj"),
         std::string("sphere --improve sometimes -o ") + path("a.obj"),
         std::string("sphere --boundary loose -o ") + path("a.obj"),
+        std::string("sphere --improver cgal -o ") + path("a.obj"),
         std::string("sphere --refine-steps -1 -o ") + path("a.obj")}) {
     const auto r = run(args);
     EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;

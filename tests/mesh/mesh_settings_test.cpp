@@ -16,7 +16,7 @@ TEST(MeshSettings, EveryKeyIsAppliedAndWrittenBack) {
   const json j = json::parse(R"({"cells": 40, "improve": 25, "boundary": "fix",
       "grid": "sparse", "refine_steps": 3, "curvature": false, "curvature_weight": 20.5,
       "singularity": false, "flips": false, "find_singular": false, "crossings": false,
-      "curves": false})");
+      "curves": false, "improver": "remesh"})");
   MeshSettings m;
   apply_mesh_settings(j, m, "s.json");
   EXPECT_EQ(m.cells, 40);
@@ -32,11 +32,14 @@ TEST(MeshSettings, EveryKeyIsAppliedAndWrittenBack) {
   EXPECT_FALSE(m.find_singular);
   EXPECT_FALSE(m.crossings);
   EXPECT_FALSE(m.curves);
+  EXPECT_EQ(m.improver, Improver::kRemesh);
   EXPECT_EQ(mesh_settings_to_json(m), j);
   MeshSettings kept = m;
   apply_mesh_settings(json::object(), kept, "s.json");
   EXPECT_EQ(mesh_settings_to_json(kept), j);
 }
+
+Improver d_improver() { return MeshSettings{}.improver; }
 
 TEST(MeshSettings, TheOptionsOfBothFrontEndsCarryEverySetting) {
   MeshSettings m;
@@ -65,7 +68,14 @@ TEST(MeshSettings, TheOptionsOfBothFrontEndsCarryEverySetting) {
   EXPECT_EQ(improve_options(m, 77).max_steps, 12);
   m.improve = false;
   EXPECT_EQ(improve_options(m, 77).max_steps, 0) << "off: no step";
+  // The remesher's: the boundary mode, the singular-point switch, the step limit bounds its
+  // iterations.
+  const RemeshOptions ro = remesh_options(m);
+  EXPECT_EQ(ro.boundary, BoundaryMode::kFixed);
+  EXPECT_FALSE(ro.find_singular_points);
+  EXPECT_EQ(ro.max_iterations, 12);
   // The defaults are the library's.
+  EXPECT_EQ(d_improver(), Improver::kPaper);
   const MeshSettings d;
   EXPECT_EQ(polygonize_options(d).refine_steps, PolygonizeOptions{}.refine_steps);
   EXPECT_EQ(improve_options(d, 300).curvature_weight, ImproveOptions{}.curvature_weight);
@@ -75,6 +85,8 @@ TEST(MeshSettings, MalformedEntriesAreRefusedWithTheirPointer) {
   const std::pair<const char*, const char*> cases[] = {
       {R"({"grid": "fine"})", "/mesh/grid: expected auto, dense or sparse"},
       {R"({"grid": 1})", "/mesh/grid"},
+      {R"({"improver": "cgal"})", "/mesh/improver: expected paper or remesh"},
+      {R"({"improver": true})", "/mesh/improver"},
       {R"({"refine_steps": 65})", "/mesh/refine_steps: must lie in [0, 64]"},
       {R"({"refine_steps": -1})", "/mesh/refine_steps: must lie in [0, 64]"},
       {R"({"refine_steps": 2.5})", "/mesh/refine_steps: expected a whole number"},

@@ -41,6 +41,8 @@ def test_mesh_takes_the_scene_files_switches_as_the_cli(cli, tmp_path):
                 "--curvature-weight", "3", "--grid", "dense", "--refine-steps", "4"],
      dict(resolution=20, improve=20, flips=False, curvature_weight=3, grid="dense",
           refine_steps=4)),
+    ("kummer", ["--param", "mu=1.5", "-r", "24", "--improver", "remesh"],
+     dict(resolution=24, improver="remesh")),
 ])
 def test_mesh_equals_the_cli(cli, tmp_path, spec, args, kwargs):
     cli("mesh", spec, *args, "-o", tmp_path / "cli.obj")

@@ -20,7 +20,8 @@ inline const std::map<std::string, std::string> kMeshValues = {
     {"cells", "28"},         {"improve", "15"},         {"boundary", "fix"},
     {"grid", "sparse"},      {"refine_steps", "0"},     {"curvature", "off"},
     {"curvature_weight", "40"}, {"singularity", "off"}, {"flips", "off"},
-    {"find_singular", "off"}, {"crossings", "off"},     {"curves", "off"}};
+    {"find_singular", "off"}, {"crossings", "off"},     {"curves", "off"},
+    {"improver", "remesh"}};
 
 // The scene file's value for a `set` value: on/off become true/false, numbers stay numbers.
 inline nlohmann::json expected_value(const std::string& text) {

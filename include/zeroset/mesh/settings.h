@@ -5,12 +5,13 @@
 ///   "mesh": {"cells": 64, "improve": true, "boundary": "constrain", "grid": "auto",
 ///            "refine_steps": 12, "curvature": true, "curvature_weight": 8,
 ///            "singularity": true, "flips": true, "find_singular": true, "crossings": true,
-///            "curves": true}
+///            "curves": true, "improver": "paper"}
 ///
 /// "improve" is true or "auto" (until at rest), false or "off", or a number of steps (at
 /// most). The other keys are the switches of `zeroset mesh` (docs/meshing.md) and κ_d, the
 /// weight of the curvature estimator (docs/algorithms.md, the mesh improver). Every key is
-/// optional; missing ones keep their current value. The command line, scene files and the
+/// optional; missing ones keep their current value. "improver" is "paper" (the spring–mass
+/// improver, MeshImprover) or "remesh" (the isotropic remesher, zeroset/mesh/remesh.h). The command line, scene files and the
 /// viewer check these settings with validate_settings below, so each refuses a bad value with
 /// the same words.
 #include <nlohmann/json.hpp>
@@ -20,6 +21,7 @@
 
 #include "zeroset/mesh/improve.h"
 #include "zeroset/mesh/polygonize.h"
+#include "zeroset/mesh/remesh.h"
 
 namespace zeroset {
 
@@ -32,6 +34,12 @@ inline constexpr int kMaxImproveSteps = 100'000;
 inline constexpr int kMaxRefineSteps = 64;
 /// Largest κ_d: far beyond it the curvature term alone sets the spring lengths.
 inline constexpr double kMaxCurvatureWeight = 1000;
+
+/// Which method improves the marching-cubes mesh.
+enum class Improver {
+  kPaper,   ///< the spring–mass improver of the paper (MeshImprover)
+  kRemesh,  ///< isotropic remeshing with locked features (remesh())
+};
 
 /// How a surface is polygonized and improved.
 struct MeshSettings {
@@ -50,6 +58,7 @@ struct MeshSettings {
   bool find_singular = true;  ///< Newton's method on ∇F = 0 for singular points
   bool crossings = true;      ///< sheets meet exactly on crossing curves
   bool curves = true;         ///< the singular curves go into the mesh file
+  Improver improver = Improver::kPaper;
 };
 
 /// The polygonizer's options for `settings` (bounds, threads and normals are the caller's).
@@ -57,6 +66,10 @@ PolygonizeOptions polygonize_options(const MeshSettings& settings);
 /// The improver's options for `settings`; max_steps is the step limit, `auto_steps` when the
 /// settings say "auto", 0 when they say off (threads are the caller's).
 ImproveOptions improve_options(const MeshSettings& settings, int auto_steps);
+
+/// The remesher's options for `settings` (when improve is on; threads are the caller's).
+/// The step limit, when the settings give one, bounds its iterations.
+RemeshOptions remesh_options(const MeshSettings& settings);
 
 /// Checks cells in [kMinMeshCells, kMaxMeshCells], the improver steps in
 /// [0, kMaxImproveSteps], refine_steps in [0, kMaxRefineSteps] and curvature_weight in
@@ -71,6 +84,9 @@ void apply_improve(std::string_view text, MeshSettings& settings);
 /// "fix" or "constrain"; throws SettingError (key "boundary") for anything else.
 BoundaryMode parse_boundary(std::string_view text);
 std::string_view to_string(BoundaryMode mode);
+/// "paper" or "remesh"; throws SettingError (key "improver") for anything else.
+Improver parse_improver(std::string_view text);
+std::string_view to_string(Improver improver);
 /// "auto", "dense" or "sparse"; throws SettingError (key "grid") for anything else.
 GridMode parse_grid(std::string_view text);
 std::string_view to_string(GridMode mode);

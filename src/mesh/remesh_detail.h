@@ -1,0 +1,151 @@
+#pragma once
+// The remesher's state (include/zeroset/mesh/remesh.h): a triangle list with per-vertex
+// triangle lists, updated by the serial split/collapse/flip passes (remesh.cpp); relaxation and
+// projection are parallel over the vertices (remesh_relax.cpp).
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <unordered_set>
+#include <utility>
+#include <vector>
+
+#include "mesh_detail.h"
+#include "zeroset/detail/parallel.h"
+#include "zeroset/mesh/remesh.h"
+
+namespace zeroset::detail {
+
+using Tri = std::array<std::uint32_t, 3>;
+constexpr std::uint32_t kNone = 0xffffffffu;
+
+// kFree: moves on F = 0. kClip: slides along the clip curve. kLocked: never moves or goes away
+// (singular points, singular curves, an open border that is not the clip, a fixed boundary).
+enum Kind : std::uint8_t { kFree = 0, kClip = 1, kLocked = 2 };
+// A valence target that does not count (curve vertices and nodes: their rings are not discs).
+constexpr int kAnyValence = -1;
+// The split/collapse band stays [4/5 L, 4/3 L] for this many iterations, then widens by
+// kBandGrowth per iteration (see remesh()).
+constexpr int kFixedBandIterations = 5;
+constexpr double kBandGrowth = 0.03;
+// Relaxation steps at most once the connectivity is at rest.
+constexpr int kMaxSettleSteps = 200;
+// Batched Newton steps onto F = 0 per relaxation step (then one at a time where needed).
+constexpr int kBatchNewtonSteps = 3;
+
+inline std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<std::uint64_t>(a) << 32) | b;
+}
+
+inline double min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
+  return std::min({corner_angle(a, b, c), corner_angle(b, c, a),
+                   corner_angle(c, a, b)});
+}
+
+struct Remesher {
+  Mesh& mesh;
+  const Surface& surface;
+  RemeshOptions opt;
+  int workers = 1;
+  EvaluatorPool pool;
+  RemeshStats stats;
+
+  std::vector<std::uint8_t> kind, alive_vertex, alive_tri;
+  std::vector<std::vector<std::uint32_t>> vt;  // live triangles of each vertex
+  std::unordered_set<std::uint64_t> curve_edges;
+  std::vector<std::uint8_t> on_curve;  // vertex of a singular curve or node
+  double L = 0, lo = 0, hi = 0, min_area = 0;
+  double hi_collapse = 0;
+  std::vector<Vec3> pending;  // singular points no vertex holds yet
+  std::vector<int> valence;  // during valence_flips: neighbours per vertex, kept up to date  // no collapse makes an edge longer than this (4/3 L)
+
+  Remesher(Mesh& m, const Surface& s, const RemeshOptions& o)
+      : mesh(m), surface(s), opt(o),
+        workers(improver_workers(o.threads, m.positions.size())), pool(s.field, workers) {}
+
+  Evaluator& ev() { return pool.at(0); }
+
+  Vec3 normal(const Tri& t) const {
+    const auto& p = mesh.positions;
+    return area_normal(p[t[0]], p[t[1]], p[t[2]]);
+  }
+
+  // The live triangles on edge (a, b).
+  int edge_tris(std::uint32_t a, std::uint32_t b, std::uint32_t out[2]) const {
+    int n = 0;
+    for (std::uint32_t t : vt[a]) {
+      const Tri& tr = mesh.triangles[t];
+      if (tr[0] == b || tr[1] == b || tr[2] == b) {
+        if (n < 2) out[n] = t;
+        ++n;
+      }
+    }
+    return n;
+  }
+
+  void neighbours(std::uint32_t v, std::vector<std::uint32_t>& out) const {
+    out.clear();
+    for (std::uint32_t t : vt[v])
+      for (std::uint32_t w : mesh.triangles[t])
+        if (w != v) out.push_back(w);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+  }
+
+  // 6 inside, 4 on a border (the clip curve or a held open border), none on a singular curve
+  // or point (their rings are not discs).
+  int valence_target(std::uint32_t v) const {
+    if (on_curve[v]) return kAnyValence;
+    return kind[v] == kFree ? 6 : 4;
+  }
+
+  // ---- set-up and topology passes (remesh.cpp)
+  void setup();
+  // The isolated singular points to hold (into `pending`).
+  void find_singular_points();
+  // The nearest vertex that can goes exactly onto each pending point and stays there; points
+  // no vertex could take stay pending.
+  void hold_pending_points();
+  std::vector<std::array<std::uint32_t, 2>> edges_where(bool longer) const;
+  std::uint32_t add_vertex(const Vec3& p, Kind k);
+  std::uint32_t add_triangle(const Tri& t);
+  void drop_from(std::uint32_t v, std::uint32_t t);
+  long long split_pass();
+  // Collapses v into w (w stays where it is). Returns false, changing nothing, when refused.
+  bool try_collapse(std::uint32_t v, std::uint32_t w, std::vector<std::uint32_t>& nv,
+                    std::vector<std::uint32_t>& nw);
+  long long collapse_pass();
+  // Flips edge (a, b) of triangles t1 = (a, b, c), t2 = (b, a, d) into (a, d, c), (d, b, c)
+  // when `wanted` says so and the geometry allows it.
+  template <class Wanted> long long flip_pass(Wanted wanted);
+  long long valence_flips();
+  long long delaunay_flips();
+
+  // ---- relaxation, projection and output (remesh_relax.cpp)
+  // Newton onto F = 0 (onto the clip curve F = 0 ∩ G = 0 for kClip vertices) from `from`.
+  // False when it does not get there within `reach`, or meets a point where F or ∇F is not
+  // finite or ∇F vanishes.
+  bool project(bool on_clip, Vec3& p, double reach);
+  // The two border neighbours of a clip vertex (kNone where it has not exactly two).
+  std::array<std::uint32_t, 2> border_neighbours(std::uint32_t v) const;
+  // Targets for the clip vertices: each chain of them along the border (between two vertices
+  // that do not slide, or a closed loop from its first vertex) evenly spaced by arc length on
+  // its polyline. Relaxing by neighbour midpoints instead converges as slowly as a 1-D Jacobi
+  // iteration (about 1% per step on a chain of 20); this lands in one step up to the
+  // polyline's error.
+  void border_targets(std::vector<Vec3>& target, std::vector<std::uint8_t>& has);
+  // One Jacobi step: every free vertex to the area-weighted centroid of its ring, in the
+  // tangent plane, and every clip vertex to its border target along the clip curve; then back
+  // onto F = 0 (the curve). Moves that would turn a triangle over or flatten it are undone.
+  // Returns the largest move over L.
+  double relax();
+  // Moves every vertex to `next` except where a triangle would turn over or flatten: there
+  // the triangle's vertices stay (repeated until no triangle is bad).
+  double apply_guarded(std::vector<Vec3>& next);
+  // Newton projection of every moving vertex onto F = 0 (the clip curve for kClip), guarded.
+  void final_projection();
+  void compact();
+  void measure_residual();
+};
+
+}  // namespace zeroset::detail
