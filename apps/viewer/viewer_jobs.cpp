@@ -475,7 +475,9 @@ ViewerStats ViewerState::stats() const {
   s.show_singular = display_.show_singular;
   s.singular = singular();
   s.singular_is_current = singular_is_current();
-  if (floaters_) {
+  // Only the current job's floaters count: a frame of a job that a settings change has replaced
+  // would let `steps N` end on the old job's step count.
+  if (floaters_ && floaters_->generation == generation_) {
     s.floater_count = floaters_->positions.size();
     s.floater_steps = floaters_->last.step;
     s.steps_per_second = floaters_->steps_per_second;
