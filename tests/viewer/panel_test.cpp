@@ -111,15 +111,17 @@ TEST(Panel, RandomClicksOnTheKeyframesKeepThemValid) {
   bool touched = false;
   for (int i = 0; i < 3000; ++i) {
     const float x0 = x(rng), y0 = y(rng);
-    if (i % 4 == 0)
+    if (i % 4 == 0) {
       ASSERT_NO_THROW(gui.drag(state, panel, x0, y0, x0 + step(rng), y0 + step(rng)));
-    else
+    } else {
       ASSERT_NO_THROW(gui.click(state, panel, x0, y0));
+    }
     touched |= state.keyframes() != before || state.keyframe_playhead() != 0;
-    if (state.has_keyframes())
+    if (state.has_keyframes()) {
       ASSERT_NO_THROW((void)read_keyframes(state.scene().settings, state.surface(),
                                            state.keyframe_frames(), "panel"))
           << state.keyframes().dump();
+    }
   }
   EXPECT_TRUE(touched) << "the clicks reached the Keyframes section";
 }
