@@ -39,7 +39,7 @@ shot 7ab-paper torus -r 16
 shot 7ab-nocurv torus -r 16 --no-curvature
 shot 7ab-remesh torus -r 16 --improver remesh
 
-# Figure 7(c): a thin torus (tube radius 0.12, about 1.5 cells across) at 16 cells.
+# Figure 7(c): a thin torus (tube radius 0.12, 1.2 cells across) at 16 cells.
 T7=$TMP/thin-torus.json
 cat >"$T7" <<'EOF'
 {"name": "torus", "parameters": {"r": 0.12},
