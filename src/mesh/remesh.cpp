@@ -448,10 +448,6 @@ RemeshStats remesh(Mesh& mesh, const Surface& surface, const RemeshOptions& opti
     }
     for (int j = 0; j < options.relax_steps; ++j) r.relax();
   }
-  // Settling: after each step only the vertices with a ring neighbour (or themselves) still
-  // moving stay active, the others are at rest already (Remesher::frozen). The topology does
-  // not change from here on.
-  r.settling = true;
   bool moves_at_rest = false;
   for (int k = 0; k < kMaxSettleSteps && !stop.stop_requested(); ++k) {
     st.last_max_move = r.relax();
@@ -460,8 +456,6 @@ RemeshStats remesh(Mesh& mesh, const Surface& surface, const RemeshOptions& opti
       break;
     }
   }
-  r.settling = false;
-  r.frozen.clear();
   st.missed_singular_points = static_cast<long long>(r.pending.size());
   st.converged = topology_at_rest && flips_at_rest && moves_at_rest;
   r.final_projection();

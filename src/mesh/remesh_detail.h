@@ -32,9 +32,6 @@ constexpr double kBandGrowth = 0.03;
 constexpr int kMaxSettleSteps = 200;
 // Batched Newton steps onto F = 0 per relaxation step (then one at a time where needed).
 constexpr int kBatchNewtonSteps = 3;
-// While settling, a vertex freezes when it and its ring neighbours moved less than this ×
-// rest_move × L in the last step (see Remesher::frozen).
-constexpr double kFreezeMove = 0.25;
 
 inline std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
   if (a > b) std::swap(a, b);
@@ -72,13 +69,6 @@ struct Remesher {
   // ∇F where it was last evaluated (grad_at; NaN: never): a vertex that did not move since
   // needs no new evaluation for its tangent plane.
   std::vector<Vec3> grad_at, grad;
-  // Active set while settling (the connectivity no longer changes): a frozen vertex stays
-  // where it is. A vertex freezes when neither it nor any ring neighbour moved more than
-  // kFreezeMove × rest_move × L in the last step (its own next move would be about as small),
-  // and wakes when one of them moves again.
-  bool settling = false;
-  std::vector<std::uint8_t> frozen;
-  std::vector<double> last_move;  // each vertex's move in the last relaxation step, in L
 
   Remesher(Mesh& m, const Surface& s, const RemeshOptions& o)
       : mesh(m), surface(s), opt(o),
@@ -162,9 +152,6 @@ struct Remesher {
   // onto F = 0 (the curve). Moves that would turn a triangle over or flatten it are undone.
   // Returns the largest move over L.
   double relax();
-  // After each settling step: freezes the vertices whose ring did not move in it and wakes
-  // the others (see `frozen`); returns how many stay active.
-  long long update_frozen(double threshold);
   // ∇F at the current position of every listed vertex, from the cache where it is there.
   void update_gradients(const std::vector<std::uint32_t>& vs);
   // Moves every vertex to `next` except where a triangle would turn over or flatten: there

@@ -133,38 +133,17 @@ void Remesher::update_gradients(const std::vector<std::uint32_t>& vs) {
   for (size_t i = 0; i < todo.size(); ++i) grad_at[todo[i]] = pts[i], grad[todo[i]] = g[i];
 }
 
-long long Remesher::update_frozen(double threshold) {
-  const size_t n = mesh.positions.size();
-  if (rings_stale) build_rings();
-  std::vector<std::uint8_t> awake(n, 0);
-  for (std::uint32_t t = 0; t < rtri.size(); ++t) {
-    const Tri& tr = rtri[t];
-    if (last_move[tr[0]] > threshold || last_move[tr[1]] > threshold ||
-        last_move[tr[2]] > threshold)
-      awake[tr[0]] = awake[tr[1]] = awake[tr[2]] = 1;
-  }
-  long long count = 0;
-  frozen.assign(n, 0);
-  for (size_t v = 0; v < n; ++v) {
-    // Clip vertices are placed along their whole chain at once: never frozen.
-    frozen[v] = !awake[v] && kind[v] == kFree;
-    count += !frozen[v];
-  }
-  return count;
-}
-
 // One Jacobi step: every free vertex to the area-weighted centroid of its ring, in the
 // tangent plane, and every clip vertex to its border target along the clip curve; then back
 // onto F = 0 (the curve). Moves that would turn a triangle over or flatten it are undone.
-// Frozen vertices (see `frozen`) stay. Returns the largest move over L.
+// Returns the largest move over L.
 double Remesher::relax() {
   ++stats.relax_steps;
   if (rings_stale) build_rings();
   const size_t nv = mesh.positions.size();
-  frozen.resize(nv, 0);
   std::vector<std::uint32_t> free_vs, clip_vs;
   for (std::uint32_t v = 0; v < nv; ++v) {
-    if (!alive_vertex[v] || ring_start[v] == ring_start[v + 1] || frozen[v]) continue;
+    if (!alive_vertex[v] || ring_start[v] == ring_start[v + 1]) continue;
     if (kind[v] == kFree) free_vs.push_back(v);
     if (kind[v] == kClip) clip_vs.push_back(v);
   }
@@ -262,9 +241,7 @@ double Remesher::relax() {
     }
   });
   trap.rethrow();
-  const double worst = apply_guarded(next);
-  if (settling) update_frozen(kFreezeMove * opt.rest_move);
-  return worst;
+  return apply_guarded(next);
 }
 
 // Moves every vertex to `next` except where a triangle would turn over or flatten: there
@@ -300,13 +277,10 @@ double Remesher::apply_guarded(std::vector<Vec3>& next) {
         for (std::uint32_t v : rtri[judged[j]])
           if (moved[v]) next[v] = mesh.positions[v], moved[v] = 0, ++stats.reverted_moves;
   }
-  last_move.assign(nv, 0.0);
   double worst = 0;
   for (size_t v = 0; v < nv; ++v) {
     if (!moved[v]) continue;
-    const double d = L > 0 ? (next[v] - mesh.positions[v]).norm() / L : 0.0;
-    last_move[v] = d;
-    worst = std::max(worst, d);
+    worst = std::max(worst, L > 0 ? (next[v] - mesh.positions[v]).norm() / L : 0.0);
     mesh.positions[v] = next[v];
   }
   return worst;
