@@ -29,6 +29,8 @@ void Remesher::setup() {
   alive_vertex.assign(nv, 1);
   alive_tri.assign(mesh.triangles.size(), 1);
   vt.assign(nv, {});
+  grad_at.assign(nv, Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
+  grad.assign(nv, Vec3::Zero());
   for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
     for (std::uint32_t v : mesh.triangles[t]) vt[v].push_back(t);
   for (size_t v = 0; v < nv; ++v) {
@@ -155,6 +157,8 @@ std::uint32_t Remesher::add_vertex(const Vec3& p, Kind k) {
   on_curve.push_back(0);
   alive_vertex.push_back(1);
   vt.emplace_back();
+  grad_at.push_back(Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
+  grad.emplace_back(Vec3::Zero());
   return static_cast<std::uint32_t>(mesh.positions.size() - 1);
 }
 
@@ -163,10 +167,12 @@ std::uint32_t Remesher::add_triangle(const Tri& t) {
   alive_tri.push_back(1);
   const auto id = static_cast<std::uint32_t>(mesh.triangles.size() - 1);
   for (std::uint32_t v : t) vt[v].push_back(id);
+  rings_stale = true;
   return id;
 }
 
 void Remesher::drop_from(std::uint32_t v, std::uint32_t t) {
+  rings_stale = true;
   auto& l = vt[v];
   l.erase(std::remove(l.begin(), l.end(), t), l.end());
 }
@@ -230,21 +236,22 @@ long long Remesher::split_pass() {
 // Collapses v into w (w stays where it is). Returns false, changing nothing, when refused.
 bool Remesher::try_collapse(std::uint32_t v, std::uint32_t w, std::vector<std::uint32_t>& nv,
                             std::vector<std::uint32_t>& nw) {
+  if (kind[v] == kLocked) return false;
   std::uint32_t et[2];
   const int ne = edge_tris(v, w, et);
   if (ne == 0 || ne > 2) return false;
-  if (kind[v] == kLocked) return false;
   if (kind[v] == kClip && !(kind[w] == kClip && ne == 1)) return false;
   if (kind[v] == kFree && ne != 2) return false;
-  // Link condition: the common neighbours are exactly the opposite corners.
+  // The cheap tests first: no edge longer than hi_collapse, then the link condition (the
+  // common neighbours are exactly the opposite corners).
   neighbours(v, nv);
+  const Vec3& pw = mesh.positions[w];
+  for (std::uint32_t x : nv)
+    if (x != w && (mesh.positions[x] - pw).norm() > hi_collapse) return false;
   neighbours(w, nw);
   std::vector<std::uint32_t> common;
   std::set_intersection(nv.begin(), nv.end(), nw.begin(), nw.end(), std::back_inserter(common));
   if (static_cast<int>(common.size()) != ne) return false;
-  const Vec3& pw = mesh.positions[w];
-  for (std::uint32_t x : nv)
-    if (x != w && (mesh.positions[x] - pw).norm() > hi_collapse) return false;
   for (std::uint32_t t : vt[v]) {
     const Tri& tr = mesh.triangles[t];
     if (tr[0] == w || tr[1] == w || tr[2] == w) continue;
@@ -277,7 +284,7 @@ long long Remesher::collapse_pass() {
   for (const auto& [a, b] : edges_where(false)) {
     if (!alive_vertex[a] || !alive_vertex[b]) continue;
     if ((mesh.positions[a] - mesh.positions[b]).norm() >= lo) continue;
-    if (curve_edges.count(edge_key(a, b))) continue;
+    if (on_curve[a] && on_curve[b] && curve_edges.count(edge_key(a, b))) continue;
     if (try_collapse(a, b, nv, nw) || try_collapse(b, a, nv, nw))
       ++n;
     else
@@ -295,7 +302,8 @@ long long Remesher::flip_pass(Wanted wanted) {
     for (int k = 0; k < 3 && alive_tri[t1]; ++k) {
       const Tri tr = mesh.triangles[t1];
       const std::uint32_t a = tr[k], b = tr[(k + 1) % 3], c = tr[(k + 2) % 3];
-      if (curve_edges.count(edge_key(a, b))) continue;
+      // A curve edge has both ends on a curve: the hash lookup only then.
+      if (on_curve[a] && on_curve[b] && curve_edges.count(edge_key(a, b))) continue;
       std::uint32_t et[2];
       if (edge_tris(a, b, et) != 2) continue;
       const std::uint32_t t2 = et[0] == t1 ? et[1] : et[0];

@@ -1,7 +1,8 @@
 #pragma once
 // The remesher's state (include/zeroset/mesh/remesh.h): a triangle list with per-vertex
 // triangle lists, updated by the serial split/collapse/flip passes (remesh.cpp); relaxation and
-// projection are parallel over the vertices (remesh_relax.cpp).
+// projection are parallel over the vertices (remesh_relax.cpp) and read a packed copy of the
+// connectivity (CSR), rebuilt only when a topology pass changed it.
 #include <algorithm>
 #include <array>
 #include <cstdint>
@@ -57,7 +58,17 @@ struct Remesher {
   double L = 0, lo = 0, hi = 0, min_area = 0;
   double hi_collapse = 0;
   std::vector<Vec3> pending;  // singular points no vertex holds yet
-  std::vector<int> valence;  // during valence_flips: neighbours per vertex, kept up to date  // no collapse makes an edge longer than this (4/3 L)
+  std::vector<int> valence;  // during valence_flips: neighbours per vertex, kept up to date
+
+  // Relaxation's view of the connectivity, rebuilt when a topology pass has changed it: the
+  // live triangles packed, and each vertex's among them in CSR form (ring_tri[ring_start[v] ..
+  // ring_start[v + 1]]). Contiguous, unlike vt, and without the dead triangles.
+  bool rings_stale = true;
+  std::vector<Tri> rtri;
+  std::vector<std::uint32_t> ring_start, ring_tri;
+  // ∇F where it was last evaluated (grad_at; NaN: never): a vertex that did not move since
+  // needs no new evaluation for its tangent plane.
+  std::vector<Vec3> grad_at, grad;
 
   Remesher(Mesh& m, const Surface& s, const RemeshOptions& o)
       : mesh(m), surface(s), opt(o),
@@ -110,6 +121,8 @@ struct Remesher {
   std::uint32_t add_vertex(const Vec3& p, Kind k);
   std::uint32_t add_triangle(const Tri& t);
   void drop_from(std::uint32_t v, std::uint32_t t);
+  // rtri, ring_start and ring_tri from the live triangles.
+  void build_rings();
   long long split_pass();
   // Collapses v into w (w stays where it is). Returns false, changing nothing, when refused.
   bool try_collapse(std::uint32_t v, std::uint32_t w, std::vector<std::uint32_t>& nv,
@@ -139,6 +152,8 @@ struct Remesher {
   // onto F = 0 (the curve). Moves that would turn a triangle over or flatten it are undone.
   // Returns the largest move over L.
   double relax();
+  // ∇F at the current position of every listed vertex, from the cache where it is there.
+  void update_gradients(const std::vector<std::uint32_t>& vs);
   // Moves every vertex to `next` except where a triangle would turn over or flatten: there
   // the triangle's vertices stay (repeated until no triangle is bad).
   double apply_guarded(std::vector<Vec3>& next);

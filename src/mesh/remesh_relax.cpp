@@ -105,85 +105,139 @@ void Remesher::border_targets(std::vector<Vec3>& target, std::vector<std::uint8_
     }
 }
 
+void Remesher::build_rings() {
+  const size_t n = mesh.positions.size();
+  rtri.clear();
+  ring_start.assign(n + 1, 0);
+  for (size_t t = 0; t < mesh.triangles.size(); ++t)
+    if (alive_tri[t]) {
+      rtri.push_back(mesh.triangles[t]);
+      for (std::uint32_t v : mesh.triangles[t]) ++ring_start[v + 1];
+    }
+  for (size_t v = 0; v < n; ++v) ring_start[v + 1] += ring_start[v];
+  ring_tri.resize(ring_start[n]);
+  std::vector<std::uint32_t> fill(ring_start.begin(), ring_start.end() - 1);
+  for (std::uint32_t t = 0; t < rtri.size(); ++t)
+    for (std::uint32_t v : rtri[t]) ring_tri[fill[v]++] = t;
+  rings_stale = false;
+}
+
+void Remesher::update_gradients(const std::vector<std::uint32_t>& vs) {
+  std::vector<std::uint32_t> todo;
+  std::vector<Vec3> pts;
+  for (std::uint32_t v : vs)
+    if (!(grad_at[v] == mesh.positions[v])) todo.push_back(v), pts.push_back(mesh.positions[v]);
+  std::vector<double> f;
+  std::vector<Vec3> g;
+  values_gradients(pool, workers, pts, f, g);
+  for (size_t i = 0; i < todo.size(); ++i) grad_at[todo[i]] = pts[i], grad[todo[i]] = g[i];
+}
+
 // One Jacobi step: every free vertex to the area-weighted centroid of its ring, in the
 // tangent plane, and every clip vertex to its border target along the clip curve; then back
 // onto F = 0 (the curve). Moves that would turn a triangle over or flatten it are undone.
 // Returns the largest move over L.
 double Remesher::relax() {
   ++stats.relax_steps;
-  const long long n = static_cast<long long>(mesh.positions.size());
-  std::vector<Vec3> border_target(mesh.positions.size());
-  std::vector<std::uint8_t> has_target(mesh.positions.size(), 0);
-  border_targets(border_target, has_target);
+  if (rings_stale) build_rings();
+  const size_t nv = mesh.positions.size();
+  std::vector<std::uint32_t> free_vs, clip_vs;
+  for (std::uint32_t v = 0; v < nv; ++v) {
+    if (!alive_vertex[v] || ring_start[v] == ring_start[v + 1]) continue;
+    if (kind[v] == kFree) free_vs.push_back(v);
+    if (kind[v] == kClip) clip_vs.push_back(v);
+  }
+  std::vector<Vec3> border_target;
+  std::vector<std::uint8_t> has_target;
+  if (!clip_vs.empty()) {
+    border_target.resize(nv);
+    has_target.assign(nv, 0);
+    border_targets(border_target, has_target);
+  }
   // F and ∇F in batches (much cheaper per point than one at a time): at the current positions
-  // for the tangent planes, then at the moved ones for Newton's steps onto F = 0.
-  std::vector<double> f;
-  std::vector<Vec3> g;
-  values_gradients(pool, workers, mesh.positions, f, g);
-  std::vector<Vec3> next = mesh.positions, start(mesh.positions.size());
-  std::vector<std::uint8_t> moving(mesh.positions.size(), 0);
-  ExceptionTrap trap;
-#pragma omp parallel for num_threads(workers) schedule(dynamic, 256)
-  for (long long vv = 0; vv < n; ++vv) trap.run([&] {
-    const auto v = static_cast<std::uint32_t>(vv);
-    if (!alive_vertex[v] || kind[v] == kLocked || vt[v].empty()) return;
+  // for the tangent planes (cached for the vertices that did not move), then at the moved ones
+  // for Newton's steps onto F = 0.
+  update_gradients(free_vs);
+  std::vector<Vec3> next = mesh.positions;
+  const long long nf = static_cast<long long>(free_vs.size());
+  std::vector<Vec3> start(free_vs.size());
+  std::vector<std::uint8_t> state(free_vs.size(), 0);  // 0 failed, 1 moving, 2 on F = 0
+#pragma omp parallel for num_threads(workers) schedule(static)
+  for (long long i = 0; i < nf; ++i) {
+    const std::uint32_t v = free_vs[i];
     const Vec3& p = mesh.positions[v];
     Vec3 c = Vec3::Zero();
-    if (kind[v] == kClip) {
-      if (!has_target[v]) return;
-      Vec3 q = border_target[v];
-      if (project(true, q, 0.5 * L) && surface.clip.contains(q, 1e-9 * L)) next[v] = q;
-      return;
-    }
     double area = 0;
-    for (std::uint32_t t : vt[v]) {
-      const Tri& tr = mesh.triangles[t];
+    for (std::uint32_t k = ring_start[v]; k < ring_start[v + 1]; ++k) {
+      const Tri& tr = rtri[ring_tri[k]];
       const Vec3 &x = mesh.positions[tr[0]], &y = mesh.positions[tr[1]],
                  &z = mesh.positions[tr[2]];
       const double a = area_normal(x, y, z).norm();
       c += a * (x + y + z) / 3, area += a;
     }
-    if (!(area > 0) || !(g[v].norm() > 0) || !g[v].allFinite()) return;
+    const Vec3& gv = grad[v];
+    if (!(area > 0) || !(gv.norm() > 0) || !gv.allFinite()) continue;
     c /= area;
-    const Vec3 u = g[v].normalized();
+    const Vec3 u = gv.normalized();
     Vec3 d = c - p;
     d -= d.dot(u) * u;
-    start[v] = next[v] = p + d;
-    moving[v] = 1;
+    start[i] = p + d;
+    state[i] = 1;
+  }
+  ExceptionTrap trap;
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 16)
+  for (long long i = 0; i < static_cast<long long>(clip_vs.size()); ++i) trap.run([&] {
+    const std::uint32_t v = clip_vs[i];
+    if (!has_target[v]) return;
+    Vec3 q = border_target[v];
+    if (project(true, q, 0.5 * L) && surface.clip.contains(q, 1e-9 * L)) next[v] = q;
   });
   trap.rethrow();
-  // Newton's method onto F = 0 for the free vertices, all at once.
-  std::vector<std::uint8_t> done(mesh.positions.size(), 0);
-  for (int it = 0; it < kBatchNewtonSteps + 1; ++it) {
-    values_gradients(pool, workers, next, f, g);
+  // Newton's method onto F = 0 for the free vertices, all at once, each round only at the
+  // points not there yet.
+  std::vector<Vec3> at = start;
+  std::vector<std::uint32_t> todo;
+  for (std::uint32_t i = 0; i < free_vs.size(); ++i)
+    if (state[i] == 1) todo.push_back(i);
+  std::vector<Vec3> pts;
+  std::vector<double> f;
+  std::vector<Vec3> g;
+  for (int it = 0; it < kBatchNewtonSteps + 1 && !todo.empty(); ++it) {
+    pts.resize(todo.size());
+    for (size_t k = 0; k < todo.size(); ++k) pts[k] = at[todo[k]];
+    values_gradients(pool, workers, pts, f, g);
     const bool last = it == kBatchNewtonSteps;
-#pragma omp parallel for num_threads(workers) schedule(static)
-    for (long long v = 0; v < n; ++v) {
-      if (!moving[v] || done[v]) continue;
-      const double gn = g[v].norm();
-      if (!has_residual(f[v], gn)) {
-        moving[v] = 0;
+    size_t kept = 0;
+    for (size_t k = 0; k < todo.size(); ++k) {
+      const std::uint32_t i = todo[k];
+      const double gn = g[k].norm();
+      if (!has_residual(f[k], gn)) {
+        state[i] = 0;
         continue;
       }
-      if (residual(f[v], gn) <= 1e-14 * (1 + next[v].norm())) {
-        done[v] = 1;
+      if (residual(f[k], gn) <= 1e-14 * (1 + pts[k].norm())) {
+        state[i] = 2;
+        // ∇F there is what the next step's tangent plane needs if the vertex stays there.
+        const std::uint32_t v = free_vs[i];
+        grad_at[v] = pts[k], grad[v] = g[k];
         continue;
       }
-      if (!last) next[v] += surface_newton_step(f[v], g[v]);
+      if (!last) at[i] += surface_newton_step(f[k], g[k]);
+      todo[kept++] = i;
     }
+    todo.resize(kept);
   }
   trap.run([&] {
-    for (long long vv = 0; vv < n; ++vv) {
-      const auto v = static_cast<std::uint32_t>(vv);
-      if (!moving[v]) continue;
+    for (std::uint32_t i = 0; i < free_vs.size(); ++i) {
+      if (state[i] == 0) continue;
       // Not there yet after the batched steps (rare): one at a time from the start.
-      if (!done[v]) {
-        Vec3 q = start[v];
-        if (project(false, q, 0.5 * L)) next[v] = q, done[v] = 1;
+      if (state[i] == 1) {
+        Vec3 q = start[i];
+        if (project(false, q, 0.5 * L)) at[i] = q, state[i] = 2;
       }
-      const bool ok = done[v] && (next[v] - start[v]).norm() <= 0.5 * L &&
-                      (surface.clip.is_empty_spec() || surface.clip.contains(next[v], 1e-9 * L));
-      if (!ok) next[v] = mesh.positions[v];
+      const bool ok = state[i] == 2 && (at[i] - start[i]).norm() <= 0.5 * L &&
+                      (surface.clip.is_empty_spec() || surface.clip.contains(at[i], 1e-9 * L));
+      if (ok) next[free_vs[i]] = at[i];
     }
   });
   trap.rethrow();
@@ -193,36 +247,43 @@ double Remesher::relax() {
 // Moves every vertex to `next` except where a triangle would turn over or flatten: there
 // the triangle's vertices stay (repeated until no triangle is bad).
 double Remesher::apply_guarded(std::vector<Vec3>& next) {
-  const long long nt = static_cast<long long>(mesh.triangles.size());
-  std::vector<std::uint8_t> bad(mesh.triangles.size(), 0);
+  if (rings_stale) build_rings();
+  const size_t nv = mesh.positions.size();
+  std::vector<std::uint8_t> moved(nv);
+  for (size_t v = 0; v < nv; ++v) moved[v] = next[v] != mesh.positions[v];
+  // Only the triangles with a moved corner are judged.
+  std::vector<std::uint32_t> judged;
+  for (std::uint32_t t = 0; t < rtri.size(); ++t)
+    if (moved[rtri[t][0]] || moved[rtri[t][1]] || moved[rtri[t][2]]) judged.push_back(t);
+  const long long nj = static_cast<long long>(judged.size());
+  std::vector<std::uint8_t> bad(judged.size(), 0);
   // Each round undoes at least one move (a bad triangle has a moved corner: unmoved ones are
   // not judged), so this ends, with no bad triangle left.
   for (;;) {
     long long count = 0;
 #pragma omp parallel for num_threads(workers) schedule(static) reduction(+ : count)
-    for (long long t = 0; t < nt; ++t) {
-      bad[t] = 0;
-      if (!alive_tri[t]) continue;
-      const Tri& tr = mesh.triangles[t];
-      if (next[tr[0]] == mesh.positions[tr[0]] && next[tr[1]] == mesh.positions[tr[1]] &&
-          next[tr[2]] == mesh.positions[tr[2]])
-        continue;
+    for (long long j = 0; j < nj; ++j) {
+      bad[j] = 0;
+      const Tri& tr = rtri[judged[j]];
+      if (!moved[tr[0]] && !moved[tr[1]] && !moved[tr[2]]) continue;
       const Vec3 before = normal(tr);
       const Vec3 after = area_normal(next[tr[0]], next[tr[1]], next[tr[2]]);
       if (!(after.norm() > min_area && after.dot(before) > 0.5 * after.norm() * before.norm()))
-        bad[t] = 1, ++count;
+        bad[j] = 1, ++count;
     }
     if (count == 0) break;
-    for (long long t = 0; t < nt; ++t)
-      if (bad[t])
-        for (std::uint32_t v : mesh.triangles[t])
-          if (next[v] != mesh.positions[v]) next[v] = mesh.positions[v], ++stats.reverted_moves;
+    for (long long j = 0; j < nj; ++j)
+      if (bad[j])
+        for (std::uint32_t v : rtri[judged[j]])
+          if (moved[v]) next[v] = mesh.positions[v], moved[v] = 0, ++stats.reverted_moves;
   }
   double worst = 0;
-  for (size_t v = 0; v < next.size(); ++v)
-    worst = std::max(worst, (next[v] - mesh.positions[v]).norm());
-  mesh.positions.swap(next);
-  return L > 0 ? worst / L : 0.0;
+  for (size_t v = 0; v < nv; ++v) {
+    if (!moved[v]) continue;
+    worst = std::max(worst, L > 0 ? (next[v] - mesh.positions[v]).norm() / L : 0.0);
+    mesh.positions[v] = next[v];
+  }
+  return worst;
 }
 
 // Newton projection of every moving vertex onto F = 0 (the clip curve for kClip), guarded.
