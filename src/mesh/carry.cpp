@@ -207,9 +207,9 @@ CarryResult carry_mesh(const Mesh& mesh, const Surface& from, const Surface& to,
     return bad;
   };
   if (old_set.points.size() != new_set.points.size())
-    return failed_after(CarryFailure::kSingularSet, fmt::format("singular points: {} → {}",
-                                                                old_set.points.size(),
-                                                                new_set.points.size()));
+    return failed_after(
+        CarryFailure::kSingularSet,
+        fmt::format("singular points: {} → {}", old_set.points.size(), new_set.points.size()));
   if (old_set.curves != new_set.curves)
     return failed_after(CarryFailure::kSingularSet,
                         fmt::format("singular curves: {} → {}", old_set.curves, new_set.curves));
