@@ -477,11 +477,9 @@ struct MeshImprover::State {
           return;
         }
     };
-    // Whether an edge flips depends only on the fixed positions and on the lists of its ends and
-    // its two opposite vertices. A flip changes the lists of its four vertices, so it marks them
-    // and their neighbours (which hold every edge it can affect); a pass after the first checks
-    // only edges with a marked end since that edge was last checked: the same flips as checking
-    // every edge again, for a fraction of the time.
+    // An edge's test reads the fixed positions and the lists of its ends and opposite vertices;
+    // a flip marks its four vertices and their neighbours (the ends of every edge it affects),
+    // and later passes test only edges marked since their last test: the same flips, sooner.
     std::vector<std::uint8_t> marked_before(nv(), 1), marked(nv(), 0);
     auto mark = [&](std::uint32_t x) {
       marked[x] = 1;
