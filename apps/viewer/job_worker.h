@@ -67,6 +67,11 @@ class Mailbox {
     std::lock_guard lock(mutex_);
     return std::move(value_);
   }
+  /// The posted value, left for take(); nullptr when there is none.
+  std::shared_ptr<const T> peek() {
+    std::lock_guard lock(mutex_);
+    return value_;
+  }
   void clear() { post(nullptr); }
 
  private:

@@ -104,6 +104,7 @@ bool ViewerState::update(double now_s) {
     is_new = true;
   }
   is_new |= update_singular();
+  survey_if_due(now_s);
   restart_if_needed();
   return is_new;
 }
@@ -132,9 +133,17 @@ void ViewerState::restart_if_needed() {
   }
   // Continuous changes (dragging, animation) must not cancel a job before it has shown its
   // first result, or nothing would ever be drawn while they last.
+  // A mesh job's first result counts once it is posted and the window is due to take the next
+  // live result within about two carries' time: the next carry starts from it while the window
+  // still draws the one before (start_mesh_job), so carrying and drawing overlap instead of
+  // taking turns, and no carry is made only to be replaced before it is shown.
+  const auto posted = mode_ == Mode::kMesh ? mesh_box_.peek() : nullptr;
+  const bool posted_in_time =
+      posted && posted->generation == generation_ &&
+      last_update_s_ >= last_live_frame_s_ + live_frame_interval_s_ - 2 * posted->carry_seconds;
   const bool first_result_shown =
       (mode_ == Mode::kRaytrace && preview_ && preview_->generation == generation_) ||
-      (mode_ == Mode::kMesh && mesh_ && mesh_->generation == generation_);
+      (mode_ == Mode::kMesh && mesh_ && mesh_->generation == generation_) || posted_in_time;
   if (cancel_now_ || first_result_shown || worker_.is_idle()) restart_job();
 }
 
@@ -336,10 +345,12 @@ void ViewerState::start_mesh_job() {
   const int threads = threads_;
   // Only the parameters changed since the mesh on screen was made: carry it (docs/viewer.md,
   // live meshes), rebuilding only when that fails.
-  std::shared_ptr<const MeshFrame> previous;
-  if (is_improving && mesh_ && mesh_->structure == structure && !mesh_->mesh.empty() &&
-      mesh_->surface.field.parameter_values() != surface.field.parameter_values())
-    previous = mesh_;
+  // The newest mesh: one posted and not yet taken by the window is newer than the one shown.
+  std::shared_ptr<const MeshFrame> previous, latest = mesh_box_.peek();
+  if (!latest) latest = mesh_;
+  if (is_improving && latest && latest->structure == structure && !latest->mesh.empty() &&
+      latest->surface.field.parameter_values() != surface.field.parameter_values())
+    previous = latest;
   worker_.submit([=](std::stop_token stop) {
     auto new_frame = [&]() {
       auto frame = std::make_shared<MeshFrame>();
@@ -404,12 +415,14 @@ void ViewerState::start_mesh_job() {
       }
     };
     std::string reason;
+    std::optional<CarrySingularSet> singular;
     if (previous) {
       Mesh from = previous->mesh;
       if (!previous->hidden_curves.empty()) from.curves = previous->hidden_curves;
       const CarryOptions carry{.improve_steps = std::min(kCarryImproveSteps, improve.max_steps),
                                .improve = improve,
-                               .threads = threads};
+                               .threads = threads,
+                               .from_singular = previous->singular};
       CarryResult r = carry_mesh(from, previous->surface, surface, carry, stop);
       if (stop.stop_requested()) return;
       if (r.carried()) {
@@ -422,10 +435,12 @@ void ViewerState::start_mesh_job() {
         frame->improver_steps = r.improve.steps;
         frame->carried = true;
         frame->carry_seconds = r.seconds;
+        frame->singular = r.singular;
         improve_on(std::move(r.mesh), std::move(frame));
         return;
       }
       reason = std::move(r.reason);
+      singular = std::move(r.singular);
     }
     // A resolution whose grid would not fit in memory is refused (the message goes to the
     // panel) instead of taking the viewer down.
@@ -443,12 +458,13 @@ void ViewerState::start_mesh_job() {
     frame->polygonize = polygonize_stats;
     frame->crossings = crossings;
     frame->rebuild_reason = reason;
+    frame->singular = std::move(singular);
     improve_on(std::move(mesh), std::move(frame));
   });
 }
 
 bool ViewerState::is_settled() const {
-  if (needs_restart_ || !singular_is_current()) return false;
+  if (needs_restart_ || survey_pending_ || !singular_is_current()) return false;
   switch (mode_) {
     case Mode::kRaytrace:
       return preview_ && preview_->generation == generation_ && preview_->divisor == 1 &&

@@ -298,12 +298,14 @@ bool ViewerState::set_clip_specs(const std::vector<std::string>& specs) {
 void ViewerState::surface_changed(bool structure) {
   needs_restart_ = true;
   ++surface_version_;
-  // The commands' survey (milliseconds): said once when it changes, kept for the panel.
-  const std::string warning =
-      survey_warning(surface_, survey_field(surface_)).value_or(std::string());
-  if (warning != field_warning_) {
-    field_warning_ = warning;
-    if (!warning.empty()) set_status("warning: " + warning);
+  // The commands' survey takes milliseconds to tens of them on a busy machine: at every value of
+  // a moving parameter it would slow every frame, so new values alone are surveyed once they
+  // rest, and at most once per kSurveyInterval while they move (update()).
+  if (structure) {
+    survey_now();
+  } else {
+    survey_pending_ = true;
+    last_param_change_s_ = last_update_s_;
   }
   if (structure) {
     ++mesh_structure_;  // another equation or clip: a mesh is not carried across
@@ -319,6 +321,23 @@ void ViewerState::surface_changed(bool structure) {
   else
     ++floater_control_->params_version;
   floater_control_->changed.notify_all();
+}
+
+void ViewerState::survey_now() {
+  survey_pending_ = false;
+  last_survey_s_ = last_update_s_;
+  const std::string warning =
+      survey_warning(surface_, survey_field(surface_)).value_or(std::string());
+  if (warning != field_warning_) {
+    field_warning_ = warning;
+    if (!warning.empty()) set_status("warning: " + warning);
+  }
+}
+
+void ViewerState::survey_if_due(double now_s) {
+  if (survey_pending_ &&
+      (now_s - last_param_change_s_ >= kSurveyRest || now_s - last_survey_s_ >= kSurveyInterval))
+    survey_now();
 }
 
 // ---- files -------------------------------------------------------------------------------------

@@ -19,6 +19,7 @@
 #include "viewer.h"
 #include "zeroset/floaters/floaters.h"
 #include "zeroset/io/image.h"
+#include "zeroset/mesh/carry.h"
 #include "zeroset/mesh/improve.h"
 #include "zeroset/mesh/settings.h"
 #include "zeroset/mesh/mesh.h"
@@ -93,6 +94,8 @@ struct MeshFrame {
   std::vector<MeshCurve> hidden_curves;
   bool carried = false;         ///< carried from the previous mesh (docs/viewer.md, live meshes)
   double carry_seconds = 0;     ///< the carrying's time
+  /// The singular set the carrying found on `surface`: the next carry need not search it again.
+  std::optional<CarrySingularSet> singular;
   std::string rebuild_reason;   ///< why carrying failed when it was tried and this was rebuilt
 };
 
@@ -386,6 +389,13 @@ class ViewerState {
   /// Publishes the surface to the floater job: `structure` for a new equation or clip
   /// (FloaterSystem::set_surface), else new parameter values.
   void surface_changed(bool structure);
+  /// The commands' survey of the field (survey_warning), said once when its warning changes.
+  void survey_now();
+  /// Surveys new parameter values once they rested kSurveyRest, or kSurveyInterval after the
+  /// last survey while they keep moving.
+  void survey_if_due(double now_s);
+  static constexpr double kSurveyRest = 0.25;
+  static constexpr double kSurveyInterval = 1;
   /// Before a parametric clip changes size with the parameters: moves the camera (and the home
   /// camera) with it, keeping the view direction and scaling the distance and the target's
   /// offset from the clip's centre by the change of the clip's bounding radius.
@@ -435,6 +445,9 @@ class ViewerState {
   StatusLine status_;
   std::function<void(const StatusLine&)> sink_;
   std::string field_warning_;
+  bool survey_pending_ = false;  // parameters changed since the last survey
+  double last_param_change_s_ = -1e9;
+  double last_survey_s_ = -1e9;
 
   // timing
   double last_update_s_ = -1;

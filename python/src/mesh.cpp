@@ -7,6 +7,7 @@
 #include "zeroset/error.h"
 #include "zeroset/mesh/adjacency.h"
 #include "zeroset/mesh/crossings.h"
+#include "zeroset/mesh/carry.h"
 #include "zeroset/mesh/improve.h"
 #include "zeroset/mesh/remesh.h"
 #include "zeroset/mesh/mesh_io.h"
@@ -265,6 +266,26 @@ void bind_mesh(py::module_& m) {
                .threads = threads};
     return make_mesh(s, a);
   });
+  // Carrying (docs/meshing.md, "Carrying a mesh"): the carried mesh, or None with the reason.
+  m.def(
+      "_carry",
+      [](const PyMesh& p, const PySurface& to, int improve_steps, int threads) {
+        const Surface target = to.surface();
+        const CarryOptions options{.improve_steps = improve_steps, .threads = threads};
+        CarryResult r;
+        run_interruptible(
+            [&](std::stop_token stop) { r = carry_mesh(p.mesh, p.surface, target, options, stop); });
+        py::dict stats("carried"_a = r.carried(), "failure"_a = std::string(to_string(r.failure)),
+                       "reason"_a = r.reason, "seconds"_a = r.seconds,
+                       "max_move_edges"_a = r.max_move_edges, "max_residual"_a = r.max_residual,
+                       "smallest_angle_deg"_a = r.smallest_angle_deg,
+                       "flipped_triangles"_a = r.flipped_triangles,
+                       "node_vertices"_a = r.node_vertices);
+        py::object mesh = py::none();
+        if (r.carried()) mesh = py::cast(PyMesh{std::move(r.mesh), target});
+        return py::make_tuple(mesh, stats);
+      },
+      "mesh"_a, "to"_a, "improve_steps"_a, "threads"_a);
   m.def("_read_mesh", [](const std::string& path, const PySurface& s) {
     return PyMesh{read_mesh(path), s.surface()};
   });

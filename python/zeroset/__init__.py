@@ -439,6 +439,16 @@ class Mesh:
     def _repr_png_(self):
         return self.render(size=(400, 400)).to_png()
 
+    def carry(self, surface, improve_steps=3, threads=0):
+        """Carries the mesh onto `surface`, the same equation with other parameter values,
+        instead of meshing it again (docs/meshing.md, "Carrying a mesh"; the viewer's live
+        meshes). Returns (mesh, stats): the carried Mesh, or None where the mesh cannot follow
+        (nodes appear or vanish, a sheet pinches, ...): stats["reason"] says why, and the
+        surface is then meshed again with `surface.mesh()`."""
+        m, stats = _z._carry(self._m, surface._s, _count(improve_steps, "improve_steps"),
+                             _count(threads, "threads"))
+        return (Mesh(m, stats) if m is not None else None), stats
+
 
 def read_mesh(path, surface):
     """Reads a mesh file (.obj, .ply, .stl, .glb) of `surface` (used for its pictures)."""

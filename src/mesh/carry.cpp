@@ -32,15 +32,10 @@ constexpr double kProjectionTolerance = 1e-12;
 // Steps of Newton's method onto ∇F = 0 for a vertex of a singular curve.
 constexpr int kCurveNewtonSteps = 8;
 
-struct SingularInfo {
-  std::vector<Vec3> points;
-  int curves = 0;
-};
-
 // The singular points (and the number of singular curves) of `s`: the known points when the
 // surface has them, else what find_singular_set() finds.
-SingularInfo singular_info(const Surface& s, const CarryOptions& o) {
-  SingularInfo info;
+CarrySingularSet singular_info(const Surface& s, const CarryOptions& o) {
+  CarrySingularSet info;
   if (s.singular_points_fn) {
     info.points = s.singular_points();
     return info;
@@ -201,22 +196,30 @@ CarryResult carry_mesh(const Mesh& mesh, const Surface& from, const Surface& to,
   if (mesh.empty()) return failed(CarryFailure::kProjection, "no mesh to carry", t0);
 
   // The singular set must only have moved.
-  const SingularInfo old_set = singular_info(from, options);
-  const SingularInfo new_set = singular_info(to, options);
+  const CarrySingularSet old_set = options.from_singular && !from.singular_points_fn
+                                       ? *options.from_singular
+                                       : singular_info(from, options);
+  const CarrySingularSet new_set = singular_info(to, options);
+  // Failures from here on still hand back the new singular set (for the next carry's options).
+  auto failed_after = [&](CarryFailure why, std::string reason) {
+    CarryResult bad = failed(why, std::move(reason), t0);
+    bad.singular = new_set;
+    return bad;
+  };
   if (old_set.points.size() != new_set.points.size())
-    return failed(
+    return failed_after(
         CarryFailure::kSingularSet,
-        fmt::format("singular points: {} → {}", old_set.points.size(), new_set.points.size()), t0);
+        fmt::format("singular points: {} → {}", old_set.points.size(), new_set.points.size()));
   if (old_set.curves != new_set.curves)
-    return failed(CarryFailure::kSingularSet,
-                  fmt::format("singular curves: {} → {}", old_set.curves, new_set.curves), t0);
+    return failed_after(CarryFailure::kSingularSet,
+                        fmt::format("singular curves: {} → {}", old_set.curves, new_set.curves));
   VertexFrame fr = vertex_frame(mesh, old_set.points);
   const double h = fr.mean_edge;
   const std::vector<int> match =
       match_points(old_set.points, new_set.points, options.max_move_edges * h * 4);
   if (match.size() != old_set.points.size())
-    return failed(CarryFailure::kSingularSet, "a singular point jumped", t0);
-  if (stop.stop_requested()) return failed(CarryFailure::kStopped, "stopped", t0);
+    return failed_after(CarryFailure::kSingularSet, "a singular point jumped");
+  if (stop.stop_requested()) return failed_after(CarryFailure::kStopped, "stopped");
 
   const std::vector<double>& q0 = from.field.parameter_values();
   const std::vector<double>& q1 = to.field.parameter_values();
@@ -226,6 +229,7 @@ CarryResult carry_mesh(const Mesh& mesh, const Surface& from, const Surface& to,
   // The node vertices: the vertex at each old singular point goes to its partner.
   std::vector<int> node_of(nv, -1);
   CarryResult r;
+  r.singular = new_set;
   for (size_t k = 0; k < old_set.points.size(); ++k) {
     size_t best = nv;
     double best_d = 1e-3 * h;
@@ -314,15 +318,14 @@ CarryResult carry_mesh(const Mesh& mesh, const Surface& from, const Surface& to,
     const char* what = why == CarryFailure::kLongMove ? "was corrected by more than {} edge"
                        : why == CarryFailure::kClip   ? "left the clip curve"
                                                       : "found no surface nearby";
-    return failed(
+    return failed_after(
         why,
         fmt::format(fmt::runtime(fmt::format("a vertex {}", what)), options.max_move_edges) +
-            (v >= 0 ? fmt::format(" (vertex {})", v) : std::string()),
-        t0);
+            (v >= 0 ? fmt::format(" (vertex {})", v) : std::string()));
   }
   for (size_t v = 0; v < nv; ++v)
     r.max_move_edges = std::max(r.max_move_edges, moved[v] / fr.edge[v]);
-  if (stop.stop_requested()) return failed(CarryFailure::kStopped, "stopped", t0);
+  if (stop.stop_requested()) return failed_after(CarryFailure::kStopped, "stopped");
 
   // A few improver steps on the new surface, then its final projection.
   ImproveOptions improve = options.improve;
@@ -334,7 +337,7 @@ CarryResult carry_mesh(const Mesh& mesh, const Surface& from, const Surface& to,
   MeshImprover improver(std::move(out), to, improve);
   for (int i = 0; i < options.improve_steps && !improver.converged() && !stop.stop_requested(); ++i)
     improver.step();
-  if (stop.stop_requested()) return failed(CarryFailure::kStopped, "stopped", t0);
+  if (stop.stop_requested()) return failed_after(CarryFailure::kStopped, "stopped");
   improver.finish();
   r.improve = improver.stats();
   out = improver.take_mesh();

@@ -74,6 +74,24 @@ def test_mesh_files_of_every_format(tmp_path):
     assert not (tmp_path / "m.xyz").exists()
 
 
+def test_a_mesh_is_carried_to_new_parameter_values_or_says_why_not():
+    # A sphere of radius r: carried to r = 1.2 every vertex lies on the new sphere, the
+    # triangles stay; Kummer crossing mu = 1 gains twelve nodes and cannot be carried.
+    sphere = zeroset.Surface("x^2 + y^2 + z^2 - r^2", clip="sphere:2", r=1)
+    mesh = sphere.mesh(resolution=12, improve=20)
+    carried, stats = mesh.carry(zeroset.Surface("x^2 + y^2 + z^2 - r^2", clip="sphere:2", r=1.2))
+    assert stats["carried"] and stats["reason"] == "", stats
+    np.testing.assert_allclose(np.linalg.norm(carried.vertices, axis=1), 1.2, atol=1e-9)
+    assert len(carried.faces) == len(mesh.faces)
+    assert stats["flipped_triangles"] == 0
+    kummer = zeroset.Surface("kummer", mu=0.9).mesh(resolution=16, improve=20)
+    none, why = kummer.carry(zeroset.Surface("kummer", mu=1.1))
+    assert none is None and not why["carried"]
+    assert why["failure"] == "singular set" and "4 → 16" in why["reason"], why
+    with pytest.raises(ValueError, match="improve_steps"):
+        mesh.carry(sphere, improve_steps=-1)
+
+
 def test_floaters_equal_the_cli(cli, tmp_path):
     cli("sample", "kummer", "--param", "mu=1.5", "--max-count", "400", "--steps", "60", "--seed", "7",
         "-o", tmp_path / "cli.ply", "--png", tmp_path / "cli.png")

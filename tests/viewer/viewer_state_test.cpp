@@ -69,6 +69,31 @@ TEST(ViewerState, WarnsLikeTheCommandsWhenFVanishesIdentically) {
   EXPECT_TRUE(state.field_warning().empty()) << state.field_warning();
 }
 
+// New parameter values alone are surveyed once they rest (or a second after the last survey
+// while they keep moving), not at every value of an animation.
+TEST(ViewerState, AParameterThatMakesFVanishIsWarnedAboutOnceItRests) {
+  ViewerState state(kummer_scene(), Mode::kRaytrace);
+  ASSERT_TRUE(state.set_equation("a*(x^2 + y^2 + z^2 - 1)"));
+  ASSERT_TRUE(state.set_parameter("a", 1));
+  double t = 10;
+  state.update(t);
+  state.update(t += 1);
+  EXPECT_TRUE(state.field_warning().empty()) << state.field_warning();
+  ASSERT_TRUE(state.set_parameter("a", 0));
+  EXPECT_TRUE(state.field_warning().empty()) << "surveyed at once, on the window's thread";
+  state.update(t += 0.3);
+  EXPECT_NE(state.field_warning().find("vanishes identically"), std::string::npos);
+  // A moving parameter: a value every 50 ms is surveyed no more than once a second.
+  for (int i = 1; i <= 10; ++i) {
+    ASSERT_TRUE(state.set_parameter("a", 0.1 * i));
+    state.update(t += 0.05);
+  }
+  EXPECT_NE(state.field_warning().find("vanishes identically"), std::string::npos)
+      << "surveyed within half a second of the last survey";
+  state.update(t += 0.3);
+  EXPECT_TRUE(state.field_warning().empty()) << state.field_warning();
+}
+
 TEST(ViewerState, NewEquationKeepsTunedParametersAndStartsNewOnesAtOne) {
   ViewerState state(kummer_scene(), Mode::kRaytrace);
   ASSERT_TRUE(state.set_parameter("mu", 2.0));

@@ -14,15 +14,24 @@
 /// the mesh elsewhere, or the result is worse than a rebuild (triangles facing against ∇F away
 /// from the singular set, a collapsed angle, a residual left).
 #include <cstdint>
+#include <optional>
 #include <stop_token>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "zeroset/mesh/improve.h"
 #include "zeroset/mesh/mesh.h"
 #include "zeroset/surface/surface.h"
 
 namespace zeroset {
+
+/// The singular set as carrying compares it: the singular points, and how many singular curves
+/// there are (−1: a sheet of singular points, never carried).
+struct CarrySingularSet {
+  std::vector<Vec3> points;
+  int curves = 0;
+};
 
 struct CarryOptions {
   /// Improver steps after the move (then MeshImprover::finish()); 0: projection only.
@@ -41,6 +50,10 @@ struct CarryOptions {
   /// singular set is not searched; only known points are compared).
   int singular_cells = 24;
   int threads = 0;  ///< 0: one per 100 000 vertices, at most all cores (as the improver)
+  /// The singular set of `from` when the caller has it: CarryResult::singular of the carry that
+  /// led to `from` (same singular_cells). Carrying step after step then searches each surface
+  /// once instead of twice. Unset: searched. Ignored for surfaces with known singular points.
+  std::optional<CarrySingularSet> from_singular;
 };
 
 /// Why carrying failed.
@@ -69,6 +82,9 @@ struct CarryResult {
   long long flipped_triangles = 0;
   int node_vertices = 0;  ///< vertices put onto the new singular points
   ImproveStats improve;   ///< of the improver steps
+  /// The singular set of `to` (once it was compared, also when carrying failed afterwards):
+  /// CarryOptions::from_singular of the next carry from this result's mesh.
+  std::optional<CarrySingularSet> singular;
   double seconds = 0;
   bool carried() const { return failure == CarryFailure::kNone; }
 };
