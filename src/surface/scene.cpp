@@ -169,7 +169,15 @@ void apply_overrides(Scene& scene, const SurfaceOverrides& o) {
   // A parametric clip (given here or by the scene) at the final parameter values; checks the
   // extent of every clip given here.
   s.clip.update(s.field);
-  if (!o.clip_specs.empty()) s.clip.check_extent();
+  if (!o.clip_specs.empty()) {
+    s.clip.check_extent();
+    // A clip given here that leaves the camera's target outside (a close-up such as
+    // sphere:0.2@0.5,0,0) would show an empty picture: look at the clip's centre instead.
+    if (s.clip.is_bounded()) {
+      const Box3 b = s.clip.bounds();
+      if (!b.contains(s.camera.target)) s.camera.target = b.center();
+    }
+  }
   s.fit_ranges();  // a typed equation comes without ranges
 }
 

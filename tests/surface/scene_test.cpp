@@ -28,6 +28,15 @@ TEST(Scene, AppliesParameterAndClipOverrides) {
   EXPECT_DOUBLE_EQ(s.clip.spheres[0].radius, 2.5);
 }
 
+TEST(Scene, AClipAwayFromTheCameraTargetBecomesTheTarget) {
+  // A close-up clip away from the origin: the camera looks at it, not at the empty origin.
+  const Surface s = resolve_surface("roman", {.params = {}, .clip_specs = {"sphere:0.15@0.5,0,0"}});
+  EXPECT_NEAR((s.camera.target - Vec3(0.5, 0, 0)).norm(), 0.0, 1e-12);
+  // A clip that still holds the target leaves the camera alone.
+  const Surface t = resolve_surface("kummer", {.params = {}, .clip_specs = {"sphere:2@0.5,0,0"}});
+  EXPECT_EQ(t.camera.target, resolve_surface("kummer").camera.target);
+}
+
 TEST(Scene, ResolvesEquationsAndNamesEveryMissingParameter) {
   EXPECT_NO_THROW(resolve_surface("x^2 + y^2 = z^2"));
   try {
