@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numeric>
 
 #include <fmt/core.h>
 
@@ -192,6 +193,8 @@ long long Remesher::split_pass() {
     Vec3 p = mid;
     if (!project(border, p, 0.5 * len)) continue;
     const std::uint32_t m = add_vertex(p, border ? kClip : kFree);
+    ev().value_gradient(p, grad[m]);  // for agrees_with_gradient, as every other vertex has
+    grad_at[m] = p;
     // Each triangle (a, b, c) → (a, m, c), (m, b, c) in its own orientation.
     std::vector<Vec3> old_normals;
     std::vector<std::uint32_t> made;
@@ -212,6 +215,9 @@ long long Remesher::split_pass() {
       for (size_t k = 0; k < made.size(); ++k) {
         const Vec3 nn = normal(mesh.triangles[made[k]]);
         if (!(nn.norm() > min_area && nn.dot(old_normals[k / 2]) > 0)) return true;
+        if (agrees_with_gradient(old_normals[k / 2], mesh.triangles[et[k / 2]]) &&
+            !agrees_with_gradient(nn, mesh.triangles[made[k]]))
+          return true;
       }
       return false;
     };
@@ -259,9 +265,10 @@ bool Remesher::try_collapse(std::uint32_t v, std::uint32_t w, std::vector<std::u
     for (auto& u : nt)
       if (u == v) u = w;
     const Vec3 before = normal(tr), after = normal(nt);
-    // Not turned, not folded by more than 60°, not (nearly) flat.
+    // Not turned, not folded by more than 60°, not (nearly) flat, not turned against ∇F.
     if (!(after.norm() > min_area && after.dot(before) > 0.5 * after.norm() * before.norm()))
       return false;
+    if (agrees_with_gradient(before, tr) && !agrees_with_gradient(after, nt)) return false;
   }
   // Apply.
   for (int k = 0; k < ne; ++k) {
@@ -322,6 +329,9 @@ long long Remesher::flip_pass(Wanted wanted) {
       if (!(m1.norm() > min_area && m2.norm() > min_area)) continue;
       if (!(m1.dot(sum) > 0.5 * m1.norm() * sum.norm() &&
             m2.dot(sum) > 0.5 * m2.norm() * sum.norm()))
+        continue;
+      if (agrees_with_gradient(o1, tr) && agrees_with_gradient(o2, o) &&
+          !(agrees_with_gradient(m1, n1) && agrees_with_gradient(m2, n2)))
         continue;
       // Never much worse angles than before.
       const double before = std::min(min_angle(p[a], p[b], p[c]), min_angle(p[b], p[a], p[d]));
@@ -413,6 +423,12 @@ RemeshStats remesh(Mesh& mesh, const Surface& surface, const RemeshOptions& opti
   }
   r.find_singular_points();
   r.hold_pending_points();
+  {
+    // ∇F at every vertex before the first topology pass, for agrees_with_gradient.
+    std::vector<std::uint32_t> all(mesh.positions.size());
+    std::iota(all.begin(), all.end(), 0u);
+    r.update_gradients(all);
+  }
   RemeshStats& st = r.stats;
   // Splits and collapses can undo each other where relaxation stretches an edge across a
   // threshold and back, so after a few iterations the band [lo, hi] widens a little at each

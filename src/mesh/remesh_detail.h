@@ -81,6 +81,18 @@ struct Remesher {
     return area_normal(p[t[0]], p[t[1]], p[t[2]]);
   }
 
+  // Whether a triangle with (area) normal n over the corners of t faces along ∇F at each
+  // corner whose gradient is known (cached at or near the corner; zero when not yet evaluated)
+  // and that is not on the singular set. An operation may not turn a triangle that agreed into
+  // one that does not: on a tube a few edges around, moves that each tilt a triangle by less
+  // than the guards allow would otherwise flatten it into a band (docs/meshing.md).
+  bool agrees_with_gradient(const Vec3& n, const Tri& t) const {
+    for (std::uint32_t v : t)
+      if (kind[v] != kLocked && !on_curve[v] && !(n.dot(grad[v]) > 0) && grad[v] != Vec3::Zero())
+        return false;
+    return true;
+  }
+
   // The live triangles on edge (a, b).
   int edge_tris(std::uint32_t a, std::uint32_t b, std::uint32_t out[2]) const {
     int n = 0;

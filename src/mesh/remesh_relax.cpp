@@ -268,7 +268,8 @@ double Remesher::apply_guarded(std::vector<Vec3>& next) {
       if (!moved[tr[0]] && !moved[tr[1]] && !moved[tr[2]]) continue;
       const Vec3 before = normal(tr);
       const Vec3 after = area_normal(next[tr[0]], next[tr[1]], next[tr[2]]);
-      if (!(after.norm() > min_area && after.dot(before) > 0.5 * after.norm() * before.norm()))
+      if (!(after.norm() > min_area && after.dot(before) > 0.5 * after.norm() * before.norm()) ||
+          (agrees_with_gradient(before, tr) && !agrees_with_gradient(after, tr)))
         bad[j] = 1, ++count;
     }
     if (count == 0) break;

@@ -86,6 +86,42 @@ TEST(Remesh, KummerComesToRestOnACoarseGrid) {
   EXPECT_GT(c.after.mean_min_angle_deg, 45);
 }
 
+TEST(Remesh, ThinPartsKeepTheirShape) {
+  // Tubes and slabs a cell or two across, a few edges around: each move or collapse is small,
+  // but without the ∇F guard they added up to a flat band with half its triangles turned.
+  struct Case {
+    const char* equation;
+    double clip;
+    int cells;
+  };
+  for (const Case& k : {Case{"(x^2 + y^2 + z^2 + 1 - 0.12^2)^2 - 4*(x^2 + y^2)", 1.6, 16},
+                        Case{"(x^2 + y^2 + z^2 + 1 - 0.1^2)^2 - 4*(x^2 + z^2)", 1.5, 20}}) {
+    SCOPED_TRACE(k.equation);
+    Surface s = resolve_surface(k.equation);
+    s.clip = Clip::sphere(k.clip);
+    Mesh m = polygonize(s, {.cells = k.cells});
+    const long long euler = mesh_topology(m).euler_characteristic;
+    const Checked c = remesh_and_check(m, s);
+    EXPECT_EQ(mesh_topology(m).euler_characteristic, euler);
+    EXPECT_LT(c.after.percent_below_30, 5.0);
+    EXPECT_GT(c.after.mean_min_angle_deg, 45);
+  }
+  // A slab 0.2 thick, under a cell: remeshing used to shrink it to 3 vertices. Its rim, a
+  // fraction of an edge round, may still turn a few triangles (docs/meshing.md, Limitations).
+  for (const int cells : {14, 20}) {
+    SCOPED_TRACE(cells);
+    Surface s = resolve_surface("x^2 + y^2/4 + 100*z^2 - 1");
+    s.clip = Clip::sphere(2.2);
+    Mesh m = polygonize(s, {.cells = cells});
+    const long long euler = mesh_topology(m).euler_characteristic;
+    const size_t vertices = m.positions.size();
+    remesh(m, s);
+    EXPECT_EQ(mesh_topology(m).euler_characteristic, euler);
+    EXPECT_GT(m.positions.size(), vertices / 2);
+    EXPECT_LE(measure_quality(m, s).flipped_triangles, m.triangles.size() / 20);
+  }
+}
+
 TEST(Remesh, CayleyNodes) {
   const Surface s = test::catalog_surface("cayley");
   Mesh m = polygonize(s, {.cells = 40});
