@@ -477,14 +477,6 @@ struct MeshImprover::State {
           return;
         }
     };
-    // An edge's test reads the fixed positions and the lists of its ends and opposite vertices;
-    // a flip marks its four vertices and their neighbours (the ends of every edge it affects),
-    // and later passes test only edges marked since their last test: the same flips, sooner.
-    std::vector<std::uint8_t> marked_before(nv(), 1), marked(nv(), 0);
-    auto mark = [&](std::uint32_t x) {
-      marked[x] = 1;
-      for (std::uint32_t k = 0; k < nbr_count[x]; ++k) marked[nb(x)[k]] = 1;
-    };
     long long flips = 0;
     for (int pass = 0; pass < 4; ++pass) {
       long long pass_flips = 0;
@@ -492,7 +484,6 @@ struct MeshImprover::State {
         for (std::uint32_t k = 0; k < nbr_count[u]; ++k) {
           const std::uint32_t v = nb(u)[k];
           if (v < u) continue;
-          if (!(marked_before[u] | marked_before[v] | marked[u] | marked[v])) continue;
           // The two triangles on edge (u, v): t1 runs u→v, t2 runs v→u.
           std::uint32_t t1 = kNone, t2 = kNone, a = kNone, b = kNone;
           int found = 0;
@@ -547,15 +538,12 @@ struct MeshImprover::State {
           remove_from(nb(v), nbr_count[v], u);
           nb(a)[nbr_count[a]++] = b;
           nb(b)[nbr_count[b]++] = a;
-          for (const std::uint32_t x : {u, v, a, b}) mark(x);
           ++pass_flips;
           --k;  // the slot now holds another neighbour
         }
       }
       flips += pass_flips;
       if (pass_flips == 0) break;
-      marked_before.swap(marked);
-      std::fill(marked.begin(), marked.end(), std::uint8_t{0});
     }
     return flips;
   }
