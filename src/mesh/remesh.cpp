@@ -301,19 +301,24 @@ long long Remesher::collapse_pass() {
 }
 
 // Flips edge (a, b) of triangles t1 = (a, b, c), t2 = (b, a, d) into (a, d, c), (d, b, c)
-// when `wanted` says so and the geometry allows it.
-template <class Wanted>
-long long Remesher::flip_pass(Wanted wanted) {
+// when `wanted` says so and the geometry allows it; `may_want(a, b, c)` rules edges out
+// before the other triangle is looked up.
+template <class MayWant, class Wanted>
+long long Remesher::flip_pass(MayWant may_want, Wanted wanted) {
   long long n = 0;
   for (std::uint32_t t1 = 0; t1 < mesh.triangles.size(); ++t1) {
     for (int k = 0; k < 3 && alive_tri[t1]; ++k) {
       const Tri tr = mesh.triangles[t1];
       const std::uint32_t a = tr[k], b = tr[(k + 1) % 3], c = tr[(k + 2) % 3];
+      if (!may_want(a, b, c)) continue;
       // A curve edge has both ends on a curve: the hash lookup only then.
       if (on_curve[a] && on_curve[b] && curve_edges.count(edge_key(a, b))) continue;
       std::uint32_t et[2];
       if (edge_tris(a, b, et) != 2) continue;
       const std::uint32_t t2 = et[0] == t1 ? et[1] : et[0];
+      // Visited from t2 already, unless a flip made it since: a pass without flips has
+      // tested every edge.
+      if (t2 < t1) continue;
       const Tri& o = mesh.triangles[t2];
       std::uint32_t d = kNone;
       for (int i = 0; i < 3; ++i)
@@ -359,25 +364,34 @@ long long Remesher::valence_flips() {
     if (target[v] != kAnyValence)
       valence[v] = static_cast<int>(vt[v].size()) + (target[v] == 4 ? 1 : 0);
   }
-  const long long flips =
-      flip_pass([&](std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d) {
-        int before = 0, after = 0;
+  // How much nearer (negative) or farther (positive) from their targets the flip takes a,
+  // b and c; d's share is at least -1.
+  auto change = [&](const std::uint32_t* vs, int count) {
+    int sum = 0;
+    const int delta[4] = {-1, -1, 1, 1};
+    for (int i = 0; i < count; ++i)
+      if (target[vs[i]] != kAnyValence)
+        sum += std::abs(valence[vs[i]] + delta[i] - target[vs[i]]) -
+               std::abs(valence[vs[i]] - target[vs[i]]);
+    return sum;
+  };
+  const long long flips = flip_pass(
+      [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+        const std::uint32_t vs[3] = {a, b, c};
+        return change(vs, 3) <= 0;
+      },
+      [&](std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d) {
         const std::uint32_t vs[4] = {a, b, c, d};
-        const int delta[4] = {-1, -1, 1, 1};
-        for (int i = 0; i < 4; ++i) {
-          if (target[vs[i]] == kAnyValence) continue;
-          before += std::abs(valence[vs[i]] - target[vs[i]]);
-          after += std::abs(valence[vs[i]] + delta[i] - target[vs[i]]);
-        }
         // A vertex may not drop below three neighbours.
-        return after < before && valence[a] > 3 && valence[b] > 3;
+        return change(vs, 4) < 0 && valence[a] > 3 && valence[b] > 3;
       });
   valence.clear();
   return flips;
 }
 
 long long Remesher::delaunay_flips() {
-  return flip_pass([&](std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d) {
+  return flip_pass([](std::uint32_t, std::uint32_t, std::uint32_t) { return true; },
+                   [&](std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d) {
     const auto& p = mesh.positions;
     // The two angles facing the edge add up to more than π (with a margin against cycling).
     return corner_angle(p[c], p[a], p[b]) + corner_angle(p[d], p[a], p[b]) >

@@ -66,6 +66,9 @@ struct Remesher {
   bool rings_stale = true;
   std::vector<Tri> rtri;
   std::vector<std::uint32_t> ring_start, ring_tri;
+  // Area normal of each packed triangle at the current positions (triangle_normals): the
+  // centroids' weights and apply_guarded's "before" share them.
+  std::vector<Vec3> rnormal;
   // ∇F where it was last evaluated (grad_at; NaN: never): a vertex that did not move since
   // needs no new evaluation for its tangent plane.
   std::vector<Vec3> grad_at, grad;
@@ -135,14 +138,17 @@ struct Remesher {
   void drop_from(std::uint32_t v, std::uint32_t t);
   // rtri, ring_start and ring_tri from the live triangles.
   void build_rings();
+  // rnormal at the current positions.
+  void triangle_normals();
   long long split_pass();
   // Collapses v into w (w stays where it is). Returns false, changing nothing, when refused.
   bool try_collapse(std::uint32_t v, std::uint32_t w, std::vector<std::uint32_t>& nv,
                     std::vector<std::uint32_t>& nw);
   long long collapse_pass();
   // Flips edge (a, b) of triangles t1 = (a, b, c), t2 = (b, a, d) into (a, d, c), (d, b, c)
-  // when `wanted` says so and the geometry allows it.
-  template <class Wanted> long long flip_pass(Wanted wanted);
+  // when `wanted` says so and the geometry allows it; `may_want(a, b, c)` rules edges out
+  // before the other triangle is looked up.
+  template <class MayWant, class Wanted> long long flip_pass(MayWant may_want, Wanted wanted);
   long long valence_flips();
   long long delaunay_flips();
 

@@ -122,6 +122,18 @@ void Remesher::build_rings() {
   rings_stale = false;
 }
 
+void Remesher::triangle_normals() {
+  if (rings_stale) build_rings();
+  const long long nt = static_cast<long long>(rtri.size());
+  rnormal.resize(rtri.size());
+  const auto& p = mesh.positions;
+#pragma omp parallel for num_threads(workers) schedule(static)
+  for (long long t = 0; t < nt; ++t) {
+    const Tri& tr = rtri[t];
+    rnormal[t] = area_normal(p[tr[0]], p[tr[1]], p[tr[2]]);
+  }
+}
+
 void Remesher::update_gradients(const std::vector<std::uint32_t>& vs) {
   std::vector<std::uint32_t> todo;
   std::vector<Vec3> pts;
@@ -139,7 +151,7 @@ void Remesher::update_gradients(const std::vector<std::uint32_t>& vs) {
 // Returns the largest move over L.
 double Remesher::relax() {
   ++stats.relax_steps;
-  if (rings_stale) build_rings();
+  triangle_normals();
   const size_t nv = mesh.positions.size();
   std::vector<std::uint32_t> free_vs, clip_vs;
   for (std::uint32_t v = 0; v < nv; ++v) {
@@ -169,11 +181,11 @@ double Remesher::relax() {
     Vec3 c = Vec3::Zero();
     double area = 0;
     for (std::uint32_t k = ring_start[v]; k < ring_start[v + 1]; ++k) {
-      const Tri& tr = rtri[ring_tri[k]];
-      const Vec3 &x = mesh.positions[tr[0]], &y = mesh.positions[tr[1]],
-                 &z = mesh.positions[tr[2]];
-      const double a = area_normal(x, y, z).norm();
-      c += a * (x + y + z) / 3, area += a;
+      const std::uint32_t t = ring_tri[k];
+      const Tri& tr = rtri[t];
+      const double a = rnormal[t].norm();
+      c += a * (mesh.positions[tr[0]] + mesh.positions[tr[1]] + mesh.positions[tr[2]]) / 3;
+      area += a;
     }
     const Vec3& gv = grad[v];
     if (!(area > 0) || !(gv.norm() > 0) || !gv.allFinite()) continue;
@@ -245,38 +257,47 @@ double Remesher::relax() {
 }
 
 // Moves every vertex to `next` except where a triangle would turn over or flatten: there
-// the triangle's vertices stay (repeated until no triangle is bad).
+// the triangle's vertices stay (repeated until no triangle is bad). rnormal must be current.
 double Remesher::apply_guarded(std::vector<Vec3>& next) {
-  if (rings_stale) build_rings();
   const size_t nv = mesh.positions.size();
   std::vector<std::uint8_t> moved(nv);
   for (size_t v = 0; v < nv; ++v) moved[v] = next[v] != mesh.positions[v];
-  // Only the triangles with a moved corner are judged.
-  std::vector<std::uint32_t> judged;
+  // Only the triangles with a moved corner are judged, and after a round only those with a
+  // corner it put back: the others' corners are where they were when judged good.
+  std::vector<std::uint32_t> judged, reverted;
   for (std::uint32_t t = 0; t < rtri.size(); ++t)
     if (moved[rtri[t][0]] || moved[rtri[t][1]] || moved[rtri[t][2]]) judged.push_back(t);
-  const long long nj = static_cast<long long>(judged.size());
-  std::vector<std::uint8_t> bad(judged.size(), 0);
+  std::vector<std::uint8_t> bad, queued;
   // Each round undoes at least one move (a bad triangle has a moved corner: unmoved ones are
   // not judged), so this ends, with no bad triangle left.
   for (;;) {
+    const long long nj = static_cast<long long>(judged.size());
+    bad.assign(judged.size(), 0);
     long long count = 0;
 #pragma omp parallel for num_threads(workers) schedule(static) reduction(+ : count)
     for (long long j = 0; j < nj; ++j) {
-      bad[j] = 0;
       const Tri& tr = rtri[judged[j]];
       if (!moved[tr[0]] && !moved[tr[1]] && !moved[tr[2]]) continue;
-      const Vec3 before = normal(tr);
+      const Vec3& before = rnormal[judged[j]];
       const Vec3 after = area_normal(next[tr[0]], next[tr[1]], next[tr[2]]);
       if (!(after.norm() > min_area && after.dot(before) > 0.5 * after.norm() * before.norm()) ||
           (agrees_with_gradient(before, tr) && !agrees_with_gradient(after, tr)))
         bad[j] = 1, ++count;
     }
     if (count == 0) break;
+    reverted.clear();
     for (long long j = 0; j < nj; ++j)
       if (bad[j])
         for (std::uint32_t v : rtri[judged[j]])
-          if (moved[v]) next[v] = mesh.positions[v], moved[v] = 0, ++stats.reverted_moves;
+          if (moved[v])
+            next[v] = mesh.positions[v], moved[v] = 0, ++stats.reverted_moves,
+            reverted.push_back(v);
+    if (queued.empty()) queued.assign(rtri.size(), 0);
+    judged.clear();
+    for (std::uint32_t v : reverted)
+      for (std::uint32_t k = ring_start[v]; k < ring_start[v + 1]; ++k)
+        if (!queued[ring_tri[k]]) queued[ring_tri[k]] = 1, judged.push_back(ring_tri[k]);
+    for (std::uint32_t t : judged) queued[t] = 0;
   }
   double worst = 0;
   for (size_t v = 0; v < nv; ++v) {
@@ -301,6 +322,7 @@ void Remesher::final_projection() {
       if (project(kind[v] == kClip, q, 0.25 * L)) next[v] = q;
     });
     trap.rethrow();
+    triangle_normals();
     apply_guarded(next);
   }
 }
