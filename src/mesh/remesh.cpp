@@ -105,6 +105,7 @@ void Remesher::hold_pending_points() {
     if (!near.empty() && (near[0].first == 0 || (on_curve[near[0].second] &&
                                                  near[0].first < 1e-9 * L))) {
       kind[near[0].second] = kLocked, on_curve[near[0].second] = 1;
+      rings_stale = true;  // the border chains may end there now
       stats.singular_points.push_back(mesh.positions[near[0].second]);
       continue;
     }
@@ -126,6 +127,7 @@ void Remesher::hold_pending_points() {
         continue;
       }
       kind[v] = kLocked, on_curve[v] = 1;
+      rings_stale = true;
       stats.singular_points.push_back(q);
       held = true;
       break;
@@ -248,12 +250,14 @@ bool Remesher::try_collapse(std::uint32_t v, std::uint32_t w, std::vector<std::u
   if (ne == 0 || ne > 2) return false;
   if (kind[v] == kClip && !(kind[w] == kClip && ne == 1)) return false;
   if (kind[v] == kFree && ne != 2) return false;
-  // The cheap tests first: no edge longer than hi_collapse, then the link condition (the
-  // common neighbours are exactly the opposite corners).
-  neighbours(v, nv);
+  // The cheap tests first: no edge longer than hi_collapse (most refusals, so before the
+  // neighbours are sorted), then the link condition (the common neighbours are exactly the
+  // opposite corners).
   const Vec3& pw = mesh.positions[w];
-  for (std::uint32_t x : nv)
-    if (x != w && (mesh.positions[x] - pw).norm() > hi_collapse) return false;
+  for (std::uint32_t t : vt[v])
+    for (std::uint32_t x : mesh.triangles[t])
+      if (x != v && x != w && (mesh.positions[x] - pw).norm() > hi_collapse) return false;
+  neighbours(v, nv);
   neighbours(w, nw);
   std::vector<std::uint32_t> common;
   std::set_intersection(nv.begin(), nv.end(), nw.begin(), nw.end(), std::back_inserter(common));

@@ -66,9 +66,14 @@ struct Remesher {
   bool rings_stale = true;
   std::vector<Tri> rtri;
   std::vector<std::uint32_t> ring_start, ring_tri;
-  // Area normal of each packed triangle at the current positions (triangle_normals): the
-  // centroids' weights and apply_guarded's "before" share them.
-  std::vector<Vec3> rnormal;
+  // The chains of clip vertices along the border (see border_targets), each with its two
+  // ends (its first vertex again on a loop), in CSR form; rebuilt with the rings.
+  std::vector<std::uint32_t> chain_start, chain_vertex;
+  // Area normal, twice the area, and that times the centroid of each packed triangle at the
+  // current positions (triangle_normals), shared by its corners' centroids and by
+  // apply_guarded's "before".
+  std::vector<Vec3> rnormal, rmoment;
+  std::vector<double> rarea;
   // ∇F where it was last evaluated (grad_at; NaN: never): a vertex that did not move since
   // needs no new evaluation for its tangent plane.
   std::vector<Vec3> grad_at, grad;
@@ -136,9 +141,10 @@ struct Remesher {
   std::uint32_t add_vertex(const Vec3& p, Kind k);
   std::uint32_t add_triangle(const Tri& t);
   void drop_from(std::uint32_t v, std::uint32_t t);
-  // rtri, ring_start and ring_tri from the live triangles.
+  // rtri, ring_start and ring_tri from the live triangles, and the border chains.
   void build_rings();
-  // rnormal at the current positions.
+  void build_border_chains();
+  // rnormal, rarea and rmoment at the current positions.
   void triangle_normals();
   long long split_pass();
   // Collapses v into w (w stays where it is). Returns false, changing nothing, when refused.

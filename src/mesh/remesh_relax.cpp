@@ -50,41 +50,31 @@ std::array<std::uint32_t, 2> Remesher::border_neighbours(std::uint32_t v) const 
   return count == 2 ? out : std::array<std::uint32_t, 2>{kNone, kNone};
 }
 
-// Targets for the clip vertices: each chain of them along the border (between two vertices
-// that do not slide, or a closed loop from its first vertex) evenly spaced by arc length on
-// its polyline. Relaxing by neighbour midpoints instead converges as slowly as a 1-D Jacobi
-// iteration (about 1% per step on a chain of 20); this lands in one step up to the
-// polyline's error.
-void Remesher::border_targets(std::vector<Vec3>& target, std::vector<std::uint8_t>& has) {
+void Remesher::build_border_chains() {
+  chain_start.assign(1, 0);
+  chain_vertex.clear();
   const size_t n = mesh.positions.size();
+  if (std::none_of(kind.begin(), kind.end(), [](std::uint8_t k) { return k == kClip; })) return;
   std::vector<std::array<std::uint32_t, 2>> nb(n, {kNone, kNone});
   for (std::uint32_t v = 0; v < n; ++v)
     if (alive_vertex[v] && kind[v] == kClip) nb[v] = border_neighbours(v);
   std::vector<std::uint8_t> done(n, 0);
   auto walk = [&](std::uint32_t start, std::uint32_t next) {
-    std::vector<std::uint32_t> chain{start};
+    const size_t first = chain_vertex.size();
+    chain_vertex.push_back(start);
     std::uint32_t prev = start, cur = next;
     while (cur != kNone && cur != start && kind[cur] == kClip && !done[cur]) {
-      chain.push_back(cur);
+      chain_vertex.push_back(cur);
       done[cur] = 1;
       const std::uint32_t nx = nb[cur][0] == prev ? nb[cur][1] : nb[cur][0];
       prev = cur, cur = nx;
     }
-    if (cur == kNone) return;  // an open end: leave the chain
-    chain.push_back(cur);      // the far end (the start again on a loop)
-    std::vector<double> s(chain.size(), 0.0);
-    for (size_t i = 1; i < chain.size(); ++i)
-      s[i] = s[i - 1] + (mesh.positions[chain[i]] - mesh.positions[chain[i - 1]]).norm();
-    const double total = s.back();
-    size_t seg = 1;
-    for (size_t i = 1; i + 1 < chain.size(); ++i) {
-      const double want = total * static_cast<double>(i) / static_cast<double>(chain.size() - 1);
-      while (seg + 1 < chain.size() && s[seg] < want) ++seg;
-      const double len = s[seg] - s[seg - 1];
-      const double u = len > 0 ? std::clamp((want - s[seg - 1]) / len, 0.0, 1.0) : 0.0;
-      target[chain[i]] = (1 - u) * mesh.positions[chain[seg - 1]] + u * mesh.positions[chain[seg]];
-      has[chain[i]] = 1;
+    if (cur == kNone) {  // an open end: leave the chain
+      chain_vertex.resize(first);
+      return;
     }
+    chain_vertex.push_back(cur);  // the far end (the start again on a loop)
+    chain_start.push_back(static_cast<std::uint32_t>(chain_vertex.size()));
   };
   // Chains from a vertex that does not slide.
   for (std::uint32_t v = 0; v < n; ++v) {
@@ -105,6 +95,32 @@ void Remesher::border_targets(std::vector<Vec3>& target, std::vector<std::uint8_
     }
 }
 
+// Targets for the clip vertices: each chain of them along the border (between two vertices
+// that do not slide, or a closed loop from its first vertex) evenly spaced by arc length on
+// its polyline. Relaxing by neighbour midpoints instead converges as slowly as a 1-D Jacobi
+// iteration (about 1% per step on a chain of 20); this lands in one step up to the
+// polyline's error.
+void Remesher::border_targets(std::vector<Vec3>& target, std::vector<std::uint8_t>& has) {
+  std::vector<double> s;
+  for (size_t c = 0; c + 1 < chain_start.size(); ++c) {
+    const std::uint32_t* chain = chain_vertex.data() + chain_start[c];
+    const size_t size = chain_start[c + 1] - chain_start[c];
+    s.assign(size, 0.0);
+    for (size_t i = 1; i < size; ++i)
+      s[i] = s[i - 1] + (mesh.positions[chain[i]] - mesh.positions[chain[i - 1]]).norm();
+    const double total = s.back();
+    size_t seg = 1;
+    for (size_t i = 1; i + 1 < size; ++i) {
+      const double want = total * static_cast<double>(i) / static_cast<double>(size - 1);
+      while (seg + 1 < size && s[seg] < want) ++seg;
+      const double len = s[seg] - s[seg - 1];
+      const double u = len > 0 ? std::clamp((want - s[seg - 1]) / len, 0.0, 1.0) : 0.0;
+      target[chain[i]] = (1 - u) * mesh.positions[chain[seg - 1]] + u * mesh.positions[chain[seg]];
+      has[chain[i]] = 1;
+    }
+  }
+}
+
 void Remesher::build_rings() {
   const size_t n = mesh.positions.size();
   rtri.clear();
@@ -119,6 +135,7 @@ void Remesher::build_rings() {
   std::vector<std::uint32_t> fill(ring_start.begin(), ring_start.end() - 1);
   for (std::uint32_t t = 0; t < rtri.size(); ++t)
     for (std::uint32_t v : rtri[t]) ring_tri[fill[v]++] = t;
+  build_border_chains();
   rings_stale = false;
 }
 
@@ -126,11 +143,15 @@ void Remesher::triangle_normals() {
   if (rings_stale) build_rings();
   const long long nt = static_cast<long long>(rtri.size());
   rnormal.resize(rtri.size());
+  rarea.resize(rtri.size());
+  rmoment.resize(rtri.size());
   const auto& p = mesh.positions;
 #pragma omp parallel for num_threads(workers) schedule(static)
   for (long long t = 0; t < nt; ++t) {
     const Tri& tr = rtri[t];
     rnormal[t] = area_normal(p[tr[0]], p[tr[1]], p[tr[2]]);
+    rarea[t] = rnormal[t].norm();
+    rmoment[t] = rarea[t] * (p[tr[0]] + p[tr[1]] + p[tr[2]]) / 3;
   }
 }
 
@@ -180,13 +201,8 @@ double Remesher::relax() {
     const Vec3& p = mesh.positions[v];
     Vec3 c = Vec3::Zero();
     double area = 0;
-    for (std::uint32_t k = ring_start[v]; k < ring_start[v + 1]; ++k) {
-      const std::uint32_t t = ring_tri[k];
-      const Tri& tr = rtri[t];
-      const double a = rnormal[t].norm();
-      c += a * (mesh.positions[tr[0]] + mesh.positions[tr[1]] + mesh.positions[tr[2]]) / 3;
-      area += a;
-    }
+    for (std::uint32_t k = ring_start[v]; k < ring_start[v + 1]; ++k)
+      c += rmoment[ring_tri[k]], area += rarea[ring_tri[k]];
     const Vec3& gv = grad[v];
     if (!(area > 0) || !(gv.norm() > 0) || !gv.allFinite()) continue;
     c /= area;
