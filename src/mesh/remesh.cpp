@@ -272,7 +272,7 @@ bool Remesher::try_collapse(std::uint32_t v, std::uint32_t w, std::vector<std::u
     // Not turned, not folded by more than 60°, not (nearly) flat, not turned against ∇F.
     if (!(after.norm() > min_area && after.dot(before) > 0.5 * after.norm() * before.norm()))
       return false;
-    if (agrees_with_gradient(before, tr) && !agrees_with_gradient(after, nt)) return false;
+    if (!agrees_with_gradient(after, nt) && agrees_with_gradient(before, tr)) return false;
   }
   // Apply.
   for (int k = 0; k < ne; ++k) {
@@ -320,9 +320,6 @@ long long Remesher::flip_pass(MayWant may_want, Wanted wanted) {
       std::uint32_t et[2];
       if (edge_tris(a, b, et) != 2) continue;
       const std::uint32_t t2 = et[0] == t1 ? et[1] : et[0];
-      // Visited from t2 already, unless a flip made it since: a pass without flips has
-      // tested every edge.
-      if (t2 < t1) continue;
       const Tri& o = mesh.triangles[t2];
       std::uint32_t d = kNone;
       for (int i = 0; i < 3; ++i)
@@ -339,8 +336,8 @@ long long Remesher::flip_pass(MayWant may_want, Wanted wanted) {
       if (!(m1.dot(sum) > 0.5 * m1.norm() * sum.norm() &&
             m2.dot(sum) > 0.5 * m2.norm() * sum.norm()))
         continue;
-      if (agrees_with_gradient(o1, tr) && agrees_with_gradient(o2, o) &&
-          !(agrees_with_gradient(m1, n1) && agrees_with_gradient(m2, n2)))
+      if (!(agrees_with_gradient(m1, n1) && agrees_with_gradient(m2, n2)) &&
+          agrees_with_gradient(o1, tr) && agrees_with_gradient(o2, o))
         continue;
       // Never much worse angles than before.
       const double before = std::min(min_angle(p[a], p[b], p[c]), min_angle(p[b], p[a], p[d]));

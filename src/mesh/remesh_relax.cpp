@@ -297,7 +297,7 @@ double Remesher::apply_guarded(std::vector<Vec3>& next) {
       const Vec3& before = rnormal[judged[j]];
       const Vec3 after = area_normal(next[tr[0]], next[tr[1]], next[tr[2]]);
       if (!(after.norm() > min_area && after.dot(before) > 0.5 * after.norm() * before.norm()) ||
-          (agrees_with_gradient(before, tr) && !agrees_with_gradient(after, tr)))
+          (!agrees_with_gradient(after, tr) && agrees_with_gradient(before, tr)))
         bad[j] = 1, ++count;
     }
     if (count == 0) break;
