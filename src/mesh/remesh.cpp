@@ -395,6 +395,9 @@ long long Remesher::delaunay_flips() {
                    [&](std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d) {
     const auto& p = mesh.positions;
     // The two angles facing the edge add up to more than π (with a margin against cycling).
+    // Not unless one of them is obtuse: that test first, without atan2.
+    if ((p[a] - p[c]).dot(p[b] - p[c]) > 0 && (p[a] - p[d]).dot(p[b] - p[d]) > 0)
+      return false;
     return corner_angle(p[c], p[a], p[b]) + corner_angle(p[d], p[a], p[b]) >
            M_PI + 1e-3;
   });
