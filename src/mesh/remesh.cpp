@@ -411,6 +411,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using detail::kBandGrowth;
 using detail::kFixedBandIterations;
+using detail::kFlipOnlyRounds;
 using detail::kMaxSettleSteps;
 using detail::Remesher;
 
@@ -471,16 +472,21 @@ RemeshStats remesh(Mesh& mesh, const Surface& surface, const RemeshOptions& opti
     }
   }
   // Polish: Delaunay flips between nearly coplanar triangles, relaxing in between, until no
-  // flip applies; then relaxation until every move is below rest_move.
+  // flip applies. Where relaxation and flips keep trading places (a grid of squares, whose
+  // diagonals are all cocircular; the bent quads next to a pinch point) the last rounds flip
+  // without relaxing, which ends: a flip never undoes itself while no vertex moves. Then
+  // relaxation until every move is below rest_move.
   bool flips_at_rest = options.polish_rounds == 0;
-  for (int k = 0; k < options.polish_rounds && !stop.stop_requested(); ++k) {
+  const int rounds = flips_at_rest ? 0 : options.polish_rounds + kFlipOnlyRounds;
+  for (int k = 0; k < rounds && !stop.stop_requested(); ++k) {
     const long long flips = r.delaunay_flips();
     st.flips += flips;
     if (flips == 0) {
       flips_at_rest = true;
       break;
     }
-    for (int j = 0; j < options.relax_steps; ++j) r.relax();
+    if (k < options.polish_rounds)
+      for (int j = 0; j < options.relax_steps; ++j) r.relax();
   }
   bool moves_at_rest = false;
   for (int k = 0; k < kMaxSettleSteps && !stop.stop_requested(); ++k) {

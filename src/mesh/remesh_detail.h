@@ -30,6 +30,8 @@ constexpr int kFixedBandIterations = 5;
 constexpr double kBandGrowth = 0.03;
 // Relaxation steps at most once the connectivity is at rest.
 constexpr int kMaxSettleSteps = 200;
+// Delaunay flip rounds without relaxation after the polish rounds, at most.
+constexpr int kFlipOnlyRounds = 20;
 // Batched Newton steps onto F = 0 per relaxation step (then one at a time where needed).
 constexpr int kBatchNewtonSteps = 3;
 

@@ -86,6 +86,30 @@ TEST(Remesh, KummerComesToRestOnACoarseGrid) {
   EXPECT_GT(c.after.mean_min_angle_deg, 45);
 }
 
+TEST(Remesh, ComesToRestWhereFlipsAndRelaxationTradePlaces) {
+  // Two planes along the grid axes: marching cubes makes squares whose diagonals are
+  // cocircular, so each relaxation step made a few Delaunay flips worth making again.
+  {
+    Surface s = test::catalog_surface("planes");
+    s.field.set_parameter("a", 0.3);
+    PolygonizeStats ps;
+    Mesh m = polygonize(s, {.cells = 64}, &ps);
+    ASSERT_TRUE(mesh_crossings(m, s, ps.cell_size).failure.empty());
+    remesh_and_check(m, s);
+  }
+  // Roman's surface: next to its pinch points the two sheets meet at a small angle and the
+  // quads between them stay bent.
+  {
+    const Surface s = test::catalog_surface("roman");
+    PolygonizeStats ps;
+    Mesh m = polygonize(s, {.cells = 64}, &ps);
+    ASSERT_TRUE(mesh_crossings(m, s, ps.cell_size).failure.empty());
+    const RemeshStats st = remesh(m, s);
+    EXPECT_TRUE(st.converged) << "not at rest after " << st.iterations << " iterations";
+    EXPECT_EQ(st.missed_singular_points, 0);
+  }
+}
+
 TEST(Remesh, ThinPartsKeepTheirShape) {
   // Tubes and slabs a cell or two across, a few edges around: each move or collapse is small,
   // but without the ∇F guard they added up to a flat band with half its triangles turned.

@@ -27,7 +27,9 @@ struct RemeshOptions {
   double target_edge = 0;      ///< L; 0: the mean edge length of the input mesh
   int max_iterations = 30;     ///< split/collapse/flip/relax rounds at most
   int relax_steps = 3;         ///< relaxation steps per iteration
-  int polish_rounds = 10;      ///< Delaunay flip + relaxation rounds after the iterations, at most
+  /// Delaunay flip + relaxation rounds after the iterations, at most (then up to 20 rounds of
+  /// flips alone; 0: no polish).
+  int polish_rounds = 10;
   BoundaryMode boundary = BoundaryMode::kConstrained;
   bool find_singular_points = true;  ///< lock a vertex on every isolated singular point
   /// At rest when no split, collapse or flip applies and every relaxation move is below this
