@@ -19,6 +19,7 @@ void check_improve_options(const ImproveOptions& o) {
   };
   if (o.max_steps < 0) bad("max_steps", o.max_steps, "must be ≥ 0");
   if (!(o.relaxation > 0 && o.relaxation <= 1)) bad("relaxation", o.relaxation, "must be in (0, 1]");
+  if (!(o.inertia >= 0 && o.inertia < 1)) bad("inertia", o.inertia, "must be in [0, 1)");
   if (!(o.feedback >= 0 && o.feedback <= 1)) bad("feedback", o.feedback, "must be in [0, 1]");
   if (!(o.spring_base > 0 && std::isfinite(o.spring_base))) bad("spring_base", o.spring_base, "must be > 0");
   if (!(o.curvature_weight >= 0 && std::isfinite(o.curvature_weight)))
