@@ -164,37 +164,7 @@ struct MeshImprover::State {
     }
   }
 
-  void update_mean_edge() {
-    // Sums per block of vertices, added in block order: the same rounding whatever the
-    // number of workers (an OpenMP reduction would add in thread order).
-    constexpr long long kBlock = 4096;
-    const long long n = static_cast<long long>(nv());
-    const long long blocks = (n + kBlock - 1) / kBlock;
-    std::vector<double> block_sum(static_cast<size_t>(blocks), 0.0);
-    std::vector<long long> block_count(static_cast<size_t>(blocks), 0);
-    detail::ExceptionTrap trap;
-#pragma omp parallel for num_threads(workers) schedule(static)
-    for (long long b = 0; b < blocks; ++b) trap.run([&] {
-      double sum = 0;
-      long long count = 0;
-      for (long long v = b * kBlock; v < std::min(n, (b + 1) * kBlock); ++v) {
-        const std::uint32_t* q = nb(static_cast<std::uint32_t>(v));
-        for (std::uint32_t k = 0; k < nbr_count[static_cast<size_t>(v)]; ++k)
-          if (q[k] > v) {
-            sum += (mesh.positions[q[k]] - mesh.positions[static_cast<size_t>(v)]).norm();
-            ++count;
-          }
-      }
-      block_sum[static_cast<size_t>(b)] = sum;
-      block_count[static_cast<size_t>(b)] = count;
-    });
-    trap.rethrow();
-    double sum = 0;
-    long long count = 0;
-    for (long long b = 0; b < blocks; ++b)
-      sum += block_sum[static_cast<size_t>(b)], count += block_count[static_cast<size_t>(b)];
-    mean_edge = count > 0 ? sum / static_cast<double>(count) : 0.0;
-  }
+  void update_mean_edge() { mean_edge = detail::improver_mean_edge(mesh.positions, nbr, nbr_count, cap, workers); }
 
   // β of docs/algorithms.md B.3 and C.1 at every vertex, and the Newton step length towards ∇F = 0.
   void update_singularity_estimates() {
