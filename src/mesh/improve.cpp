@@ -28,6 +28,9 @@ constexpr double kFlipMargin = 0.05;
 enum Mode : std::uint8_t { kFree = 0, kHeld = 1, kOnCurve = 2 };
 // |∇F|² below this × grad_ref² marks a vertex that has reached a singular curve.
 constexpr double kOnSingularCurve = 1e-4;
+// A vertex keeps the inertia of its last move (ImproveOptions::inertia) only where none of its
+// springs is stiffer than this × κ_0: flat parts away from creases and singular points.
+constexpr double kFlatSpring = 1.5;
 
 }  // namespace
 
@@ -161,37 +164,7 @@ struct MeshImprover::State {
     }
   }
 
-  void update_mean_edge() {
-    // Sums per block of vertices, added in block order: the same rounding whatever the
-    // number of workers (an OpenMP reduction would add in thread order).
-    constexpr long long kBlock = 4096;
-    const long long n = static_cast<long long>(nv());
-    const long long blocks = (n + kBlock - 1) / kBlock;
-    std::vector<double> block_sum(static_cast<size_t>(blocks), 0.0);
-    std::vector<long long> block_count(static_cast<size_t>(blocks), 0);
-    detail::ExceptionTrap trap;
-#pragma omp parallel for num_threads(workers) schedule(static)
-    for (long long b = 0; b < blocks; ++b) trap.run([&] {
-      double sum = 0;
-      long long count = 0;
-      for (long long v = b * kBlock; v < std::min(n, (b + 1) * kBlock); ++v) {
-        const std::uint32_t* q = nb(static_cast<std::uint32_t>(v));
-        for (std::uint32_t k = 0; k < nbr_count[static_cast<size_t>(v)]; ++k)
-          if (q[k] > v) {
-            sum += (mesh.positions[q[k]] - mesh.positions[static_cast<size_t>(v)]).norm();
-            ++count;
-          }
-      }
-      block_sum[static_cast<size_t>(b)] = sum;
-      block_count[static_cast<size_t>(b)] = count;
-    });
-    trap.rethrow();
-    double sum = 0;
-    long long count = 0;
-    for (long long b = 0; b < blocks; ++b)
-      sum += block_sum[static_cast<size_t>(b)], count += block_count[static_cast<size_t>(b)];
-    mean_edge = count > 0 ? sum / static_cast<double>(count) : 0.0;
-  }
+  void update_mean_edge() { mean_edge = detail::improver_mean_edge(mesh.positions, nbr, nbr_count, cap, workers); }
 
   // β of docs/algorithms.md B.3 and C.1 at every vertex, and the Newton step length towards ∇F = 0.
   void update_singularity_estimates() {
@@ -398,6 +371,7 @@ struct MeshImprover::State {
   void compute_moves() {
     const long long n = static_cast<long long>(nv());
     move.assign(nv(), Vec3::Zero());
+    const bool coast = opt.inertia > 0 && previous.size() == nv();
     const double eps2 = 1e-6 * grad_ref * grad_ref;
     const double phi = opt.feedback;
     detail::ExceptionTrap trap;
@@ -406,7 +380,7 @@ struct MeshImprover::State {
       const std::uint32_t v = static_cast<std::uint32_t>(vv);
       if (mode[v] == kHeld || nbr_count[v] == 0) return;
       const Vec3& p = mesh.positions[v];
-      double wsum = 0, shortest = std::numeric_limits<double>::infinity();
+      double wsum = 0, stiffest = 0, shortest = std::numeric_limits<double>::infinity();
       Vec3 wp = Vec3::Zero();
       // A vertex on the clip curve is pulled by its neighbours along the curve only: the
       // interior's pull would turn the whole mesh about the clip's axis wherever that is a
@@ -429,6 +403,7 @@ struct MeshImprover::State {
         if (opt.use_singularity && !beta.empty() && !by_curve)
           kappa += opt.singularity_weight * (1 - std::min(beta[v], beta[w]));
         wsum += kappa;
+        stiffest = std::max(stiffest, kappa);
         wp += kappa * mesh.positions[w];
         shortest = std::min(shortest, (mesh.positions[w] - p).norm());
       }
@@ -440,7 +415,14 @@ struct MeshImprover::State {
       // point, where the sheets close up on the curve) has no tangent plane to slide in: the
       // springs alone would push it to and fro along the curve. It stays where it is.
       if (near_curve[v] && g.squaredNorm() < kOnSingularCurve * grad_ref * grad_ref) return;
-      if (mode[v] == kFree) {
+      if (mode[v] == kFree && coast && !near_curve[v] && stiffest <= kFlatSpring * opt.spring_base) {
+        // Heavy-ball momentum on the tangential part only (docs/algorithms.md, C.2): the last
+        // move, made tangent, carried over; the Newton part towards F = 0 stays as it is.
+        const double gg = g.dot(g) + eps2;
+        Vec3 last = p - previous[v];
+        last -= (g.dot(last) / gg) * g;
+        vel = P - (g.dot(P) / gg) * g + opt.inertia * last - (phi * f[v] / gg) * g;
+      } else if (mode[v] == kFree) {
         vel = P - ((g.dot(P) + phi * f[v]) / (g.dot(g) + eps2)) * g;
       } else {  // on the clip curve: both constraints (paper §4.2)
         Vec3 gg;

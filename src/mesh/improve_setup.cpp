@@ -1,5 +1,5 @@
-// The improver's set-up: its options' rules and how many workers it takes
-// (docs/algorithms.md, the mesh improver).
+// The improver's set-up: its options' rules, how many workers it takes and the mean edge
+// length its thresholds scale with (docs/algorithms.md, the mesh improver).
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -19,6 +19,7 @@ void check_improve_options(const ImproveOptions& o) {
   };
   if (o.max_steps < 0) bad("max_steps", o.max_steps, "must be ≥ 0");
   if (!(o.relaxation > 0 && o.relaxation <= 1)) bad("relaxation", o.relaxation, "must be in (0, 1]");
+  if (!(o.inertia >= 0 && o.inertia < 1)) bad("inertia", o.inertia, "must be in [0, 1)");
   if (!(o.feedback >= 0 && o.feedback <= 1)) bad("feedback", o.feedback, "must be in [0, 1]");
   if (!(o.spring_base > 0 && std::isfinite(o.spring_base))) bad("spring_base", o.spring_base, "must be > 0");
   if (!(o.curvature_weight >= 0 && std::isfinite(o.curvature_weight)))
@@ -51,6 +52,39 @@ int improver_workers(int requested, size_t vertices) {
   if (requested > 0) return detail::worker_count(requested);
   const size_t by_size = std::max<size_t>(1, vertices / kVerticesPerWorker);
   return static_cast<int>(std::min<size_t>(by_size, static_cast<size_t>(detail::worker_count(0))));
+}
+
+double improver_mean_edge(const std::vector<Vec3>& positions, const std::vector<std::uint32_t>& nbr,
+                          const std::vector<std::uint32_t>& nbr_count, int cap, int workers) {
+  // Sums per block of vertices, added in block order: the same rounding whatever the
+  // number of workers (an OpenMP reduction would add in thread order).
+  constexpr long long kBlock = 4096;
+  const long long n = static_cast<long long>(positions.size());
+  const long long blocks = (n + kBlock - 1) / kBlock;
+  std::vector<double> block_sum(static_cast<size_t>(blocks), 0.0);
+  std::vector<long long> block_count(static_cast<size_t>(blocks), 0);
+  ExceptionTrap trap;
+#pragma omp parallel for num_threads(workers) schedule(static)
+  for (long long b = 0; b < blocks; ++b) trap.run([&] {
+    double sum = 0;
+    long long count = 0;
+    for (long long v = b * kBlock; v < std::min(n, (b + 1) * kBlock); ++v) {
+      const std::uint32_t* q = &nbr[static_cast<size_t>(v) * static_cast<size_t>(cap)];
+      for (std::uint32_t k = 0; k < nbr_count[static_cast<size_t>(v)]; ++k)
+        if (q[k] > v) {
+          sum += (positions[q[k]] - positions[static_cast<size_t>(v)]).norm();
+          ++count;
+        }
+    }
+    block_sum[static_cast<size_t>(b)] = sum;
+    block_count[static_cast<size_t>(b)] = count;
+  });
+  trap.rethrow();
+  double sum = 0;
+  long long count = 0;
+  for (long long b = 0; b < blocks; ++b)
+    sum += block_sum[static_cast<size_t>(b)], count += block_count[static_cast<size_t>(b)];
+  return count > 0 ? sum / static_cast<double>(count) : 0.0;
 }
 
 }  // namespace zeroset::detail

@@ -2,6 +2,8 @@
 // Pieces shared by the polygonizer and the improver.
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -47,5 +49,8 @@ inline double mean_ratio(const Vec3& a, const Vec3& b, const Vec3& c) {
 // workers a step uses for `vertices` vertices (`requested` 0: as many as pay off).
 void check_improve_options(const ImproveOptions& o);
 int improver_workers(int requested, size_t vertices);
+// The mean length of the edges in the improver's neighbour lists (`cap` slots per vertex).
+double improver_mean_edge(const std::vector<Vec3>& positions, const std::vector<std::uint32_t>& nbr,
+                          const std::vector<std::uint32_t>& nbr_count, int cap, int workers);
 
 }  // namespace zeroset::detail

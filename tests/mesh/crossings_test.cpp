@@ -118,6 +118,8 @@ struct Expect {
   // 1e-6 of the scene radius (straight curves lie on the mesh's chords exactly; a curved one
   // is a chord's sagitta away between the mesh's vertices).
   double curve_tolerance_edges = 0;
+  // The improver comes to rest within this many steps (0: within its default limit).
+  int max_steps = 0;
 };
 
 void check_crossing_mesh(const Surface& s, int cells, const Expect& expect = {}) {
@@ -129,6 +131,7 @@ void check_crossing_mesh(const Surface& s, int cells, const Expect& expect = {})
   ASSERT_GE(cs.crossing_curves, expect.min_crossing_curves);
   const ImproveStats st = improve_mesh(m, s);
   EXPECT_TRUE(st.converged) << "not at rest after " << st.steps << " steps";
+  if (expect.max_steps > 0) EXPECT_LE(st.steps, expect.max_steps);
   const double e = mean_edge(m);
   const double radius = s.scene_radius();
   const TriangleBins bins(m, e);
@@ -234,7 +237,9 @@ TEST(Crossings, KummerFourPlanes) {
   // At 96 cells one sliver (area 0.002 e², 2.1 edge lengths from a line) can end up turned
   // over, depending on the last bits of the arithmetic (it does in some builds, not in
   // others): a limit named in docs/meshing.md, "Crossings".
-  check_crossing_mesh(s, 96, {.min_crossing_curves = 6, .max_flipped = 1});
+  // The wide flat sectors relax slowly without the springs' inertia (docs/meshing.md,
+  // "Crossings": 291 steps at 96 cells; 192 with it).
+  check_crossing_mesh(s, 96, {.min_crossing_curves = 6, .max_flipped = 1, .max_steps = 240});
 }
 
 TEST(Crossings, SphereCrossingACylinderAlongTwoCircles) {

@@ -116,7 +116,7 @@ TEST(Improve, EverySwitchCanBeTurnedOff) {
   const Surface s = test::kummer(1.5, 3);
   Mesh m = polygonize(s, {.cells = 20});
   const size_t triangles = m.triangle_count();
-  const ImproveStats st = improve_mesh(m, s, {.max_steps = 10, .use_curvature = false,
+  const ImproveStats st = improve_mesh(m, s, {.max_steps = 10, .inertia = 0, .use_curvature = false,
                                               .use_singularity = false,
                                               .find_singular_points = false,
                                               .flip_edges = false});
@@ -129,6 +129,7 @@ TEST(Improve, RejectsBadOptions) {
   const Surface s = test::catalog_surface("sphere");
   const Mesh m = polygonize(s, {.cells = 8});
   EXPECT_THROW(MeshImprover(m, s, {.relaxation = 0}), InvalidArgument);
+  EXPECT_THROW(MeshImprover(m, s, {.inertia = 1}), InvalidArgument);
   EXPECT_THROW(MeshImprover(m, s, {.speed_threshold = -1}), InvalidArgument);
   Mesh broken = m;
   broken.triangles.push_back({0, 1, 999999});

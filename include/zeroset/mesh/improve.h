@@ -32,6 +32,9 @@ enum class BoundaryMode {
 struct ImproveOptions {
   int max_steps = 300;               ///< improve_mesh stops after this many steps
   double relaxation = 0.5;           ///< λ: fraction of the way to the spring equilibrium per step
+  /// β: share of its last tangential move a vertex carries into the next, on flat parts more
+  /// than three rings from singular curves (heavy-ball momentum; 0: none)
+  double inertia = 0.9;
   double feedback = 1.0;             ///< φ·dt: fraction of the Newton correction to F = 0 per step
   double spring_base = 1.0;          ///< κ_0
   bool use_curvature = true;         ///< add the curvature estimator (paper eq. 6)
