@@ -214,7 +214,7 @@ const std::vector<SettingWidget>& setting_widgets() {
                   "spring-mass system on F = 0 (section 4) that evens out the triangles and "
                   "pulls vertices into creases and singular points."},
       {.object = "mesh", .key = "improver", .label = "Improver", .kind = K::kChoice,
-       .choices = "paper|remesh",
+       .choices = "remesh|paper",
        .tooltip = "remesh (the default): isotropic remeshing (split long edges, collapse short "
                   "ones, flip towards valence 6, relax in the tangent plane) with singular "
                   "points, singular curves and the clip curve kept exactly; shown when done. "
@@ -260,9 +260,7 @@ void draw_setting_widgets(ViewerState& state, std::string_view object) {
     if (w.object != object) continue;
     const std::string key(w.key);
     const json value = current.contains(key) ? current[key] : json();
-    const bool disabled = remeshing && std::find(kPaperOnlyMeshKeys.begin(),
-                                                 kPaperOnlyMeshKeys.end(),
-                                                 w.key) != kPaperOnlyMeshKeys.end();
+    const bool disabled = remeshing && is_paper_only_mesh_key(w.key);
     ImGui::PushID(key.c_str());
     ImGui::BeginDisabled(disabled);
     switch (w.kind) {

@@ -7,7 +7,6 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <algorithm>
 #include <map>
 #include <set>
 #include <string>
@@ -64,11 +63,6 @@ MeshPrint settle_mesh(ViewerState& state) {
           frame->improver_steps, frame->polygonize.sparse};
 }
 
-bool is_paper_only(const std::string& key) {
-  return std::find(kPaperOnlyMeshKeys.begin(), kPaperOnlyMeshKeys.end(), key) !=
-         kPaperOnlyMeshKeys.end();
-}
-
 TEST(SettingsSwitches, EveryMeshKeyReachesTheMeshJob) {
   expect_every_key_listed(mesh_settings_to_json(MeshSettings{}), kMeshValues, "mesh");
   // Kummer's nodes and Roman's crossing curves, both cut by their clip: every switch changes
@@ -85,7 +79,7 @@ TEST(SettingsSwitches, EveryMeshKeyReachesTheMeshJob) {
       const MeshPrint base = settle_mesh(state);
       ASSERT_GT(base.triangles, 500u) << name;
       for (const auto& [key, value] : kMeshValues) {
-        if (improver == "paper" && !is_paper_only(key) && !both.count(key)) continue;
+        if (improver == "paper" && !is_paper_only_mesh_key(key) && !both.count(key)) continue;
         SCOPED_TRACE(std::string(name) + ", improver " + improver + ": set mesh." + key + " " +
                      value);
         ASSERT_TRUE(state.command("set mesh." + key + " " + value)) << state.status().text;
@@ -93,7 +87,7 @@ TEST(SettingsSwitches, EveryMeshKeyReachesTheMeshJob) {
         const MeshPrint print = settle_mesh(state);
         EXPECT_GT(print.triangles, 100u) << "still a surface";
         if (!(print == base)) changed[key].insert(improver);
-        if (improver == "remesh" && is_paper_only(key)) {
+        if (improver == "remesh" && is_paper_only_mesh_key(key)) {
           EXPECT_TRUE(print == base) << "the remesher does not read the paper's own keys";
         }
         // Back to the default, by the scene file's value, and to the same mesh as before.
@@ -105,10 +99,9 @@ TEST(SettingsSwitches, EveryMeshKeyReachesTheMeshJob) {
     }
   }
   for (const auto& [key, value] : kMeshValues) {
-    const std::set<std::string> wanted = is_paper_only(key) ? std::set<std::string>{"paper"}
-                                         : both.count(key)
-                                             ? std::set<std::string>{"remesh", "paper"}
-                                             : std::set<std::string>{"remesh"};
+    std::set<std::string> wanted = {"remesh", "paper"};
+    if (is_paper_only_mesh_key(key)) wanted.erase("remesh");
+    if (!is_paper_only_mesh_key(key) && !both.count(key)) wanted.erase("paper");
     for (const std::string& improver : wanted)
       EXPECT_TRUE(changed[key].count(improver))
           << "mesh." << key << " " << value << " changed no mesh made by improver " << improver;

@@ -14,6 +14,7 @@
 /// remesher, zeroset/mesh/remesh.h, the default) or "paper" (the spring–mass improver of the
 /// paper, MeshImprover). The command line, scene files and the viewer check these settings with
 /// validate_settings below, so each refuses a bad value with the same words.
+#include <algorithm>
 #include <array>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -49,6 +50,10 @@ enum class Improver {
 /// them out.
 inline constexpr std::array<std::string_view, 4> kPaperOnlyMeshKeys = {
     "curvature", "curvature_weight", "singularity", "flips"};
+inline bool is_paper_only_mesh_key(std::string_view key) {
+  return std::find(kPaperOnlyMeshKeys.begin(), kPaperOnlyMeshKeys.end(), key) !=
+         kPaperOnlyMeshKeys.end();
+}
 
 /// How a surface is polygonized and improved.
 struct MeshSettings {
