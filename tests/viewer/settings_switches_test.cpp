@@ -74,7 +74,7 @@ TEST(SettingsSwitches, EveryMeshKeyReachesTheMeshJob) {
   for (const char* name : {"kummer", "roman"}) {
     for (const std::string improver : {"remesh", "paper"}) {
       ViewerState state(catalog_scene(name), Mode::kMesh, 1);
-      ASSERT_TRUE(state.command("mesh cells=32 improve=40 improver=" + improver));
+      ASSERT_TRUE(state.command("mesh cells=24 improve=40 improver=" + improver));
       const json defaults = state.settings_object("mesh");
       const MeshPrint base = settle_mesh(state);
       ASSERT_GT(base.triangles, 500u) << name;
