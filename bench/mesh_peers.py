@@ -148,7 +148,8 @@ def run_cli_mesh(build, tmp, improve):
     stats = pathlib.Path(tmp) / f"kummer_{improve}.json"
     ply = pathlib.Path(tmp) / f"kummer_{improve}.ply"
     subprocess.run([str(exe), "--quiet", "mesh", "kummer", "--param", f"mu={MU}", "--resolution", "128",
-                    "--improve", improve, "--stats", str(stats), "-o", str(ply)], check=True)
+                    "--improve", improve, "--improver", "paper", "--stats", str(stats), "-o", str(ply)],
+                   check=True)
     return json.loads(stats.read_text())
 
 

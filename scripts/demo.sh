@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The main job: shows the catalog, checks a Kummer node, and writes pictures and a mesh to OUT:
 # the Kummer family ray traced as in the paper's figure 1, a few catalog surfaces, floaters on
-# the Kummer surface, and its improved mesh.
+# the Kummer surface, and its remeshed mesh.
 # Usage: scripts/demo.sh ZEROSET_BINARY OUT_DIR
 set -euo pipefail
 zs=${1:?usage: demo.sh ZEROSET_BINARY OUT_DIR}
@@ -31,7 +31,7 @@ echo "== Floaters on the Kummer surface, mu = 1.5 (the paper's figure 5(b))"
   --png "$out/kummer-floaters.png" --stats "$out/kummer-floaters.json"
 echo "wrote $out/kummer-floaters.ply, .png, .json"
 echo
-echo "== Polygonized and improved mesh of the Kummer surface, mu = 1.5"
+echo "== Polygonized and remeshed mesh of the Kummer surface, mu = 1.5"
 "$zs" mesh kummer --param mu=1.5 --resolution 128 -o "$out/kummer.glb" \
   --png "$out/kummer-mesh.png" --wireframe --size 600x600 --stats "$out/kummer-mesh.json"
 echo "wrote $out/kummer.glb, $out/kummer-mesh.png, $out/kummer-mesh.json"

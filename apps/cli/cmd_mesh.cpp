@@ -1,5 +1,5 @@
-// zeroset mesh: marching cubes cut at the clip, the spring–mass improver of Rösch, Ruhl &
-// Saupe (§4), mesh files, a picture and quality figures.
+// zeroset mesh: marching cubes cut at the clip, isotropic remeshing or the spring–mass improver
+// of Rösch, Ruhl & Saupe (§4), mesh files, a picture and quality figures.
 #include <fmt/core.h>
 
 #include <chrono>
@@ -31,7 +31,7 @@ struct MeshArgs {
   int refine_steps = PolygonizeOptions{}.refine_steps;
   std::string improve = "auto";
   std::string boundary = "constrain";
-  std::string improver = "paper";
+  std::string improver = "remesh";
   bool no_curvature = false;
   bool no_singularity = false;
   bool no_flips = false;
@@ -55,6 +55,23 @@ struct MeshArgs {
   CLI::Option* curvature_weight_opt = nullptr;
   double curvature_weight = MeshSettings{}.curvature_weight;
 };
+
+// The flags of the paper's own settings (kPaperOnlyMeshKeys). With the remesher they would do
+// nothing, so one given explicitly is refused rather than ignored.
+void refuse_paper_only_flags(const MeshArgs& a, const MeshSettings& m) {
+  const std::pair<bool, const char*> flags[] = {
+      {a.no_curvature, "--no-curvature"},
+      {a.curvature_weight_opt->count() > 0, "--curvature-weight"},
+      {a.no_singularity, "--no-singularity"},
+      {a.no_flips, "--no-flips"}};
+  static_assert(std::size(flags) == kPaperOnlyMeshKeys.size());
+  if (m.improver != Improver::kRemesh) return;
+  for (const auto& [given, flag] : flags)
+    if (given)
+      throw InvalidArgument(fmt::format("{} sets the paper's improver, but the improver is "
+                                        "remesh: add --improver paper",
+                                        flag));
+}
 
 // Settings from a scene file's "mesh" object (as the viewer saves them, or with improve as
 // --improve takes it); flags given explicitly win. The scene's values are checked as it is
@@ -89,6 +106,7 @@ MeshSettings settings_from(const MeshArgs& a, const Scene& scene) {
        {"grid", "--grid"},
        {"refine_steps", "--refine-steps"},
        {"curvature_weight", "--curvature-weight"}});
+  refuse_paper_only_flags(a, m);
   return m;
 }
 
@@ -375,12 +393,14 @@ void register_mesh_command(CLI::App& app) {
   auto args = std::make_shared<MeshArgs>();
   CLI::App* cmd = app.add_subcommand(
       "mesh",
-      "Polygonize a surface (marching cubes cut at the clip) and improve the mesh with the "
-      "spring-mass system of Rosch, Ruhl & Saupe (1997, section 4).\n\n"
+      "Polygonize a surface (marching cubes cut at the clip) and improve the mesh by isotropic "
+      "remeshing, or with the spring-mass system of Rosch, Ruhl & Saupe (1997, section 4) "
+      "given --improver paper.\n\n"
       "Examples:\n"
       "  zeroset mesh kummer --param mu=1.5 -o kummer.obj\n"
       "  zeroset mesh kummer --param mu=1.2 --resolution 48 --png-raw raw.png --png improved.png "
       "--wireframe\n"
+      "  zeroset mesh kummer --param mu=1.5 --improver paper --no-flips -o paper.obj\n"
       "  zeroset mesh torus --improve off --stats torus.json -o torus.glb");
   args->surface.add_to(cmd);
   args->resolution_opt =
@@ -401,33 +421,40 @@ void register_mesh_command(CLI::App& app) {
           ->capture_default_str();
   args->improve_opt =
       cmd->add_option("--improve", args->improve,
-                      "auto (until every vertex is slower than the threshold), off, or at most "
-                      "STEPS steps")
+                      "auto (until at rest), off, or at most STEPS steps (the remesher's "
+                      "iterations or the paper improver's steps)")
           ->type_name("auto|off|STEPS")
           ->capture_default_str();
   args->improver_opt =
       cmd->add_option("--improver", args->improver,
-                      "paper: the spring-mass improver of the paper; remesh: isotropic "
-                      "remeshing (split, collapse, flip, relax) with singular points, singular "
-                      "curves and the clip curve kept exactly")
-          ->type_name("paper|remesh")
+                      "remesh: isotropic remeshing (split, collapse, flip, relax) with singular "
+                      "points, singular curves and the clip curve kept exactly; paper: the "
+                      "spring-mass improver of the paper, with the flags of its own group below")
+          ->type_name("remesh|paper")
           ->capture_default_str();
   args->boundary_opt =
       cmd->add_option("--boundary", args->boundary,
                       "Boundary vertices: fix, or constrain to the clip curve F = 0, G = 0")
           ->type_name("fix|constrain")
           ->capture_default_str();
+  // The paper improver's own flags, in a group of their own in --help (refused with the
+  // remesher, refuse_paper_only_flags).
+  const std::string paper_only = "Paper improver only (--improver paper)";
   cmd->add_flag("--no-curvature", args->no_curvature,
-                "Springs without the curvature estimator (paper eq. 6)");
+                "Springs without the curvature estimator (paper eq. 6)")
+      ->group(paper_only);
   args->curvature_weight_opt =
       cmd->add_option("--curvature-weight", args->curvature_weight,
                       fmt::format("kappa_d, the weight of the curvature estimator in the spring "
                                   "lengths (0 to {:g})",
                                   kMaxCurvatureWeight))
-          ->capture_default_str();
+          ->capture_default_str()
+          ->group(paper_only);
   cmd->add_flag("--no-singularity", args->no_singularity,
-                "Springs without the singularity estimator");
-  cmd->add_flag("--no-flips", args->no_flips, "No Delaunay edge flips (vertex motion only)");
+                "Springs without the singularity estimator")
+      ->group(paper_only);
+  cmd->add_flag("--no-flips", args->no_flips, "No Delaunay edge flips (vertex motion only)")
+      ->group(paper_only);
   cmd->add_flag("--no-find-singular", args->no_find_singular,
                 "Do not search singular points by Newton's method on grad F = 0");
   cmd->add_flag("--no-crossings", args->no_crossings,

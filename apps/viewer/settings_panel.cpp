@@ -7,6 +7,7 @@
 #include <string>
 
 #include "viewer_state.h"
+#include "zeroset/mesh/settings.h"
 
 namespace zeroset::viewer {
 namespace {
@@ -14,8 +15,8 @@ namespace {
 using json = nlohmann::json;
 
 // What the panel's Dear ImGui (1.86, before SetItemTooltip) shows over the last widget.
-void tooltip(std::string_view text) {
-  if (!ImGui::IsItemHovered()) return;
+void tooltip(std::string_view text, ImGuiHoveredFlags flags = 0) {
+  if (!ImGui::IsItemHovered(flags)) return;
   ImGui::BeginTooltip();
   ImGui::PushTextWrapPos(ImGui::GetFontSize() * 28);
   ImGui::TextUnformatted(text.data(), text.data() + text.size());
@@ -86,8 +87,10 @@ void draw_improve(ViewerState& state, const SettingWidget& w, const json& value)
   if (ImGui::SliderInt("Max steps", &steps, lo, hi, steps == 0 ? "auto" : "%d",
                        w.logarithmic ? ImGuiSliderFlags_Logarithmic : 0))
     apply(state, w, steps == 0 ? json("auto") : json(steps));
-  tooltip("At most this many improver steps; auto (0): until every vertex moves less than "
-          "0.005 mean edge lengths in a step, at most 200 steps live (300 in zeroset mesh).");
+  tooltip("At most this many remesher iterations or paper improver steps; auto (0): until at "
+          "rest, at most 30 iterations of the remesher; for the paper's improver until every "
+          "vertex moves less than 0.005 mean edge lengths in a step, at most 200 steps live "
+          "(300 in zeroset mesh).");
 }
 
 }  // namespace
@@ -207,15 +210,16 @@ const std::vector<SettingWidget>& setting_widgets() {
                   "triangles only."},
       {.object = "mesh", .key = "improve", .label = "Improve", .kind = K::kImprove, .min = 0,
        .max = 2000, .logarithmic = true,
-       .tooltip = "Run the paper's improver (section 4) after marching cubes: a spring-mass "
-                  "system on F = 0 that evens out the triangles and pulls vertices into creases "
-                  "and singular points."},
+       .tooltip = "Run the improver after marching cubes: the remesher, or the paper's "
+                  "spring-mass system on F = 0 (section 4) that evens out the triangles and "
+                  "pulls vertices into creases and singular points."},
       {.object = "mesh", .key = "improver", .label = "Improver", .kind = K::kChoice,
-       .choices = "paper|remesh",
-       .tooltip = "paper: the spring-mass improver of the paper, step by step. remesh: "
-                  "isotropic remeshing (split long edges, collapse short ones, flip towards "
-                  "valence 6, relax in the tangent plane) with singular points, singular curves "
-                  "and the clip curve kept exactly; shown when done."},
+       .choices = "remesh|paper",
+       .tooltip = "remesh (the default): isotropic remeshing (split long edges, collapse short "
+                  "ones, flip towards valence 6, relax in the tangent plane) with singular "
+                  "points, singular curves and the clip curve kept exactly; shown when done. "
+                  "paper: the spring-mass improver of the paper, step by step, with the "
+                  "settings below that are greyed out for the remesher."},
       {.object = "mesh", .key = "boundary", .label = "Boundary", .kind = K::kChoice,
        .choices = "constrain|fix",
        .tooltip = "Boundary vertices fixed where marching cubes cut them, or sliding along the "
@@ -249,11 +253,16 @@ const std::vector<SettingWidget>& setting_widgets() {
 
 void draw_setting_widgets(ViewerState& state, std::string_view object) {
   const json current = state.settings_object(object);
+  // The paper improver's own settings do nothing for the remesher: greyed out, kept for a
+  // switch back.
+  const bool remeshing = object == "mesh" && current.value("improver", "") == "remesh";
   for (const SettingWidget& w : setting_widgets()) {
     if (w.object != object) continue;
     const std::string key(w.key);
     const json value = current.contains(key) ? current[key] : json();
+    const bool disabled = remeshing && is_paper_only_mesh_key(w.key);
     ImGui::PushID(key.c_str());
+    ImGui::BeginDisabled(disabled);
     switch (w.kind) {
       case WidgetKind::kSwitch: draw_switch(state, w, value); break;
       case WidgetKind::kWhole: draw_whole(state, w, value); break;
@@ -261,6 +270,13 @@ void draw_setting_widgets(ViewerState& state, std::string_view object) {
       case WidgetKind::kChoice: draw_choice(state, w, value); break;
       case WidgetKind::kImprove: draw_improve(state, w, value); break;
     }
+    ImGui::EndDisabled();
+    if (disabled)
+      tooltip(std::string(w.tooltip) +
+                  "\n\nThe remesher does not read this setting (only the few steps of the "
+                  "paper's improver that carry the mesh while a parameter moves do). Choose "
+                  "Improver: paper to use it; the value is kept.",
+              ImGuiHoveredFlags_AllowWhenDisabled);
     ImGui::PopID();
   }
 }

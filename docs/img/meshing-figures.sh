@@ -35,8 +35,8 @@ shot() {
 
 # Figure 7(a)/(b): marching cubes against the improvers on the ring torus, 16 cells.
 shot 7ab-raw torus -r 16 --improve off
-shot 7ab-paper torus -r 16
-shot 7ab-nocurv torus -r 16 --no-curvature
+shot 7ab-paper torus -r 16 --improver paper
+shot 7ab-nocurv torus -r 16 --improver paper --no-curvature
 shot 7ab-remesh torus -r 16 --improver remesh
 
 # Figure 7(c): a thin torus (tube radius 0.12, 1.2 cells across) at 16 cells.
@@ -46,8 +46,8 @@ cat >"$T7" <<'EOF'
  "camera": {"azimuth_deg": 30, "elevation_deg": 35, "distance": 4, "fov_deg": 30}}
 EOF
 shot 7c-raw "$T7" -r 16 --improve off
-shot 7c-paper "$T7" -r 16
-shot 7c-nocurv "$T7" -r 16 --no-curvature
+shot 7c-paper "$T7" -r 16 --improver paper
+shot 7c-nocurv "$T7" -r 16 --improver paper --no-curvature
 shot 7c-remesh "$T7" -r 16 --improver remesh
 
 # Figure 8: Kummer mu = 1.5 at 32 cells, the inner nodes and the small pieces between them.
@@ -57,8 +57,8 @@ cat >"$K8" <<'EOF'
  "camera": {"azimuth_deg": 75, "elevation_deg": 40, "distance": 9, "fov_deg": 30}}
 EOF
 shot 8-raw "$K8" -r 32 --improve off
-shot 8-paper "$K8" -r 32
-shot 8-nocurv "$K8" -r 32 --no-curvature
+shot 8-paper "$K8" -r 32 --improver paper
+shot 8-nocurv "$K8" -r 32 --improver paper --no-curvature
 shot 8-remesh "$K8" -r 32 --improver remesh
 
 # Figure 9: the node of the ding-dong surface seen from close by, 16 cells.
@@ -68,8 +68,8 @@ cat >"$D9" <<'EOF'
  "camera": {"azimuth_deg": 30, "elevation_deg": 10, "distance": 1.6, "fov_deg": 30, "target": [0, 0, 0]}}
 EOF
 shot 9-raw "$D9" -r 16 --improve off
-shot 9-paper "$D9" -r 16
-shot 9-nocurv "$D9" -r 16 --no-curvature
+shot 9-paper "$D9" -r 16 --improver paper
+shot 9-nocurv "$D9" -r 16 --improver paper --no-curvature
 shot 9-remesh "$D9" -r 16 --improver remesh
 
 # Boundary (paper section 4.2): a paraboloid cut by a sphere, 10 cells, fixed or sliding.
@@ -79,8 +79,8 @@ cat >"$PB" <<'EOF'
  "camera": {"azimuth_deg": 30, "elevation_deg": 80, "fov_deg": 30, "target": [0, 0, 0.6]}}
 EOF
 shot bd-raw "$PB" -r 10 --improve off
-shot bd-fix "$PB" -r 10 --boundary fix
-shot bd-constrain "$PB" -r 10 --boundary constrain
+shot bd-fix "$PB" -r 10 --boundary fix --improver paper
+shot bd-constrain "$PB" -r 10 --boundary constrain --improver paper
 shot bd-remesh "$PB" -r 10 --improver remesh
 
 python3 - "$TMP" "${NAMES[@]}" <<'EOF'

@@ -58,6 +58,17 @@ MeshSettings settings_from(const MeshArgs& a, const PySurface& s) {
         std::pair{&a.crossings, &m.crossings}, std::pair{&a.curves, &m.curves}})
     if (*given) *setting = **given;
   validate_settings(m);
+  // As `zeroset mesh` refuses their flags: the paper's own settings (kPaperOnlyMeshKeys) do
+  // nothing with the remesher, so one given explicitly is refused rather than ignored.
+  if (m.improver == Improver::kRemesh)
+    for (auto [given, name] : {std::pair{a.curvature.has_value(), "curvature"},
+                               std::pair{a.curvature_weight.has_value(), "curvature_weight"},
+                               std::pair{a.singularity.has_value(), "singularity"},
+                               std::pair{a.flips.has_value(), "flips"}})
+      if (given)
+        throw InvalidArgument(std::string(name) +
+                              " sets the paper's improver, but the improver is remesh: add "
+                              "improver=\"paper\"");
   return m;
 }
 

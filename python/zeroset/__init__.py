@@ -286,12 +286,13 @@ class Surface:
              threads=0):
         """Polygonizes and improves the surface as `zeroset mesh` does (its options by the same
         names, each None for the scene file's value or else the default: resolution 128;
-        improve "auto", "off", True, False or a number of steps; improver "paper" (the
-        spring-mass improver) or "remesh" (isotropic remeshing); boundary "constrain" or
-        "fix"; grid "auto", "dense" or "sparse"; refine_steps 12; curvature_weight 8, the
-        curvature estimator's kappa_d; the switches True). quality=True adds the quality
-        figures before and after improvement to the stats. Returns a Mesh, which unpacks as
-        V, F, stats."""
+        improve "auto", "off", True, False or a number of steps; improver "remesh" (isotropic
+        remeshing) or "paper" (the spring-mass improver); boundary "constrain" or "fix"; grid
+        "auto", "dense" or "sparse"; refine_steps 12; the switches True). curvature,
+        curvature_weight (8, the curvature estimator's kappa_d), singularity and flips set the
+        paper's improver only: given with the remesher they raise ValueError. quality=True
+        adds the quality figures before and after improvement to the stats. Returns a Mesh,
+        which unpacks as V, F, stats."""
         if improve is True:
             improve = "auto"
         elif improve is False:

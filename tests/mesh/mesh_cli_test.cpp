@@ -52,10 +52,17 @@ TEST_F(MeshCli, ReadsTheMeshSettingsTheViewerSaves) {
     std::ifstream in(path("s.json"));
     return nlohmann::json::parse(in);
   };
+  // true: until at rest, not 1 step; by the remesher (the default) or the improver given.
   const nlohmann::json improved = stats("");
   EXPECT_EQ(improved["polygonize"]["resolution"].get<int>(), 12);
   ASSERT_TRUE(improved.contains("improve")) << improved.dump();
-  EXPECT_GT(improved["improve"]["steps"].get<int>(), 1);  // true: until converged, not 1 step
+  EXPECT_EQ(improved["improve"]["improver"], "remesh");
+  EXPECT_GT(improved["improve"]["iterations"].get<int>(), 1);
+  EXPECT_TRUE(improved["improve"]["converged"].get<bool>());
+  const nlohmann::json paper = stats("--improver paper");
+  EXPECT_EQ(paper["improve"]["improver"], "paper");
+  EXPECT_GT(paper["improve"]["steps"].get<int>(), 1);
+  EXPECT_TRUE(paper["improve"]["converged"].get<bool>());
   const nlohmann::json flagged = stats("--resolution 10 --improve off");
   EXPECT_EQ(flagged["polygonize"]["resolution"].get<int>(), 10);
   EXPECT_FALSE(flagged.contains("improve"));
@@ -124,6 +131,35 @@ TEST_F(MeshCli, BadInputExitsWithTwoAndWritesNothing) {
   }
   EXPECT_FALSE(fs::exists(path("a.obj")));
   EXPECT_FALSE(fs::exists(path("a.xyz")));
+}
+
+TEST_F(MeshCli, ThePaperImproversOwnFlagsAreRefusedWithTheRemesher) {
+  // They would do nothing there; a scene file's keys are kept (they wait for --improver
+  // paper), an explicit flag is refused whether the remesher is the default or the scene's.
+  std::ofstream(path("scene.json"))
+      << R"({"name": "sphere", "mesh": {"cells": 10, "improver": "remesh", "flips": false}})";
+  for (const std::string flag :
+       {"--no-curvature", "--curvature-weight 3", "--no-singularity", "--no-flips"}) {
+    for (const std::string& surface : {std::string("sphere -r 10"), path("scene.json")}) {
+      const auto r = run(surface + " " + flag + " -o " + path("a.obj"));
+      EXPECT_EQ(r.exit_code, 2) << flag << "\n" << r.output;
+      const std::string name = flag.substr(0, flag.find(' '));
+      EXPECT_NE(r.output.find(name + " sets the paper's improver"), std::string::npos) << r.output;
+      EXPECT_NE(r.output.find("add --improver paper"), std::string::npos) << r.output;
+      EXPECT_FALSE(fs::exists(path("a.obj")));
+      EXPECT_EQ(run(surface + " --improver paper " + flag + " -o " + path("a.obj")).exit_code, 0)
+          << flag;
+      fs::remove(path("a.obj"));
+    }
+  }
+  EXPECT_EQ(run(path("scene.json") + " -o " + path("a.obj")).exit_code, 0);
+  // --help says which flags are the paper improver's.
+  const std::string help = run("--help").output;
+  const size_t group = help.find("Paper improver only (--improver paper)");
+  ASSERT_NE(group, std::string::npos) << help;
+  for (const char* text : {"Springs without the curvature estimator", "kappa_d, the weight",
+                           "Springs without the singularity estimator", "No Delaunay edge flips"})
+    EXPECT_GT(help.find(text), group) << text;
 }
 
 TEST_F(MeshCli, AbsurdResolutionIsRefusedWithTheMemoryItNeeds) {

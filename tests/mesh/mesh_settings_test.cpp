@@ -16,7 +16,7 @@ TEST(MeshSettings, EveryKeyIsAppliedAndWrittenBack) {
   const json j = json::parse(R"({"cells": 40, "improve": 25, "boundary": "fix",
       "grid": "sparse", "refine_steps": 3, "curvature": false, "curvature_weight": 20.5,
       "singularity": false, "flips": false, "find_singular": false, "crossings": false,
-      "curves": false, "improver": "remesh"})");
+      "curves": false, "improver": "paper"})");
   MeshSettings m;
   apply_mesh_settings(j, m, "s.json");
   EXPECT_EQ(m.cells, 40);
@@ -32,7 +32,7 @@ TEST(MeshSettings, EveryKeyIsAppliedAndWrittenBack) {
   EXPECT_FALSE(m.find_singular);
   EXPECT_FALSE(m.crossings);
   EXPECT_FALSE(m.curves);
-  EXPECT_EQ(m.improver, Improver::kRemesh);
+  EXPECT_EQ(m.improver, Improver::kPaper);
   EXPECT_EQ(mesh_settings_to_json(m), j);
   MeshSettings kept = m;
   apply_mesh_settings(json::object(), kept, "s.json");
@@ -69,13 +69,13 @@ TEST(MeshSettings, TheOptionsOfBothFrontEndsCarryEverySetting) {
   m.improve = false;
   EXPECT_EQ(improve_options(m, 77).max_steps, 0) << "off: no step";
   // The remesher's: the boundary mode, the singular-point switch, the step limit bounds its
-  // iterations.
+  // iterations. The paper's own keys are not among its options (kPaperOnlyMeshKeys).
   const RemeshOptions ro = remesh_options(m);
   EXPECT_EQ(ro.boundary, BoundaryMode::kFixed);
   EXPECT_FALSE(ro.find_singular_points);
   EXPECT_EQ(ro.max_iterations, 12);
   // The defaults are the library's.
-  EXPECT_EQ(d_improver(), Improver::kPaper);
+  EXPECT_EQ(d_improver(), Improver::kRemesh);
   const MeshSettings d;
   EXPECT_EQ(polygonize_options(d).refine_steps, PolygonizeOptions{}.refine_steps);
   EXPECT_EQ(improve_options(d, 300).curvature_weight, ImproveOptions{}.curvature_weight);

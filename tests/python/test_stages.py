@@ -16,10 +16,12 @@ PNG = b"\x89PNG\r\n\x1a\n"
 
 
 def test_mesh_takes_the_scene_files_switches_as_the_cli(cli, tmp_path):
+    # The paper's improver, whose switches these are (flips, curvature).
     scene = tmp_path / "switches.json"
     scene.write_text(json.dumps({"name": "kummer", "mesh": {
         "cells": 18, "improve": 15, "grid": "sparse", "refine_steps": 2, "flips": False,
-        "curvature": False, "find_singular": False, "crossings": False, "curves": False}}))
+        "curvature": False, "find_singular": False, "crossings": False, "curves": False,
+        "improver": "paper"}}))
     cli("mesh", scene, "-o", tmp_path / "cli.obj")
     zeroset.Surface(scene).mesh().save(tmp_path / "py.obj")
     assert (tmp_path / "py.obj").read_bytes() == (tmp_path / "cli.obj").read_bytes()
@@ -27,7 +29,7 @@ def test_mesh_takes_the_scene_files_switches_as_the_cli(cli, tmp_path):
     cli("mesh", scene, "--grid", "dense", "-o", tmp_path / "cli2.obj")
     _, _, stats = zeroset.Surface(scene).mesh(grid="dense", flips=True)
     assert stats["polygonize"]["grid"] == "dense"
-    assert stats["improve"]["edge_flips"] > 0
+    assert stats["improve"]["improver"] == "paper" and stats["improve"]["edge_flips"] > 0
     zeroset.Surface(scene).mesh(grid="dense").save(tmp_path / "py2.obj")
     assert (tmp_path / "py2.obj").read_bytes() == (tmp_path / "cli2.obj").read_bytes()
 
@@ -37,12 +39,13 @@ def test_mesh_takes_the_scene_files_switches_as_the_cli(cli, tmp_path):
     ("x^2 + y^2 - z^2 - 0.1", ["--clip", "sphere:1.5", "-r", "20", "--improve", "30",
                                "--boundary", "fix"],
      dict(clip="sphere:1.5", resolution=20, improve=30, boundary="fix")),
-    ("kummer", ["--param", "mu=1.5", "-r", "20", "--improve", "20", "--no-flips",
-                "--curvature-weight", "3", "--grid", "dense", "--refine-steps", "4"],
-     dict(resolution=20, improve=20, flips=False, curvature_weight=3, grid="dense",
-          refine_steps=4)),
-    ("kummer", ["--param", "mu=1.5", "-r", "24", "--improver", "remesh"],
-     dict(resolution=24, improver="remesh")),
+    ("kummer", ["--param", "mu=1.5", "-r", "20", "--improve", "20", "--improver", "paper",
+                "--no-flips", "--curvature-weight", "3", "--grid", "dense", "--refine-steps",
+                "4"],
+     dict(resolution=20, improve=20, improver="paper", flips=False, curvature_weight=3,
+          grid="dense", refine_steps=4)),
+    ("kummer", ["--param", "mu=1.5", "-r", "24", "--improver", "paper"],
+     dict(resolution=24, improver="paper")),
 ])
 def test_mesh_equals_the_cli(cli, tmp_path, spec, args, kwargs):
     cli("mesh", spec, *args, "-o", tmp_path / "cli.obj")
@@ -59,6 +62,18 @@ def test_mesh_equals_the_cli(cli, tmp_path, spec, args, kwargs):
     ov = np.array([[float(t) for t in l[1:4]] for l in obj if l and l[0] == "v"])
     np.testing.assert_allclose(ov, V, rtol=1e-8, atol=1e-12)
     assert stats["polygonize"]["vertices"] > 0 and "improve" in stats
+    assert stats["improve"]["improver"] == kwargs.get("improver", "remesh")
+
+
+def test_the_paper_improvers_own_settings_are_refused_with_the_remesher():
+    kummer = zeroset.Surface("kummer", mu=1.5)
+    for given in (dict(flips=False), dict(curvature=True), dict(curvature_weight=3),
+                  dict(singularity=False)):
+        with pytest.raises(ValueError, match=f"{next(iter(given))} sets the paper's improver.*"
+                                             "add improver=\"paper\""):
+            kummer.mesh(resolution=10, **given)
+        assert kummer.mesh(resolution=10, improver="paper", improve=2, **given).stats[
+            "improve"]["improver"] == "paper"
 
 
 def test_mesh_files_of_every_format(tmp_path):

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <string>
 
 #include "run_frames.h"
@@ -65,30 +66,46 @@ MeshPrint settle_mesh(ViewerState& state) {
 TEST(SettingsSwitches, EveryMeshKeyReachesTheMeshJob) {
   expect_every_key_listed(mesh_settings_to_json(MeshSettings{}), kMeshValues, "mesh");
   // Kummer's nodes and Roman's crossing curves, both cut by their clip: every switch changes
-  // the mesh of one of them.
-  std::map<std::string, bool> changed;
+  // the mesh of one of them, made by the improver the key belongs to. Every key with the
+  // remesher (the default), where the paper improver's own keys change nothing; with the
+  // paper's improver, its own keys and those both improvers read.
+  const std::set<std::string> both = {"improve", "boundary", "find_singular"};
+  std::map<std::string, std::set<std::string>> changed;  // key: the improvers it changed
   for (const char* name : {"kummer", "roman"}) {
-    ViewerState state(catalog_scene(name), Mode::kMesh, 1);
-    ASSERT_TRUE(state.command("mesh cells=32 improve=40"));
-    const json defaults = state.settings_object("mesh");
-    const MeshPrint base = settle_mesh(state);
-    ASSERT_GT(base.triangles, 500u) << name;
-    for (const auto& [key, value] : kMeshValues) {
-      SCOPED_TRACE(std::string(name) + ": set mesh." + key + " " + value);
-      ASSERT_TRUE(state.command("set mesh." + key + " " + value)) << state.status().text;
-      EXPECT_EQ(state.settings_object("mesh")[key], expected_value(value));
-      const MeshPrint print = settle_mesh(state);
-      EXPECT_GT(print.triangles, 100u) << "still a surface";
-      if (!(print == base)) changed[key] = true;
-      // Back to the default, by the scene file's value, and to the same mesh as before.
-      ASSERT_TRUE(state.command("set mesh." + key + " " + defaults[key].dump()))
-          << state.status().text;
-      EXPECT_EQ(state.settings_object("mesh"), defaults);
-      EXPECT_TRUE(settle_mesh(state) == base) << "the default again gives the same mesh";
+    for (const std::string improver : {"remesh", "paper"}) {
+      ViewerState state(catalog_scene(name), Mode::kMesh, 1);
+      ASSERT_TRUE(state.command("mesh cells=24 improve=40 improver=" + improver));
+      const json defaults = state.settings_object("mesh");
+      const MeshPrint base = settle_mesh(state);
+      ASSERT_GT(base.triangles, 500u) << name;
+      for (const auto& [key, value] : kMeshValues) {
+        if (improver == "paper" && !is_paper_only_mesh_key(key) && !both.count(key)) continue;
+        SCOPED_TRACE(std::string(name) + ", improver " + improver + ": set mesh." + key + " " +
+                     value);
+        ASSERT_TRUE(state.command("set mesh." + key + " " + value)) << state.status().text;
+        EXPECT_EQ(state.settings_object("mesh")[key], expected_value(value));
+        const MeshPrint print = settle_mesh(state);
+        EXPECT_GT(print.triangles, 100u) << "still a surface";
+        if (!(print == base)) changed[key].insert(improver);
+        if (improver == "remesh" && is_paper_only_mesh_key(key)) {
+          EXPECT_TRUE(print == base) << "the remesher does not read the paper's own keys";
+        }
+        // Back to the default, by the scene file's value, and to the same mesh as before.
+        ASSERT_TRUE(state.command("set mesh." + key + " " + defaults[key].dump()))
+            << state.status().text;
+        EXPECT_EQ(state.settings_object("mesh"), defaults);
+        EXPECT_TRUE(settle_mesh(state) == base) << "the default again gives the same mesh";
+      }
     }
   }
-  for (const auto& [key, value] : kMeshValues)
-    EXPECT_TRUE(changed[key]) << "mesh." << key << " " << value << " changed neither mesh";
+  for (const auto& [key, value] : kMeshValues) {
+    std::set<std::string> wanted = {"remesh", "paper"};
+    if (is_paper_only_mesh_key(key)) wanted.erase("remesh");
+    if (!is_paper_only_mesh_key(key) && !both.count(key)) wanted.erase("paper");
+    for (const std::string& improver : wanted)
+      EXPECT_TRUE(changed[key].count(improver))
+          << "mesh." << key << " " << value << " changed no mesh made by improver " << improver;
+  }
 }
 
 TEST(SettingsSwitches, EveryFloaterKeyReachesTheFloaterJob) {

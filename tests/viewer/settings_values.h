@@ -17,11 +17,11 @@ inline const std::map<std::string, std::string> kFloaterValues = {
     {"radius_adapt", "wh"},       {"clip_newton", "off"},      {"average_radius_factor", "off"},
     {"local_nominal_radius", "off"}, {"energy_taper", "off"},  {"fission_offset", "off"}};
 inline const std::map<std::string, std::string> kMeshValues = {
-    {"cells", "28"},         {"improve", "15"},         {"boundary", "fix"},
+    {"cells", "28"},         {"improve", "5"},          {"boundary", "fix"},
     {"grid", "sparse"},      {"refine_steps", "0"},     {"curvature", "off"},
     {"curvature_weight", "40"}, {"singularity", "off"}, {"flips", "off"},
     {"find_singular", "off"}, {"crossings", "off"},     {"curves", "off"},
-    {"improver", "remesh"}};
+    {"improver", "paper"}};
 
 // The scene file's value for a `set` value: on/off become true/false, numbers stay numbers.
 inline nlohmann::json expected_value(const std::string& text) {

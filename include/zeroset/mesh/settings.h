@@ -5,15 +5,17 @@
 ///   "mesh": {"cells": 64, "improve": true, "boundary": "constrain", "grid": "auto",
 ///            "refine_steps": 12, "curvature": true, "curvature_weight": 8,
 ///            "singularity": true, "flips": true, "find_singular": true, "crossings": true,
-///            "curves": true, "improver": "paper"}
+///            "curves": true, "improver": "remesh"}
 ///
 /// "improve" is true or "auto" (until at rest), false or "off", or a number of steps (at
 /// most). The other keys are the switches of `zeroset mesh` (docs/meshing.md) and κ_d, the
 /// weight of the curvature estimator (docs/algorithms.md, the mesh improver). Every key is
-/// optional; missing ones keep their current value. "improver" is "paper" (the spring–mass
-/// improver, MeshImprover) or "remesh" (the isotropic remesher, zeroset/mesh/remesh.h). The command line, scene files and the
-/// viewer check these settings with validate_settings below, so each refuses a bad value with
-/// the same words.
+/// optional; missing ones keep their current value. "improver" is "remesh" (the isotropic
+/// remesher, zeroset/mesh/remesh.h, the default) or "paper" (the spring–mass improver of the
+/// paper, MeshImprover). The command line, scene files and the viewer check these settings with
+/// validate_settings below, so each refuses a bad value with the same words.
+#include <algorithm>
+#include <array>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -38,8 +40,20 @@ inline constexpr double kMaxCurvatureWeight = 1000;
 /// Which method improves the marching-cubes mesh.
 enum class Improver {
   kPaper,   ///< the spring–mass improver of the paper (MeshImprover)
-  kRemesh,  ///< isotropic remeshing with locked features (remesh())
+  kRemesh,  ///< isotropic remeshing with locked features (remesh()), the default
 };
+
+/// The keys only the paper's improver reads: its springs' estimators and its Delaunay flips
+/// (the remesher sizes edges by one target length and flips towards valence 6). Settings and
+/// scene files keep them whichever improver is chosen, so switching back to the paper's finds
+/// them; a front end refuses one given explicitly with the remesher, and the viewer greys
+/// them out.
+inline constexpr std::array<std::string_view, 4> kPaperOnlyMeshKeys = {
+    "curvature", "curvature_weight", "singularity", "flips"};
+inline bool is_paper_only_mesh_key(std::string_view key) {
+  return std::find(kPaperOnlyMeshKeys.begin(), kPaperOnlyMeshKeys.end(), key) !=
+         kPaperOnlyMeshKeys.end();
+}
 
 /// How a surface is polygonized and improved.
 struct MeshSettings {
@@ -58,7 +72,7 @@ struct MeshSettings {
   bool find_singular = true;  ///< Newton's method on ∇F = 0 for singular points
   bool crossings = true;      ///< sheets meet exactly on crossing curves
   bool curves = true;         ///< the singular curves go into the mesh file
-  Improver improver = Improver::kPaper;
+  Improver improver = Improver::kRemesh;
 };
 
 /// The polygonizer's options for `settings` (bounds, threads and normals are the caller's).
