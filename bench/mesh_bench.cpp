@@ -8,6 +8,7 @@
 #include "zeroset/mesh/improve.h"
 #include "zeroset/mesh/polygonize.h"
 #include "zeroset/mesh/quality.h"
+#include "zeroset/mesh/remesh.h"
 #include "zeroset/surface/catalog.h"
 
 namespace {
@@ -86,31 +87,39 @@ BENCHMARK(BM_Improve)->Arg(128)->Unit(benchmark::kMillisecond)->Iterations(1)->U
 // The whole mesh command's work (marching cubes, crossings, improver to rest or its limit) on
 // Kummer's surface with 16 nodes (mu = 1.5) and as four planes crossing in six lines and four
 // triple points (mu = 3): what a surface with singular curves costs next to one with nodes.
-// bench/crossings_report.py runs both side by side. arg: 10 × mu.
+// bench/crossings_report.py runs both side by side. args: 10 × mu; 1 for the remesher (the
+// default improver), 0 for the paper's improver.
 void BM_MeshPipeline(benchmark::State& state) {
   const zeroset::Surface s = kummer(static_cast<double>(state.range(0)) / 10);
+  const bool remeshing = state.range(1) != 0;
   zeroset::PolygonizeOptions o;
   o.cells = 128;
-  zeroset::ImproveStats st;
+  int steps = 0;
+  bool converged = false;
   zeroset::CrossingStats cs;
   size_t vertices = 0;
   for (auto _ : state) {
     zeroset::PolygonizeStats ps;
     zeroset::Mesh m = zeroset::polygonize(s, o, &ps);
     cs = zeroset::mesh_crossings(m, s, ps.cell_size);
-    st = zeroset::improve_mesh(m, s);
+    if (remeshing) {
+      const zeroset::RemeshStats st = zeroset::remesh(m, s);
+      steps = st.iterations, converged = st.converged;
+    } else {
+      const zeroset::ImproveStats st = zeroset::improve_mesh(m, s);
+      steps = st.steps, converged = st.converged;
+    }
     vertices = m.vertex_count();
   }
-  state.counters["steps"] = st.steps;
-  state.counters["converged"] = st.converged;
+  state.counters["steps"] = steps;
+  state.counters["converged"] = converged;
   state.counters["vertices"] = static_cast<double>(vertices);
   state.counters["crossing_curves"] = cs.crossing_curves;
   state.counters["crossings_ms"] = 1e3 * cs.seconds;
 }
 BENCHMARK(BM_MeshPipeline)
-    ->ArgName("mu10")
-    ->Arg(15)
-    ->Arg(30)
+    ->ArgNames({"mu10", "remesh"})
+    ->ArgsProduct({{15, 30}, {1, 0}})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1)
     ->UseRealTime();
