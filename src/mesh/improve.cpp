@@ -164,7 +164,9 @@ struct MeshImprover::State {
     }
   }
 
-  void update_mean_edge() { mean_edge = detail::improver_mean_edge(mesh.positions, nbr, nbr_count, cap, workers); }
+  void update_mean_edge() {
+    mean_edge = detail::improver_mean_edge(mesh.positions, nbr, nbr_count, cap, workers);
+  }
 
   // β of docs/algorithms.md B.3 and C.1 at every vertex, and the Newton step length towards ∇F = 0.
   void update_singularity_estimates() {
@@ -415,7 +417,8 @@ struct MeshImprover::State {
       // point, where the sheets close up on the curve) has no tangent plane to slide in: the
       // springs alone would push it to and fro along the curve. It stays where it is.
       if (near_curve[v] && g.squaredNorm() < kOnSingularCurve * grad_ref * grad_ref) return;
-      if (mode[v] == kFree && coast && !near_curve[v] && stiffest <= kFlatSpring * opt.spring_base) {
+      if (mode[v] == kFree && coast && !near_curve[v] &&
+          stiffest <= kFlatSpring * opt.spring_base) {
         // Heavy-ball momentum on the tangential part only (docs/algorithms.md, C.2): the last
         // move, made tangent, carried over; the Newton part towards F = 0 stays as it is.
         const double gg = g.dot(g) + eps2;
