@@ -304,6 +304,8 @@ void run_mesh(const MeshArgs& a) {
                         {"last_max_move_in_target_edges", rs.last_max_move},
                         {"singular_points_held", held},
                         {"missed_singular_points", rs.missed_singular_points},
+                        {"pinch_held_vertices", rs.pinch_held_vertices},
+                        {"pinch_improver_steps", rs.pinch_improver_steps},
                         {"max_residual", rs.max_residual},
                         {"undefined_vertices", rs.undefined_vertices},
                         {"boundary", std::string(to_string(settings.boundary))},

@@ -181,6 +181,8 @@ py::tuple make_mesh(const PySurface& s, const MeshArgs& a) {
         "improver"_a = "remesh", "iterations"_a = rs.iterations, "converged"_a = rs.converged,
         "target_edge"_a = rs.target_edge, "splits"_a = rs.splits, "collapses"_a = rs.collapses,
         "flips"_a = rs.flips, "relax_steps"_a = rs.relax_steps,
+        "pinch_held_vertices"_a = rs.pinch_held_vertices,
+        "pinch_improver_steps"_a = rs.pinch_improver_steps,
         "max_residual"_a = rs.max_residual, "seconds"_a = rs.seconds,
         "boundary"_a = std::string(to_string(settings.boundary)));
   } else if (max_steps > 0) {

@@ -27,6 +27,7 @@ void Remesher::setup() {
   if (mesh.is_boundary.size() != nv) mesh.is_boundary.assign(nv, 0);
   kind.assign(nv, kFree);
   on_curve.assign(nv, 0);
+  pinch_held.assign(nv, 0);
   alive_vertex.assign(nv, 1);
   alive_tri.assign(mesh.triangles.size(), 1);
   vt.assign(nv, {});
@@ -74,12 +75,11 @@ void Remesher::setup() {
 }
 
 // The nearest vertex goes exactly onto each isolated singular point and stays there.
-void Remesher::find_singular_points() {
+void Remesher::find_singular_points(const SingularSet& set) {
   if (!opt.find_singular_points || !surface.clip.is_bounded()) return;
   // The surface's own exact points first (the catalog's nodes), then those found.
   for (const Vec3& q : surface.singular_points())
     if (surface.clip.contains(q)) pending.push_back(q);
-  const SingularSet set = find_singular_set(surface);
   for (const SingularPoint& sp : set.points) {
     if (sp.kind == SingularPointKind::kClipEnd) continue;
     if (std::none_of(pending.begin(), pending.end(), [&](const Vec3& q) {
@@ -112,7 +112,7 @@ void Remesher::hold_pending_points() {
     // Else the nearest free vertex that can move there without turning a triangle over.
     bool held = false;
     for (const auto& [d, v] : near) {
-      if (kind[v] != kFree) continue;  // a curve or border vertex: not ours to move
+      if (kind[v] != kFree || pinch_held[v]) continue;  // a curve, border or held vertex
       const Vec3 old = mesh.positions[v];
       before.clear();
       for (std::uint32_t t : vt[v]) before.push_back(normal(mesh.triangles[t]));
@@ -158,6 +158,7 @@ std::uint32_t Remesher::add_vertex(const Vec3& p, Kind k) {
   mesh.is_boundary.push_back(k == kClip);
   kind.push_back(k);
   on_curve.push_back(0);
+  pinch_held.push_back(0);
   alive_vertex.push_back(1);
   vt.emplace_back();
   grad_at.push_back(Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
@@ -244,7 +245,7 @@ long long Remesher::split_pass() {
 // Collapses v into w (w stays where it is). Returns false, changing nothing, when refused.
 bool Remesher::try_collapse(std::uint32_t v, std::uint32_t w, std::vector<std::uint32_t>& nv,
                             std::vector<std::uint32_t>& nw) {
-  if (kind[v] == kLocked) return false;
+  if (kind[v] == kLocked || pinch_held[v]) return false;
   std::uint32_t et[2];
   const int ne = edge_tris(v, w, et);
   if (ne == 0 || ne > 2) return false;
@@ -440,7 +441,20 @@ RemeshStats remesh(Mesh& mesh, const Surface& surface, const RemeshOptions& opti
     r.stats.converged = true;
     return r.stats;
   }
-  r.find_singular_points();
+  SingularSet set;
+  if (options.find_singular_points && surface.clip.is_bounded()) set = find_singular_set(surface);
+  std::vector<Vec3> pinches;
+  for (const SingularPoint& sp : set.points)
+    if (sp.kind == SingularPointKind::kPinch) pinches.push_back(sp.position);
+  const detail::PinchStep pinch =
+      detail::improve_near_pinch_points(mesh, surface, pinches, r.L, options, stop);
+  if (pinch.improved) {
+    r.setup();  // the triangles near the pinch points have changed
+    for (std::uint32_t v : pinch.held) r.pinch_held[v] = 1;
+    r.stats.pinch_held_vertices = static_cast<long long>(pinch.held.size());
+  }
+  r.stats.pinch_improver_steps = pinch.steps;
+  r.find_singular_points(set);
   r.hold_pending_points();
   {
     // ∇F at every vertex before the first topology pass, for agrees_with_gradient.
@@ -497,7 +511,8 @@ RemeshStats remesh(Mesh& mesh, const Surface& surface, const RemeshOptions& opti
     }
   }
   st.missed_singular_points = static_cast<long long>(r.pending.size());
-  st.converged = topology_at_rest && flips_at_rest && moves_at_rest;
+  st.converged = topology_at_rest && flips_at_rest && moves_at_rest &&
+                 (!pinch.improved || pinch.converged);
   r.final_projection();
   r.compact();
   r.measure_residual();

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <stop_token>
 #include <unordered_set>
 #include <utility>
 #include <vector>
@@ -13,6 +14,7 @@
 #include "mesh_detail.h"
 #include "zeroset/detail/parallel.h"
 #include "zeroset/mesh/remesh.h"
+#include "zeroset/surface/singular_set.h"
 
 namespace zeroset::detail {
 
@@ -35,6 +37,12 @@ constexpr int kFlipOnlyRounds = 20;
 // Batched Newton steps onto F = 0 per relaxation step (then one at a time where needed).
 constexpr int kBatchNewtonSteps = 3;
 
+// Next to pinch points the spring–mass improver relaxes the mesh within this many L of each,
+// the rim held, and the remesher then holds every vertex within kPinchHoldRadius L
+// (remesh_pinch.cpp).
+constexpr double kPinchSpringRadius = 9;
+constexpr double kPinchHoldRadius = 6;
+
 inline std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
   if (a > b) std::swap(a, b);
   return (static_cast<std::uint64_t>(a) << 32) | b;
@@ -44,6 +52,18 @@ inline double min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
   return std::min({corner_angle(a, b, c), corner_angle(b, c, a),
                    corner_angle(c, a, b)});
 }
+
+struct PinchStep {
+  bool improved = false;  // false: no pinch point, or the step was undone
+  bool converged = false;
+  int steps = 0;
+  std::vector<std::uint32_t> held;  // the vertices the remesher holds
+};
+// The mesh within kPinchSpringRadius L of the pinch points improved by the spring–mass
+// improver (improve_mesh), the triangles with a corner outside held.
+PinchStep improve_near_pinch_points(Mesh& mesh, const Surface& surface,
+                                    const std::vector<Vec3>& pinches, double L,
+                                    const RemeshOptions& opt, std::stop_token stop);
 
 struct Remesher {
   Mesh& mesh;
@@ -57,6 +77,9 @@ struct Remesher {
   std::vector<std::vector<std::uint32_t>> vt;  // live triangles of each vertex
   std::unordered_set<std::uint64_t> curve_edges;
   std::vector<std::uint8_t> on_curve;  // vertex of a singular curve or node
+  // A free vertex next to a pinch point, where the spring–mass improver has placed it
+  // (remesh_pinch.cpp): it neither relaxes nor goes away, and is projected onto F = 0 at the end.
+  std::vector<std::uint8_t> pinch_held;
   double L = 0, lo = 0, hi = 0, min_area = 0;
   double hi_collapse = 0;
   std::vector<Vec3> pending;  // singular points no vertex holds yet
@@ -134,8 +157,9 @@ struct Remesher {
 
   // ---- set-up and topology passes (remesh.cpp)
   void setup();
-  // The isolated singular points to hold (into `pending`).
-  void find_singular_points();
+  // The isolated singular points to hold (into `pending`), from the surface's own list and
+  // the singular set found.
+  void find_singular_points(const SingularSet& set);
   // The nearest vertex that can goes exactly onto each pending point and stays there; points
   // no vertex could take stay pending.
   void hold_pending_points();

@@ -177,7 +177,7 @@ double Remesher::relax() {
   std::vector<std::uint32_t> free_vs, clip_vs;
   for (std::uint32_t v = 0; v < nv; ++v) {
     if (!alive_vertex[v] || ring_start[v] == ring_start[v + 1]) continue;
-    if (kind[v] == kFree) free_vs.push_back(v);
+    if (kind[v] == kFree && !pinch_held[v]) free_vs.push_back(v);
     if (kind[v] == kClip) clip_vs.push_back(v);
   }
   std::vector<Vec3> border_target;

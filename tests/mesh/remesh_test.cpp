@@ -77,6 +77,7 @@ TEST(Remesh, KummerNodesStayExactAndAnglesImprove) {
   EXPECT_EQ(small_angles_away(m, c.after.singular_points, 2 * c.stats.target_edge, 15), 0u);
   EXPECT_EQ(mesh_topology(m).euler_characteristic, euler);
   EXPECT_EQ(c.stats.singular_points.size(), c.after.singular_points.size());
+  EXPECT_EQ(c.stats.pinch_held_vertices, 0);  // nodes only: no pinch point
 }
 
 TEST(Remesh, KummerComesToRestOnACoarseGrid) {
@@ -226,6 +227,9 @@ TEST(Remesh, RomanCrossingCurvesKeepTheirFourTriangles) {
   const auto before = curve_edges(m);
   const RemeshStats st = remesh(m, s);
   EXPECT_TRUE(st.converged);
+  // The vertices next to the six pinch points are the spring–mass improver's, held.
+  EXPECT_GT(st.pinch_improver_steps, 0);
+  EXPECT_GT(st.pinch_held_vertices, 6 * 20);
   const DegenerateCount d = count_degenerate(m);
   EXPECT_EQ(d.zero_area_triangles, 0u);
   EXPECT_EQ(d.coincident_vertices, 0u);

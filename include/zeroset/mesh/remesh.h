@@ -14,6 +14,12 @@
 /// (BoundaryMode::kConstrained) or stay (kFixed); border edges are split and collapsed along
 /// the curve, new vertices put back onto it. No operation leaves a triangle of (near) zero area
 /// or one turned against its former orientation: each is checked before it is applied.
+///
+/// Next to pinch points (found with the singular set) the two sheets close like a book and
+/// marching cubes bridges them: there, within 9 L of each pinch point, the spring–mass
+/// improver (improve_mesh) relaxes the mesh first, its curvature springs pulling vertices into
+/// the fold, and the remesher then holds the vertices within 6 L as it left them, projecting
+/// them onto F = 0 at the end (docs/meshing.md, "Crossings").
 #include <stop_token>
 #include <vector>
 
@@ -53,6 +59,10 @@ struct RemeshStats {
   /// Isolated singular points found that no vertex could take without turning a triangle
   /// over (0 on every surface tested).
   long long missed_singular_points = 0;
+  /// Vertices next to pinch points placed by the spring–mass improver and then held (see the
+  /// header comment), and its steps there.
+  long long pinch_held_vertices = 0;
+  int pinch_improver_steps = 0;
   double max_residual = 0;        ///< max |F|/|∇F| over the vertices that move (not the locked)
   long long undefined_vertices = 0;
   double seconds = 0;
