@@ -391,15 +391,14 @@ long long Remesher::valence_flips() {
 }
 
 long long Remesher::delaunay_flips() {
-  return flip_pass([](std::uint32_t, std::uint32_t, std::uint32_t) { return true; },
+  const auto& p = mesh.positions;
+  // The two angles facing the edge add up to more than π (with a margin against cycling), so
+  // one of them is obtuse: each edge is tested from the triangle whose angle facing it is (the
+  // other triangle's turn comes too), before the other triangle is looked up.
+  return flip_pass([&](std::uint32_t a, std::uint32_t b,
+                       std::uint32_t c) { return (p[a] - p[c]).dot(p[b] - p[c]) < 0; },
                    [&](std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d) {
-    const auto& p = mesh.positions;
-    // The two angles facing the edge add up to more than π (with a margin against cycling).
-    // Not unless one of them is obtuse: that test first, without atan2.
-    if ((p[a] - p[c]).dot(p[b] - p[c]) > 0 && (p[a] - p[d]).dot(p[b] - p[d]) > 0)
-      return false;
-    return corner_angle(p[c], p[a], p[b]) + corner_angle(p[d], p[a], p[b]) >
-           M_PI + 1e-3;
+    return corner_angle(p[c], p[a], p[b]) + corner_angle(p[d], p[a], p[b]) > M_PI + 1e-3;
   });
 }
 
