@@ -139,13 +139,14 @@ void Remesher::hold_pending_points() {
 
 std::vector<std::array<std::uint32_t, 2>> Remesher::edges_where(bool longer) const {
   std::vector<std::array<std::uint32_t, 2>> out;
+  const double hi2 = hi * hi, lo2 = lo * lo;  // squared lengths: no square roots
   for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
     if (!alive_tri[t]) continue;
     const Tri& tr = mesh.triangles[t];
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t a = tr[k], b = tr[(k + 1) % 3];
-      const double len = (mesh.positions[a] - mesh.positions[b]).norm();
-      if (longer ? len > hi : len < lo) out.push_back({std::min(a, b), std::max(a, b)});
+      const double len2 = (mesh.positions[a] - mesh.positions[b]).squaredNorm();
+      if (longer ? len2 > hi2 : len2 < lo2) out.push_back({std::min(a, b), std::max(a, b)});
     }
   }
   std::sort(out.begin(), out.end());
@@ -254,9 +255,10 @@ bool Remesher::try_collapse(std::uint32_t v, std::uint32_t w, std::vector<std::u
   // neighbours are sorted), then the link condition (the common neighbours are exactly the
   // opposite corners).
   const Vec3& pw = mesh.positions[w];
+  const double hi2 = hi_collapse * hi_collapse;
   for (std::uint32_t t : vt[v])
     for (std::uint32_t x : mesh.triangles[t])
-      if (x != v && x != w && (mesh.positions[x] - pw).norm() > hi_collapse) return false;
+      if (x != v && x != w && (mesh.positions[x] - pw).squaredNorm() > hi2) return false;
   neighbours(v, nv);
   neighbours(w, nw);
   std::vector<std::uint32_t> common;

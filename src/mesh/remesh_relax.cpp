@@ -298,7 +298,8 @@ double Remesher::apply_guarded(std::vector<Vec3>& next) {
       if (!moved[tr[0]] && !moved[tr[1]] && !moved[tr[2]]) continue;
       const Vec3& before = rnormal[judged[j]];
       const Vec3 after = area_normal(next[tr[0]], next[tr[1]], next[tr[2]]);
-      if (!(after.norm() > min_area && after.dot(before) > 0.5 * after.norm() * before.norm()) ||
+      const double area = after.norm();
+      if (!(area > min_area && after.dot(before) > 0.5 * area * rarea[judged[j]]) ||
           (!agrees_with_gradient(after, tr) && agrees_with_gradient(before, tr)))
         bad[j] = 1, ++count;
     }
@@ -317,13 +318,13 @@ double Remesher::apply_guarded(std::vector<Vec3>& next) {
         if (!queued[ring_tri[k]]) queued[ring_tri[k]] = 1, judged.push_back(ring_tri[k]);
     for (std::uint32_t t : judged) queued[t] = 0;
   }
-  double worst = 0;
+  double worst = 0;  // squared
   for (size_t v = 0; v < nv; ++v) {
     if (!moved[v]) continue;
-    worst = std::max(worst, L > 0 ? (next[v] - mesh.positions[v]).norm() / L : 0.0);
+    worst = std::max(worst, (next[v] - mesh.positions[v]).squaredNorm());
     mesh.positions[v] = next[v];
   }
-  return worst;
+  return L > 0 ? std::sqrt(worst) / L : 0.0;
 }
 
 // Newton projection of every moving vertex onto F = 0 (the clip curve for kClip), guarded.
