@@ -139,13 +139,14 @@ void Remesher::hold_pending_points() {
 
 std::vector<std::array<std::uint32_t, 2>> Remesher::edges_where(bool longer) const {
   std::vector<std::array<std::uint32_t, 2>> out;
+  const double hi2 = hi * hi, lo2 = lo * lo;  // squared lengths: no square roots
   for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
     if (!alive_tri[t]) continue;
     const Tri& tr = mesh.triangles[t];
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t a = tr[k], b = tr[(k + 1) % 3];
-      const double len = (mesh.positions[a] - mesh.positions[b]).norm();
-      if (longer ? len > hi : len < lo) out.push_back({std::min(a, b), std::max(a, b)});
+      const double len2 = (mesh.positions[a] - mesh.positions[b]).squaredNorm();
+      if (longer ? len2 > hi2 : len2 < lo2) out.push_back({std::min(a, b), std::max(a, b)});
     }
   }
   std::sort(out.begin(), out.end());
@@ -255,9 +256,10 @@ bool Remesher::try_collapse(std::uint32_t v, std::uint32_t w, std::vector<std::u
   // neighbours are sorted), then the link condition (the common neighbours are exactly the
   // opposite corners).
   const Vec3& pw = mesh.positions[w];
+  const double hi2 = hi_collapse * hi_collapse;
   for (std::uint32_t t : vt[v])
     for (std::uint32_t x : mesh.triangles[t])
-      if (x != v && x != w && (mesh.positions[x] - pw).norm() > hi_collapse) return false;
+      if (x != v && x != w && (mesh.positions[x] - pw).squaredNorm() > hi2) return false;
   neighbours(v, nv);
   neighbours(w, nw);
   std::vector<std::uint32_t> common;
@@ -392,15 +394,14 @@ long long Remesher::valence_flips() {
 }
 
 long long Remesher::delaunay_flips() {
-  return flip_pass([](std::uint32_t, std::uint32_t, std::uint32_t) { return true; },
+  const auto& p = mesh.positions;
+  // The two angles facing the edge add up to more than π (with a margin against cycling), so
+  // one of them is obtuse: each edge is tested from the triangle whose angle facing it is (the
+  // other triangle's turn comes too), before the other triangle is looked up.
+  return flip_pass([&](std::uint32_t a, std::uint32_t b,
+                       std::uint32_t c) { return (p[a] - p[c]).dot(p[b] - p[c]) < 0; },
                    [&](std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d) {
-    const auto& p = mesh.positions;
-    // The two angles facing the edge add up to more than π (with a margin against cycling).
-    // Not unless one of them is obtuse: that test first, without atan2.
-    if ((p[a] - p[c]).dot(p[b] - p[c]) > 0 && (p[a] - p[d]).dot(p[b] - p[d]) > 0)
-      return false;
-    return corner_angle(p[c], p[a], p[b]) + corner_angle(p[d], p[a], p[b]) >
-           M_PI + 1e-3;
+    return corner_angle(p[c], p[a], p[b]) + corner_angle(p[d], p[a], p[b]) > M_PI + 1e-3;
   });
 }
 

@@ -27,7 +27,9 @@ bool Remesher::project(bool on_clip, Vec3& p, double reach) {
       const Vec3 step = surface_newton_step(f, g);
       p += step;
       if (!((p - from).norm() <= reach)) return false;
-      if (step.norm() <= 1e-3 * tolerance) break;
+      // Within the tolerance before the step: the step took it to the rounding floor (more
+      // steps only wander there).
+      if (step.norm() <= tolerance) break;
     }
   }
   Vec3 g;
@@ -296,7 +298,8 @@ double Remesher::apply_guarded(std::vector<Vec3>& next) {
       if (!moved[tr[0]] && !moved[tr[1]] && !moved[tr[2]]) continue;
       const Vec3& before = rnormal[judged[j]];
       const Vec3 after = area_normal(next[tr[0]], next[tr[1]], next[tr[2]]);
-      if (!(after.norm() > min_area && after.dot(before) > 0.5 * after.norm() * before.norm()) ||
+      const double area = after.norm();
+      if (!(area > min_area && after.dot(before) > 0.5 * area * rarea[judged[j]]) ||
           (!agrees_with_gradient(after, tr) && agrees_with_gradient(before, tr)))
         bad[j] = 1, ++count;
     }
@@ -315,25 +318,54 @@ double Remesher::apply_guarded(std::vector<Vec3>& next) {
         if (!queued[ring_tri[k]]) queued[ring_tri[k]] = 1, judged.push_back(ring_tri[k]);
     for (std::uint32_t t : judged) queued[t] = 0;
   }
-  double worst = 0;
+  double worst = 0;  // squared
   for (size_t v = 0; v < nv; ++v) {
     if (!moved[v]) continue;
-    worst = std::max(worst, L > 0 ? (next[v] - mesh.positions[v]).norm() / L : 0.0);
+    worst = std::max(worst, (next[v] - mesh.positions[v]).squaredNorm());
     mesh.positions[v] = next[v];
   }
-  return worst;
+  return L > 0 ? std::sqrt(worst) / L : 0.0;
 }
 
 // Newton projection of every moving vertex onto F = 0 (the clip curve for kClip), guarded.
 void Remesher::final_projection() {
+  std::vector<std::uint32_t> todo, polish;
+  std::vector<Vec3> pts, moved;
+  std::vector<double> f;
+  std::vector<Vec3> g;
   for (int round = 0; round < 3; ++round) {
-    const long long n = static_cast<long long>(mesh.positions.size());
+    // F and ∇F at every moving vertex in one batch. Free vertices already on F = 0
+    // (relaxation's Newton steps left most there) take one more Newton step in the first
+    // round, also batched, kept where it stays on F = 0; Newton one vertex at a time only at
+    // the others.
+    todo.clear(), pts.clear(), polish.clear(), moved.clear();
+    for (std::uint32_t v = 0; v < mesh.positions.size(); ++v)
+      if (alive_vertex[v] && kind[v] != kLocked && !vt[v].empty())
+        todo.push_back(v), pts.push_back(mesh.positions[v]);
+    values_gradients(pool, workers, pts, f, g);
+    size_t kept = 0;
+    for (size_t k = 0; k < todo.size(); ++k) {
+      const double gn = g[k].norm();
+      if (kind[todo[k]] == kClip || !has_residual(f[k], gn) ||
+          residual(f[k], gn) > 1e-14 * (1 + pts[k].norm()))
+        todo[kept++] = todo[k];
+      else if (round == 0)
+        polish.push_back(todo[k]), moved.push_back(pts[k] + surface_newton_step(f[k], g[k]));
+    }
+    todo.resize(kept);
+    if (todo.empty() && polish.empty()) break;
     std::vector<Vec3> next = mesh.positions;
+    values_gradients(pool, workers, moved, f, g);
+    for (size_t k = 0; k < polish.size(); ++k) {
+      const double gn = g[k].norm();
+      if (has_residual(f[k], gn) && residual(f[k], gn) <= 1e-14 * (1 + moved[k].norm()))
+        next[polish[k]] = moved[k];
+    }
+    const long long n = static_cast<long long>(todo.size());
     ExceptionTrap trap;
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 256)
-    for (long long vv = 0; vv < n; ++vv) trap.run([&] {
-      const auto v = static_cast<std::uint32_t>(vv);
-      if (!alive_vertex[v] || kind[v] == kLocked || vt[v].empty()) return;
+    for (long long k = 0; k < n; ++k) trap.run([&] {
+      const std::uint32_t v = todo[k];
       Vec3 q = mesh.positions[v];
       if (project(kind[v] == kClip, q, 0.25 * L)) next[v] = q;
     });
