@@ -279,5 +279,16 @@ TEST(Crossings, RemesherKeepsEveryCrossing) {
   }
 }
 
+// Plücker's conoid z (x² + y²) = 2xy: the sheets z = sin 2θ are ruled by horizontal lines
+// through the z axis, which they cross along |z| < 1, pinch points at z = ±1, whiskers beyond.
+// The rim of the tube's cut is one closed chain that runs up and down the double line twice,
+// once along each half-sheet. At 128 cells the remesher strays from a sheet 5.3 cells from a
+// pinch point, a limit it has on Roman's surface too (docs/meshing.md, "Crossings": limits).
+TEST(Crossings, PluckerConoid) {
+  const Surface s = test::equation("z*(x^2+y^2) - 2*x*y", Clip::sphere(1.5));
+  for (const int cells : {64, 96})
+    for (const bool paper : {false, true}) check_crossing_mesh(s, cells, {.paper = paper});
+}
+
 }  // namespace
 }  // namespace zeroset
