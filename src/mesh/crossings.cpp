@@ -209,6 +209,25 @@ std::uint32_t vertex_at_arc(const Network::Curve& c, double arc) {
   return c.verts[k];
 }
 
+// Where arc lengths u along a run first turn back: one past the extreme after which they
+// return by more than `depth`, having gone that way by more than `depth` from u[0]; u.size()
+// if they never do. The rim of a cut zigzags by less than `depth`; a run turns around a fold
+// of the sheets near a pinch point, and turns at each end of the curve where one closed rim
+// runs along it several times (Plücker's conoid: the rim around its double line goes up and
+// down twice, once along each of the four half-sheets).
+size_t first_turn(const std::vector<double>& u, double depth) {
+  size_t hi = 0, lo = 0;
+  int dir = 0;
+  for (size_t j = 1; j < u.size(); ++j) {
+    if (u[j] > u[hi]) hi = j;
+    if (u[j] < u[lo]) lo = j;
+    if (dir == 0) dir = u[hi] - u[0] > depth ? 1 : u[0] - u[lo] > depth ? -1 : 0;
+    if (dir > 0 && u[hi] - u[j] > depth) return hi + 1;
+    if (dir < 0 && u[j] - u[lo] > depth) return lo + 1;
+  }
+  return u.size();
+}
+
 // The vertices of the graph each rim vertex of one chain is joined to. Along a run of rim
 // vertices anchored on the same curve the arc length is made monotone in the run's direction,
 // so the strip covers each curve edge once (the rim of a cut zigzags a little).
@@ -236,16 +255,9 @@ std::vector<std::uint32_t> chain_targets(const Network& net, const std::vector<A
       u[j - k] = u[j - k - 1] + d;
     }
     // A run that goes out and comes back (around a fold of the sheets) is two runs, split
-    // where it turns.
-    const auto [lo, hi] = std::minmax_element(u.begin(), u.end());
-    size_t stop = end;
-    for (auto turn : {hi, lo}) {
-      const double depth = std::min(std::abs(*turn - u.front()), std::abs(*turn - u.back()));
-      if (depth > fold_depth && static_cast<size_t>(turn - u.begin()) + 1 < u.size()) {
-        stop = k + static_cast<size_t>(turn - u.begin()) + 1;
-        break;
-      }
-    }
+    // where it turns; the rest is read the same way, so a run turning several times is split
+    // at every turn.
+    const size_t stop = k + first_turn(u, fold_depth);
     const size_t count = stop - k;
     const double free_reach = kFreeEndReach * fold_depth;
     const double dir = u[count - 1] >= u[0] ? 1.0 : -1.0;

@@ -282,5 +282,18 @@ TEST(Crossings, RemesherKeepsEveryCrossing) {
   }
 }
 
+// Plücker's conoid z (x² + y²) = 2xy: the sheets z = sin 2θ are ruled by horizontal lines
+// through the z axis, which they cross along |z| < 1, pinch points at z = ±1, whiskers beyond.
+// The rim of the tube's cut is one closed chain that runs up and down the double line twice,
+// once along each half-sheet. At 128 cells the sheets are a quarter of an edge apart 5.3
+// cells from a pinch point, where the remesher leaves the mesh to the paper's improver
+// (docs/meshing.md, "Crossings": limits).
+TEST(Crossings, PluckerConoid) {
+  const Surface s = test::equation("z*(x^2+y^2) - 2*x*y", Clip::sphere(1.5));
+  for (const int cells : {64, 96})
+    for (const bool paper : {false, true}) check_crossing_mesh(s, cells, {.paper = paper});
+  check_crossing_mesh(s, 128, {.paper = false});
+}
+
 }  // namespace
 }  // namespace zeroset
