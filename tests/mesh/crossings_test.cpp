@@ -295,5 +295,21 @@ TEST(Crossings, PluckerConoid) {
   check_crossing_mesh(s, 128, {.paper = false});
 }
 
+// The cross-cap 4x²(x² + y² + z² + z) + y²(y² + z² − 1) = 0: a double segment from a pinch point
+// at the origin to one at z = 1, the isolated z axis below; and a torus crossing its equatorial
+// plane along two circles (curved curves: a chord's sagitta from the mesh between vertices).
+// The clip leaves the plane a ring 5 cells wide outside the torus: at 2 cells (a clip radius of
+// 1.5) the ring is lost (docs/meshing.md, "Crossings": limits).
+TEST(Crossings, CrossCapAndTorusThroughAPlaneWithTheRemesher) {
+  const Surface cap = test::equation("4*x^2*(x^2+y^2+z^2+z) + y^2*(y^2+z^2-1)", Clip::sphere(1.5));
+  const Surface torus =
+      test::equation("((x^2+y^2+z^2+0.84)^2 - 4*(x^2+y^2)) * z", Clip::sphere(1.7));
+  for (const int cells : {64, 96}) {
+    check_crossing_mesh(cap, cells, {.paper = false});
+    check_crossing_mesh(torus, cells,
+                        {.min_crossing_curves = 2, .curve_tolerance_edges = 0.02, .paper = false});
+  }
+}
+
 }  // namespace
 }  // namespace zeroset
