@@ -10,6 +10,7 @@
 #include <string>
 
 #include "support/run_command.h"
+#include "support/xvfb.h"
 #include "zeroset/surface/clip.h"
 
 namespace zeroset {
@@ -17,7 +18,7 @@ namespace {
 
 using test::run_command;
 
-bool has_xvfb() { return std::system("command -v xvfb-run > /dev/null 2>&1") == 0; }
+using test::has_xvfb;
 
 std::string temp_path(const std::string& name) {
   const auto d = std::filesystem::temp_directory_path() / "zeroset_viewer_faults_test";
@@ -49,8 +50,7 @@ struct Timed {
 Timed view(const std::string& args) {
   const auto t0 = std::chrono::steady_clock::now();
   Timed t;
-  t.result = run_command("LIBGL_ALWAYS_SOFTWARE=1 xvfb-run -a -s '-screen 0 1024x768x24' " +
-                         std::string(ZEROSET_BINARY) + " view " + args);
+  t.result = test::run_viewer(ZEROSET_BINARY, args, "1024x768");
   t.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return t;
 }

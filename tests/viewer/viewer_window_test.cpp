@@ -15,6 +15,7 @@
 #include "settings_values.h"
 #include "support/file_bytes.h"
 #include "support/run_command.h"
+#include "support/xvfb.h"
 #include "zeroset/floaters/settings.h"
 #include "zeroset/io/image.h"
 #include "zeroset/mesh/settings.h"
@@ -32,7 +33,7 @@ using test::run_command;
 // The viewer's default background (linear RGB), see viewer_state.cpp.
 const Color kBackground(0.74, 0.76, 0.80);
 
-bool has_xvfb() { return std::system("command -v xvfb-run > /dev/null 2>&1") == 0; }
+using test::has_xvfb;
 
 std::string temp_dir() {
   const auto d = std::filesystem::temp_directory_path() / "zeroset_viewer_window_test";
@@ -48,9 +49,7 @@ std::string write_script(const std::string& name, const std::string& text) {
 
 // `zeroset view ARGS` in a virtual 24-bit screen with software OpenGL.
 test::CommandResult view(const std::string& args) {
-  return run_command(
-      "LIBGL_ALWAYS_SOFTWARE=1 xvfb-run -a -s '-screen 0 1280x1024x24' " +
-      std::string(ZEROSET_BINARY) + " view " + args);
+  return test::run_viewer(ZEROSET_BINARY, args, "1280x1024");
 }
 
 // What fraction of the pixels in columns [x0, x1) show the surface, its front (orange) and
