@@ -37,6 +37,10 @@ constexpr int kFlipOnlyRounds = 20;
 // Batched Newton steps onto F = 0 per relaxation step (then one at a time where needed).
 constexpr int kBatchNewtonSteps = 3;
 
+// From this many vertices on the remesher numbers the mesh again after its first topology
+// passes, for locality (Remesher::renumber); a smaller mesh fits in the cache.
+constexpr size_t kRenumberVertices = 16384;
+
 // Next to pinch points the spring–mass improver relaxes the mesh within this many L of each,
 // the rim held, and the remesher then holds every vertex within kPinchHoldRadius L
 // (remesh_pinch.cpp).
@@ -172,6 +176,9 @@ struct Remesher {
   void build_border_chains();
   // rnormal, rarea and rmoment at the current positions.
   void triangle_normals();
+  // Drops the dead vertices and triangles and numbers the rest along a space-filling curve,
+  // so that neighbours lie near each other in memory (the splits append theirs at the end).
+  void renumber();
   long long split_pass();
   // Collapses v into w (w stays where it is). Returns false, changing nothing, when refused.
   bool try_collapse(std::uint32_t v, std::uint32_t w, std::vector<std::uint32_t>& nv,
