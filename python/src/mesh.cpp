@@ -284,7 +284,8 @@ void bind_mesh(py::module_& m) {
       "_carry",
       [](const PyMesh& p, const PySurface& to, int improve_steps, int threads) {
         const Surface target = to.surface();
-        const CarryOptions options{.improve_steps = improve_steps, .threads = threads};
+        CarryOptions options;
+        options.improve_steps = improve_steps, options.threads = threads;
         CarryResult r;
         run_interruptible(
             [&](std::stop_token stop) { r = carry_mesh(p.mesh, p.surface, target, options, stop); });

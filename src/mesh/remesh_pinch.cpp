@@ -9,11 +9,9 @@
 #include <cstdint>
 #include <stdexcept>
 #include <unordered_map>
-#include <unordered_set>
 #include <vector>
 
 #include "remesh_detail.h"
-#include "zeroset/error.h"
 #include "zeroset/mesh/improve.h"
 
 namespace zeroset::detail {
@@ -68,7 +66,7 @@ PinchStep improve_near_pinch_points(Mesh& mesh, const Surface& surface,
   }
   // The singular curves' runs inside, so that the springs treat them as curves.
   for (const MeshCurve& c : mesh.curves) {
-    MeshCurve run{.kind = c.kind};
+    MeshCurve run{.kind = c.kind, .vertices = {}, .closed = false};
     auto flush = [&] {
       if (run.vertices.size() >= 2) sub.curves.push_back(run);
       run.vertices.clear();
@@ -92,26 +90,30 @@ PinchStep improve_near_pinch_points(Mesh& mesh, const Surface& surface,
   // The improver moves vertices and flips edges; it neither adds nor removes any.
   if (sub.triangles.size() != tris.size() || sub.positions.size() != full_of.size())
     throw std::logic_error("improve_near_pinch_points: the improver changed the vertex count");
+  // A flip between two held rim vertices could make an edge that a triangle outside has too:
+  // then the mesh stays as it was (and the remesher relaxes it like the rest). Edges of three
+  // or more triangles that were there before (a crossing the singular-set search missed) do
+  // not count.
+  auto edge_uses = [&] {
+    std::unordered_map<std::uint64_t, int> uses;
+    for (const Tri& tr : mesh.triangles)
+      if (sub_of[tr[0]] != kNone || sub_of[tr[1]] != kNone || sub_of[tr[2]] != kNone)
+        for (int k = 0; k < 3; ++k) ++uses[edge_key(tr[k], tr[(k + 1) % 3])];
+    return uses;
+  };
+  const std::unordered_map<std::uint64_t, int> uses_before = edge_uses();
   std::vector<Tri> before(tris.size());
   for (size_t k = 0; k < tris.size(); ++k) {
     before[k] = mesh.triangles[tris[k]];
     for (int j = 0; j < 3; ++j) mesh.triangles[tris[k]][j] = full_of[sub.triangles[k][j]];
   }
-  // A flip between two held rim vertices could make an edge that a triangle outside has too:
-  // then the mesh stays as it was (and the remesher relaxes it like the rest).
-  std::unordered_map<std::uint64_t, int> uses;
-  for (const Tri& tr : mesh.triangles)
-    if (sub_of[tr[0]] != kNone || sub_of[tr[1]] != kNone || sub_of[tr[2]] != kNone)
-      for (int k = 0; k < 3; ++k) ++uses[edge_key(tr[k], tr[(k + 1) % 3])];
-  std::unordered_set<std::uint64_t> curve;
-  for (const MeshCurve& c : mesh.curves)
-    for (size_t k = 1; k < c.vertices.size(); ++k)
-      curve.insert(edge_key(c.vertices[k - 1], c.vertices[k]));
-  for (const auto& [e, n] : uses)
-    if (n > 2 && !curve.count(e)) {
-      for (size_t k = 0; k < tris.size(); ++k) mesh.triangles[tris[k]] = before[k];
-      return out;
-    }
+  for (const auto& [e, n] : edge_uses()) {
+    if (n <= 2) continue;
+    const auto was = uses_before.find(e);
+    if (was != uses_before.end() && was->second >= n) continue;
+    for (size_t k = 0; k < tris.size(); ++k) mesh.triangles[tris[k]] = before[k];
+    return out;
+  }
   out.improved = true;
   for (size_t k = 0; k < full_of.size(); ++k) mesh.positions[full_of[k]] = sub.positions[k];
   for (size_t v = 0; v < nv; ++v)

@@ -136,11 +136,15 @@ void check_crossing_mesh(const Surface& s, int cells, const Expect& expect = {})
   if (expect.paper) {
     const ImproveStats st = improve_mesh(m, s);
     EXPECT_TRUE(st.converged) << "not at rest after " << st.steps << " steps";
-    if (expect.max_steps > 0) EXPECT_LE(st.steps, expect.max_steps);
+    if (expect.max_steps > 0) {
+      EXPECT_LE(st.steps, expect.max_steps);
+    }
   } else {
     const RemeshStats st = remesh(m, s);
     EXPECT_TRUE(st.converged) << "not at rest after " << st.iterations << " iterations";
-    if (expect.max_steps > 0) EXPECT_LE(st.iterations, expect.max_steps);
+    if (expect.max_steps > 0) {
+      EXPECT_LE(st.iterations, expect.max_steps);
+    }
   }
   const double e = mean_edge(m);
   const double radius = s.scene_radius();

@@ -60,7 +60,8 @@ struct RemeshStats {
   /// over (0 on every surface tested).
   long long missed_singular_points = 0;
   /// Vertices next to pinch points placed by the spring–mass improver and then held (see the
-  /// header comment), and its steps there.
+  /// header comment), and its steps there. The steps are counted also when its result was put
+  /// back (a flip there would have made an edge of three triangles): then no vertex is held.
   long long pinch_held_vertices = 0;
   int pinch_improver_steps = 0;
   double max_residual = 0;        ///< max |F|/|∇F| over the vertices that move (not the locked)
