@@ -571,7 +571,8 @@ RemeshStats remesh(Mesh& mesh, const Surface& surface, const RemeshOptions& opti
   // flip applies. Where relaxation and flips keep trading places (a grid of squares, whose
   // diagonals are all cocircular; the bent quads next to a pinch point) the last rounds flip
   // without relaxing, which ends: a flip never undoes itself while no vertex moves. Then
-  // relaxation until every move is below rest_move.
+  // relaxation until every move is below rest_move, a vertex that still moves that much
+  // repeating its step (Remesher::relax).
   bool flips_at_rest = options.polish_rounds == 0;
   const int rounds = flips_at_rest ? 0 : options.polish_rounds + kFlipOnlyRounds;
   for (int k = 0; k < rounds && !stop.stop_requested(); ++k) {
@@ -585,6 +586,7 @@ RemeshStats remesh(Mesh& mesh, const Surface& surface, const RemeshOptions& opti
       for (int j = 0; j < options.relax_steps; ++j) r.relax();
   }
   bool moves_at_rest = false;
+  r.step_repeats = detail::kSettleRepeats;
   for (int k = 0; k < kMaxSettleSteps && !stop.stop_requested(); ++k) {
     st.last_max_move = r.relax();
     if (st.last_max_move < options.rest_move) {
@@ -592,6 +594,7 @@ RemeshStats remesh(Mesh& mesh, const Surface& surface, const RemeshOptions& opti
       break;
     }
   }
+  r.step_repeats = 0;
   st.missed_singular_points = static_cast<long long>(r.pending.size());
   st.converged = topology_at_rest && flips_at_rest && moves_at_rest &&
                  (!pinch.improved || pinch.converged);

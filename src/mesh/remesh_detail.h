@@ -36,6 +36,10 @@ constexpr int kMaxSettleSteps = 200;
 constexpr int kFlipOnlyRounds = 20;
 // Batched Newton steps onto F = 0 per relaxation step (then one at a time where needed).
 constexpr int kBatchNewtonSteps = 3;
+// While settling, a vertex that moves by rest_move L or more repeats its step (tangent-plane
+// move towards the same centroid, then back onto F = 0) up to this many more times (see
+// Remesher::relax).
+constexpr int kSettleRepeats = 3;
 
 // From this many vertices on the remesher numbers the mesh again after its first topology
 // passes, for locality (Remesher::renumber); a smaller mesh fits in the cache.
@@ -209,6 +213,9 @@ struct Remesher {
   // onto F = 0 (the curve). Moves that would turn a triangle over or flatten it are undone.
   // Returns the largest move over L.
   double relax();
+  // Extra repeats of a vertex's step where it moves by rest_move L or more (0, or
+  // kSettleRepeats while settling).
+  int step_repeats = 0;
   // ∇F at the current position of every listed vertex, from the cache where it is there.
   void update_gradients(const std::vector<std::uint32_t>& vs);
   // Moves every vertex to `next` except where a triangle would turn over or flatten: there
