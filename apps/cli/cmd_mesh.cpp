@@ -285,6 +285,7 @@ void run_mesh(const MeshArgs& a) {
   if (max_steps > 0 && !mesh.empty() && remeshing) {
     RemeshOptions ro = remesh_options(settings);
     ro.threads = global_flags().threads;
+    if (singular) ro.singular_set = &*singular;  // found once, for the crossings or --stats
     rs = remesh(mesh, surface, ro);
     is.steps = rs.iterations, is.converged = rs.converged, is.seconds = rs.seconds;
     is.undefined_vertices = rs.undefined_vertices;

@@ -132,6 +132,7 @@ py::tuple make_mesh(const PySurface& s, const MeshArgs& a) {
   Mesh mesh;
   PolygonizeStats ps;
   std::optional<CrossingStats> cs;
+  std::optional<SingularSet> singular;  // the crossings', for the remesher too
   ImproveStats is;
   RemeshStats rs;
   std::optional<MeshQuality> before, after;
@@ -143,7 +144,7 @@ py::tuple make_mesh(const PySurface& s, const MeshArgs& a) {
     const auto t0 = std::chrono::steady_clock::now();
     mesh = polygonize(surface, po, &ps, stop);
     if (settings.crossings && !mesh.empty() && !stop.stop_requested())
-      cs = mesh_crossings(mesh, surface, ps.cell_size, {}, nullptr, stop);
+      cs = mesh_crossings(mesh, surface, ps.cell_size, {}, &singular.emplace(), stop);
     if (a.quality) {
       before = measure_quality(mesh, surface, qo);
       topology_before = mesh_topology(mesh);
@@ -152,6 +153,7 @@ py::tuple make_mesh(const PySurface& s, const MeshArgs& a) {
         settings.improver == Improver::kRemesh) {
       RemeshOptions ro = remesh_options(settings);
       ro.threads = a.threads;
+      if (singular) ro.singular_set = &*singular;
       rs = remesh(mesh, surface, ro, stop);
       if (stop.stop_requested()) return;
     } else if (max_steps > 0 && !mesh.empty() && !stop.stop_requested()) {

@@ -518,8 +518,11 @@ RemeshStats remesh(Mesh& mesh, const Surface& surface, const RemeshOptions& opti
     r.stats.converged = true;
     return r.stats;
   }
-  SingularSet set;
-  if (options.find_singular_points && surface.clip.is_bounded()) set = find_singular_set(surface);
+  SingularSet found;
+  if (options.find_singular_points && surface.clip.is_bounded() && !options.singular_set)
+    found = find_singular_set(surface);
+  const SingularSet& set =
+      options.find_singular_points && options.singular_set ? *options.singular_set : found;
   std::vector<Vec3> pinches;
   for (const SingularPoint& sp : set.points)
     if (sp.kind == SingularPointKind::kPinch) pinches.push_back(sp.position);

@@ -25,6 +25,7 @@
 
 #include "zeroset/mesh/improve.h"
 #include "zeroset/mesh/mesh.h"
+#include "zeroset/surface/singular_set.h"
 #include "zeroset/surface/surface.h"
 
 namespace zeroset {
@@ -42,6 +43,10 @@ struct RemeshOptions {
   /// × L.
   double rest_move = 5e-3;
   int threads = 0;  ///< 0: one per 100 000 vertices, at most all cores (as the improver)
+  /// The surface's singular set when the caller has found it already (mesh_crossings() does),
+  /// so that it is not found twice; null: remesh() finds it (with find_singular_points and a
+  /// bounded clip). Must outlive the call.
+  const SingularSet* singular_set = nullptr;
 };
 
 struct RemeshStats {
