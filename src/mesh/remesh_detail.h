@@ -36,6 +36,13 @@ constexpr int kMaxSettleSteps = 200;
 constexpr int kFlipOnlyRounds = 20;
 // Batched Newton steps onto F = 0 per relaxation step (then one at a time where needed).
 constexpr int kBatchNewtonSteps = 3;
+// Relaxation's Newton steps work through the vertices in chunks of this many.
+constexpr long long kNewtonChunk = 2048;
+// A relaxation step's first Newton step shorter than this (in L) ends its Newton's method
+// without F and ∇F evaluated where it lands (Remesher::relax): most moves are so short that
+// this saves one of the two evaluations per vertex and step. final_projection() then puts
+// every vertex onto F = 0 to the rounding floor.
+constexpr double kShortNewtonStep = 1e-3;
 // While settling, a vertex that moves by rest_move L or more repeats its step (tangent-plane
 // move towards the same centroid, then back onto F = 0) up to this many more times (see
 // Remesher::relax).

@@ -230,67 +230,94 @@ double Remesher::relax() {
     if (project(true, q, 0.5 * L) && surface.clip.contains(q, 1e-9 * L)) next[v] = q;
   });
   trap.rethrow();
-  // Newton's method onto F = 0 for the free vertices, all at once, each round only at the
-  // points not there yet.
+  // Newton's method onto F = 0 for the free vertices, in chunks of kNewtonChunk (each chunk's
+  // points evaluated together in structure-of-arrays batches, its data staying in the cache),
+  // each round only at the points not there yet; the chunks in parallel.
   std::vector<Vec3> at = start;
-  std::vector<std::uint32_t> todo;
-  for (std::uint32_t i = 0; i < free_vs.size(); ++i)
-    if (state[i] == 1) todo.push_back(i);
-  std::vector<Vec3> pts;
-  std::vector<double> f;
-  std::vector<Vec3> g;
-  for (int it = 0; it < kBatchNewtonSteps + 1 && !todo.empty(); ++it) {
-    pts.resize(todo.size());
-    for (size_t k = 0; k < todo.size(); ++k) pts[k] = at[todo[k]];
-    values_gradients(pool, workers, pts, f, g);
-    const bool last = it == kBatchNewtonSteps;
-    size_t kept = 0;
-    for (size_t k = 0; k < todo.size(); ++k) {
-      const std::uint32_t i = todo[k];
-      const double gn = g[k].norm();
-      if (!has_residual(f[k], gn)) {
-        state[i] = 0;
-        continue;
+  const long long chunks = (nf + kNewtonChunk - 1) / kNewtonChunk;
+#pragma omp parallel num_threads(workers)
+  {
+    std::vector<std::uint32_t> live;
+    std::vector<double> x, y, z, f, gx, gy, gz;
+#pragma omp for schedule(dynamic, 1)
+    for (long long c = 0; c < chunks; ++c) trap.run([&] {
+      const long long e = std::min(nf, (c + 1) * kNewtonChunk);
+      live.clear();
+      for (long long i = c * kNewtonChunk; i < e; ++i)
+        if (state[i] == 1) live.push_back(static_cast<std::uint32_t>(i));
+      for (int it = 0; it < kBatchNewtonSteps + 1 && !live.empty(); ++it) {
+        const size_t m = live.size();
+        x.resize(m), y.resize(m), z.resize(m), f.resize(m), gx.resize(m), gy.resize(m),
+            gz.resize(m);
+        for (size_t k = 0; k < m; ++k) {
+          const Vec3& q = at[live[k]];
+          x[k] = q.x(), y[k] = q.y(), z[k] = q.z();
+        }
+        pool.local().values_gradients(x, y, z, f, gx, gy, gz);
+        const bool last = it == kBatchNewtonSteps;
+        size_t kept = 0;
+        for (size_t k = 0; k < m; ++k) {
+          const std::uint32_t i = live[k];
+          const Vec3 g(gx[k], gy[k], gz[k]);
+          const double gn = g.norm();
+          if (!has_residual(f[k], gn)) {
+            state[i] = 0;
+            continue;
+          }
+          if (residual(f[k], gn) <= 1e-14 * (1 + at[i].norm())) {
+            state[i] = 2;
+            // ∇F there is what the next step's tangent plane needs if the vertex stays there.
+            const std::uint32_t v = free_vs[i];
+            grad_at[v] = at[i], grad[v] = g;
+            continue;
+          }
+          if (last) {
+            live[kept++] = i;
+            continue;
+          }
+          const Vec3 step = surface_newton_step(f[k], g);
+          at[i] += step;
+          if (it == 0 && step.norm() <= kShortNewtonStep * L) {
+            // Left about the curvature times the step squared off F = 0 (1e-6 L), with ∇F from
+            // where the step began as its tangent plane's: no second evaluation.
+            state[i] = 2;
+            const std::uint32_t v = free_vs[i];
+            grad_at[v] = at[i], grad[v] = g;
+            continue;
+          }
+          live[kept++] = i;
+        }
+        live.resize(kept);
       }
-      if (residual(f[k], gn) <= 1e-14 * (1 + pts[k].norm())) {
-        state[i] = 2;
-        // ∇F there is what the next step's tangent plane needs if the vertex stays there.
-        const std::uint32_t v = free_vs[i];
-        grad_at[v] = pts[k], grad[v] = g[k];
-        continue;
-      }
-      if (!last) at[i] += surface_newton_step(f[k], g[k]);
-      todo[kept++] = i;
-    }
-    todo.resize(kept);
+    });
   }
-  trap.run([&] {
-    for (std::uint32_t i = 0; i < free_vs.size(); ++i) {
-      if (state[i] == 0) continue;
-      // Not there yet after the batched steps (rare): one at a time from the start.
-      if (state[i] == 1) {
-        Vec3 q = start[i];
-        if (project(false, q, 0.5 * L)) at[i] = q, state[i] = 2;
-      }
-      auto inside = [&](const Vec3& q) {
-        return surface.clip.is_empty_spec() || surface.clip.contains(q, 1e-9 * L);
-      };
-      const bool ok = state[i] == 2 && (at[i] - start[i]).norm() <= 0.5 * L && inside(at[i]);
-      if (!ok) continue;
-      const Vec3& p = mesh.positions[free_vs[i]];
-      for (int k = 0; k < step_repeats && (at[i] - p).norm() >= opt.rest_move * L; ++k) {
-        Vec3 g;
-        pool.local().value_gradient(at[i], g);
-        if (!(g.norm() > 0) || !g.allFinite()) break;
-        const Vec3 u = g.normalized();
-        Vec3 d = centroid[i] - at[i];
-        d -= d.dot(u) * u;
-        Vec3 q = at[i] + d;
-        if (!project(false, q, 0.5 * L) || !inside(q)) break;
-        at[i] = q;
-      }
-      next[free_vs[i]] = at[i];
+  trap.rethrow();
+  auto inside = [&](const Vec3& q) {
+    return surface.clip.is_empty_spec() || surface.clip.contains(q, 1e-9 * L);
+  };
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 256)
+  for (long long i = 0; i < nf; ++i) trap.run([&] {
+    if (state[i] == 0) return;
+    // Not there yet after the batched steps (rare): one at a time from the start.
+    if (state[i] == 1) {
+      Vec3 q = start[i];
+      if (project(false, q, 0.5 * L)) at[i] = q, state[i] = 2;
     }
+    const bool ok = state[i] == 2 && (at[i] - start[i]).norm() <= 0.5 * L && inside(at[i]);
+    if (!ok) return;
+    const Vec3& p = mesh.positions[free_vs[i]];
+    for (int k = 0; k < step_repeats && (at[i] - p).norm() >= opt.rest_move * L; ++k) {
+      Vec3 g;
+      pool.local().value_gradient(at[i], g);
+      if (!(g.norm() > 0) || !g.allFinite()) break;
+      const Vec3 u = g.normalized();
+      Vec3 d = centroid[i] - at[i];
+      d -= d.dot(u) * u;
+      Vec3 q = at[i] + d;
+      if (!project(false, q, 0.5 * L) || !inside(q)) break;
+      at[i] = q;
+    }
+    next[free_vs[i]] = at[i];
   });
   trap.rethrow();
   return apply_guarded(next);
