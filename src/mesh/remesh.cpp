@@ -549,7 +549,7 @@ RemeshStats remesh(Mesh& mesh, const Surface& surface, const RemeshOptions& opti
   }
   RemeshStats& st = r.stats;
   // Splits and collapses can undo each other where relaxation stretches an edge across a
-  // threshold and back, so after a few iterations the band [lo, hi] widens a little at each
+  // threshold and back, so after two iterations the band [lo, hi] widens by a tenth at each
   // iteration: the mesh comes to rest with every edge within the band reached.
   bool topology_at_rest = false;
   for (int it = 0; it < options.max_iterations && !stop.stop_requested(); ++it) {
