@@ -101,9 +101,10 @@ void BM_MeshPipeline(benchmark::State& state) {
   for (auto _ : state) {
     zeroset::PolygonizeStats ps;
     zeroset::Mesh m = zeroset::polygonize(s, o, &ps);
-    cs = zeroset::mesh_crossings(m, s, ps.cell_size);
+    zeroset::SingularSet set;  // found by the crossings step, used again as `zeroset mesh` does
+    cs = zeroset::mesh_crossings(m, s, ps.cell_size, {}, &set);
     if (remeshing) {
-      const zeroset::RemeshStats st = zeroset::remesh(m, s);
+      const zeroset::RemeshStats st = zeroset::remesh(m, s, {.singular_set = &set});
       steps = st.iterations, converged = st.converged;
     } else {
       const zeroset::ImproveStats st = zeroset::improve_mesh(m, s);
