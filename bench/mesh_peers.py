@@ -277,6 +277,8 @@ def run_remesh_comparison(build, repeat):
                              f"{a['mean']:.1f}° | {a['node_gap']:.3f} | {residual(fn, v, nodes, a['edge']):.1e} |")
             else:
                 notes.append("CGAL was not found at build time: no CGAL row.")
+    notes.append("What limits the remesher, with figures (the relaxation steps until rest, which grow with "
+                 "the mesh), and what was tried: docs/meshing.md, section \"Remesher\".")
     lines += [""] + notes
     text = "\n".join(lines) + "\n"
     subprocess.run([sys.executable, str(HERE / "update_doc.py"), "remesh", "-"], input=text, text=True, check=True)
