@@ -111,9 +111,13 @@ struct Remesher {
   // The chains of clip vertices along the border (see border_targets), each with its two
   // ends (its first vertex again on a loop), in CSR form; rebuilt with the rings.
   std::vector<std::uint32_t> chain_start, chain_vertex;
-  // Area normal, twice the area, and that times the centroid of each packed triangle at the
-  // current positions (triangle_normals), shared by its corners' centroids and by
-  // apply_guarded's "before".
+  // The vertices relaxation moves, rebuilt with the rings: the free ones (not held next to a
+  // pinch point) and the clip ones, each with a live triangle.
+  std::vector<std::uint32_t> free_vs, clip_vs;
+  // Area normal, twice the area, and that times the sum of the corners (three times the
+  // centroid: the division by three is made once per vertex, not per triangle) of each packed
+  // triangle at the current positions (triangle_normals), shared by its corners' centroids
+  // and by apply_guarded's "before".
   std::vector<Vec3> rnormal, rmoment;
   std::vector<double> rarea;
   // ∇F where it was last evaluated (grad_at; NaN: never): a vertex that did not move since

@@ -137,6 +137,12 @@ void Remesher::build_rings() {
   std::vector<std::uint32_t> fill(ring_start.begin(), ring_start.end() - 1);
   for (std::uint32_t t = 0; t < rtri.size(); ++t)
     for (std::uint32_t v : rtri[t]) ring_tri[fill[v]++] = t;
+  free_vs.clear(), clip_vs.clear();
+  for (std::uint32_t v = 0; v < n; ++v) {
+    if (!alive_vertex[v] || ring_start[v] == ring_start[v + 1]) continue;
+    if (kind[v] == kFree && !pinch_held[v]) free_vs.push_back(v);
+    if (kind[v] == kClip) clip_vs.push_back(v);
+  }
   build_border_chains();
   rings_stale = false;
 }
@@ -153,7 +159,7 @@ void Remesher::triangle_normals() {
     const Tri& tr = rtri[t];
     rnormal[t] = area_normal(p[tr[0]], p[tr[1]], p[tr[2]]);
     rarea[t] = rnormal[t].norm();
-    rmoment[t] = rarea[t] * (p[tr[0]] + p[tr[1]] + p[tr[2]]) / 3;
+    rmoment[t] = rarea[t] * (p[tr[0]] + p[tr[1]] + p[tr[2]]);
   }
 }
 
@@ -182,12 +188,6 @@ double Remesher::relax() {
   ++stats.relax_steps;
   triangle_normals();
   const size_t nv = mesh.positions.size();
-  std::vector<std::uint32_t> free_vs, clip_vs;
-  for (std::uint32_t v = 0; v < nv; ++v) {
-    if (!alive_vertex[v] || ring_start[v] == ring_start[v + 1]) continue;
-    if (kind[v] == kFree && !pinch_held[v]) free_vs.push_back(v);
-    if (kind[v] == kClip) clip_vs.push_back(v);
-  }
   std::vector<Vec3> border_target;
   std::vector<std::uint8_t> has_target;
   if (!clip_vs.empty()) {
@@ -213,7 +213,7 @@ double Remesher::relax() {
       c += rmoment[ring_tri[k]], area += rarea[ring_tri[k]];
     const Vec3& gv = grad[v];
     if (!(area > 0) || !(gv.norm() > 0) || !gv.allFinite()) continue;
-    c /= area;
+    c *= 1 / (3 * area);  // rmoment holds three times the moments
     const Vec3 u = gv.normalized();
     Vec3 d = c - p;
     d -= d.dot(u) * u;
@@ -329,43 +329,47 @@ double Remesher::apply_guarded(std::vector<Vec3>& next) {
   const size_t nv = mesh.positions.size();
   std::vector<std::uint8_t> moved(nv);
   for (size_t v = 0; v < nv; ++v) moved[v] = next[v] != mesh.positions[v];
-  // Only the triangles with a moved corner are judged, and after a round only those with a
-  // corner it put back: the others' corners are where they were when judged good.
+  // Whether packed triangle t is bad after the moves. An unmoved one is not: its corners are
+  // where they were when it was judged good.
+  auto is_bad = [&](std::uint32_t t) {
+    const Tri& tr = rtri[t];
+    if (!moved[tr[0]] && !moved[tr[1]] && !moved[tr[2]]) return false;
+    const Vec3& before = rnormal[t];
+    const Vec3 after = area_normal(next[tr[0]], next[tr[1]], next[tr[2]]);
+    // |after| > min_area and after·before > |after| |before| / 2, squared: no square root.
+    const double area2 = after.squaredNorm(), dot = after.dot(before);
+    return !(area2 > min_area * min_area && dot > 0 &&
+             4 * dot * dot > area2 * rarea[t] * rarea[t]) ||
+           (!agrees_with_gradient(after, tr) && agrees_with_gradient(before, tr));
+  };
   std::vector<std::uint32_t> judged, reverted;
+  auto revert = [&](std::uint32_t t) {
+    for (std::uint32_t v : rtri[t])
+      if (moved[v])
+        next[v] = mesh.positions[v], moved[v] = 0, ++stats.reverted_moves, reverted.push_back(v);
+  };
+  // The first round judges every triangle, each later one only those with a corner the round
+  // before put back. Each round undoes at least one move (a bad triangle has a moved corner),
+  // so this ends, with no bad triangle left.
+  std::vector<std::uint8_t> bad(rtri.size()), queued;
+  const long long nt = static_cast<long long>(rtri.size());
+#pragma omp parallel for num_threads(workers) schedule(static)
+  for (long long t = 0; t < nt; ++t) bad[t] = is_bad(static_cast<std::uint32_t>(t));
   for (std::uint32_t t = 0; t < rtri.size(); ++t)
-    if (moved[rtri[t][0]] || moved[rtri[t][1]] || moved[rtri[t][2]]) judged.push_back(t);
-  std::vector<std::uint8_t> bad, queued;
-  // Each round undoes at least one move (a bad triangle has a moved corner: unmoved ones are
-  // not judged), so this ends, with no bad triangle left.
-  for (;;) {
-    const long long nj = static_cast<long long>(judged.size());
-    bad.assign(judged.size(), 0);
-    long long count = 0;
-#pragma omp parallel for num_threads(workers) schedule(static) reduction(+ : count)
-    for (long long j = 0; j < nj; ++j) {
-      const Tri& tr = rtri[judged[j]];
-      if (!moved[tr[0]] && !moved[tr[1]] && !moved[tr[2]]) continue;
-      const Vec3& before = rnormal[judged[j]];
-      const Vec3 after = area_normal(next[tr[0]], next[tr[1]], next[tr[2]]);
-      const double area = after.norm();
-      if (!(area > min_area && after.dot(before) > 0.5 * area * rarea[judged[j]]) ||
-          (!agrees_with_gradient(after, tr) && agrees_with_gradient(before, tr)))
-        bad[j] = 1, ++count;
-    }
-    if (count == 0) break;
-    reverted.clear();
-    for (long long j = 0; j < nj; ++j)
-      if (bad[j])
-        for (std::uint32_t v : rtri[judged[j]])
-          if (moved[v])
-            next[v] = mesh.positions[v], moved[v] = 0, ++stats.reverted_moves,
-            reverted.push_back(v);
+    if (bad[t]) revert(t);
+  while (!reverted.empty()) {
     if (queued.empty()) queued.assign(rtri.size(), 0);
     judged.clear();
     for (std::uint32_t v : reverted)
       for (std::uint32_t k = ring_start[v]; k < ring_start[v + 1]; ++k)
         if (!queued[ring_tri[k]]) queued[ring_tri[k]] = 1, judged.push_back(ring_tri[k]);
     for (std::uint32_t t : judged) queued[t] = 0;
+    const long long nj = static_cast<long long>(judged.size());
+#pragma omp parallel for num_threads(workers) schedule(static)
+    for (long long j = 0; j < nj; ++j) bad[j] = is_bad(judged[j]);
+    reverted.clear();
+    for (long long j = 0; j < nj; ++j)
+      if (bad[j]) revert(judged[j]);
   }
   double worst = 0;  // squared
   for (size_t v = 0; v < nv; ++v) {

@@ -321,7 +321,15 @@ bool Clip::is_bounded() const {
   return b.lo.allFinite() && b.hi.allFinite();
 }
 
-bool Clip::contains(const Vec3& p, double tolerance) const { return value(p) <= tolerance; }
+bool Clip::contains(const Vec3& p, double tolerance) const {
+  // value(p) <= tolerance, part by part and without the gradient: every stage asks this at
+  // every point it moves.
+  for (const auto& s : spheres)
+    if ((p - s.center).norm() - s.radius > tolerance) return false;
+  for (const auto& h : planes)
+    if (h.normal.dot(p) - h.offset > tolerance) return false;
+  return true;
+}
 
 double Clip::value(const Vec3& p) const {
   Vec3 g;
