@@ -4,6 +4,7 @@
 #include <imgui.h>
 
 #include <array>
+#include <optional>
 #include <string>
 
 #include "panel.h"
@@ -41,9 +42,12 @@ void keyframes_section(ViewerState& state, PanelState& panel) {
   if (!ImGui::CollapsingHeader("Keyframes",
                                state.has_keyframes() ? ImGuiTreeNodeFlags_DefaultOpen : 0))
     return;
-  const std::size_t count = state.keyframes().size();
+  std::size_t count = state.keyframes().size();
   if (count == 0)
     ImGui::TextDisabled("no keyframes: Play animates one parameter");
+  // A row's Delete takes effect after the table: the rows below it would otherwise ask for
+  // keyframes that are no longer there.
+  std::optional<std::size_t> deleted;
   if (ImGui::BeginTable("keyframes", 4, ImGuiTableFlags_SizingFixedFit)) {
     for (std::size_t i = 0; i < count; ++i) {
       ImGui::PushID(static_cast<int>(i));
@@ -62,11 +66,15 @@ void keyframes_section(ViewerState& state, PanelState& panel) {
       if (ImGui::SmallButton("Update")) state.update_keyframe(i);
       tooltip("Record the current parameters and camera into this keyframe");
       ImGui::SameLine();
-      if (ImGui::SmallButton("Delete")) state.delete_keyframe(i);
+      if (ImGui::SmallButton("Delete")) deleted = i;
       tooltip("Remove this keyframe");
       ImGui::PopID();
     }
     ImGui::EndTable();
+  }
+  if (deleted) {
+    state.delete_keyframe(*deleted);
+    count = state.keyframes().size();
   }
   ImGui::SetNextItemWidth(120);
   ImGui::InputDouble("##new-time", &panel.keyframe_time, 0.05, 0.25, "%.4g");

@@ -19,11 +19,11 @@ namespace {
 
 class Gui {
  public:
-  Gui() {
+  explicit Gui(float height = 800) {
     ImGui::CreateContext();
     ImGuiIO& io = ImGui::GetIO();
     io.IniFilename = nullptr;
-    io.DisplaySize = ImVec2(1000, 800);
+    io.DisplaySize = ImVec2(1000, height);
     unsigned char* pixels = nullptr;
     int w = 0, h = 0;
     io.Fonts->GetTexDataAsRGBA32(&pixels, &w, &h);  // builds the font atlas
@@ -124,6 +124,32 @@ TEST(Panel, RandomClicksOnTheKeyframesKeepThemValid) {
     }
   }
   EXPECT_TRUE(touched) << "the clicks reached the Keyframes section";
+}
+
+// A click on every spot of the panel, three keyframes listed each time: Delete on a row that
+// is not the last once made the rows below it ask for keyframes no longer there. Bottom up,
+// so that no click folds a section above the spots still to come.
+TEST(Panel, DeletingAKeyframeFromTheListLeavesTheRowsBelowIntact) {
+  const Scene scene = scene_from_json(nlohmann::json::parse(R"j({
+    "equation": "x^2 + y^2 + z^2 - R^2", "parameters": {"R": 1}, "clip": ["sphere:2"],
+    "animation": {"keyframes": [{"time": 0, "params": {"R": 0.8}},
+      {"time": 0.5, "params": {"R": 1.2}}, {"time": 1, "params": {"R": 1}}]}})j"), "keys.json");
+  ViewerState state(scene, Mode::kRaytrace, 2);
+  PanelState panel;
+  panel.scene_path = (std::filesystem::temp_directory_path() / "zeroset_panel_rows.json").string();
+  Gui gui(3000);  // tall enough for every section unscrolled
+  int deletions = 0;
+  for (float y = 3000; y > 0; y -= 4)
+    for (float x = 4; x < kPanelWidth; x += 12) {
+      const size_t before = state.keyframes().size();
+      ASSERT_NO_THROW(gui.click(state, panel, x, y)) << x << ", " << y;
+      if (state.keyframes().size() < before && before == 3) ++deletions;
+      // Back to three (Add adds one), at times no keyframe has (a time taken is refused).
+      while (state.keyframes().size() > 3) state.delete_keyframe(state.keyframes().size() - 1);
+      for (double t = 0.05; state.keyframes().size() < 3 && t < 1; t += 0.1) state.add_keyframe(t);
+      ASSERT_EQ(state.keyframes().size(), 3u);
+    }
+  EXPECT_GT(deletions, 0) << "no click reached a Delete button";
 }
 
 // Every key of the scene file's "floaters" and "mesh" objects has exactly one widget with a
