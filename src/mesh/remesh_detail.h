@@ -50,6 +50,10 @@ constexpr double kShortNewtonStep = 1e-3;
 // Remesher::relax).
 constexpr int kSettleRepeats = 3;
 
+// From this many vertices on, and with RemeshOptions::threads = 0, relaxation runs on all
+// cores or on one, whichever its steps measure faster (MeasuredWorkers); a smaller mesh on one.
+constexpr size_t kMeasuredWorkersVertices = 20000;
+
 // From this many vertices on the remesher numbers the mesh again after its first topology
 // passes, for locality (Remesher::renumber); a smaller mesh fits in the cache.
 constexpr size_t kRenumberVertices = 16384;
@@ -86,14 +90,18 @@ struct Remesher {
   Mesh& mesh;
   const Surface& surface;
   RemeshOptions opt;
+  // Relaxation's workers: as asked, or (RemeshOptions::threads = 0) one or all cores as
+  // measured step by step (relax()). Every loop's result is the same for any number.
   int workers = 1;
+  bool measure_workers = false;
+  MeasuredWorkers worker_choice{1};
   EvaluatorPool pool;
   RemeshStats stats;
 
   std::vector<std::uint8_t> kind, alive_vertex, alive_tri;
   std::vector<std::vector<std::uint32_t>> vt;  // live triangles of each vertex
   std::unordered_set<std::uint64_t> curve_edges;
-  std::vector<std::uint8_t> on_curve;  // vertex of a singular curve or node
+  std::vector<std::uint8_t> on_curve;  // vertex of a singular curve or node (always kLocked)
   // A free vertex next to a pinch point, where the spring–mass improver has placed it
   // (remesh_pinch.cpp): it neither relaxes nor goes away, and is projected onto F = 0 at the end.
   std::vector<std::uint8_t> pinch_held;
@@ -126,7 +134,10 @@ struct Remesher {
 
   Remesher(Mesh& m, const Surface& s, const RemeshOptions& o)
       : mesh(m), surface(s), opt(o),
-        workers(improver_workers(o.threads, m.positions.size())), pool(s.field, workers) {}
+        workers(o.threads > 0 ? worker_count(o.threads)
+                : m.positions.size() >= kMeasuredWorkersVertices ? worker_count(0) : 1),
+        measure_workers(o.threads == 0 && workers > 1), worker_choice(workers),
+        pool(s.field, workers) {}
 
   Evaluator& ev() { return pool.at(0); }
 
@@ -137,13 +148,13 @@ struct Remesher {
 
   // Whether a triangle with (area) normal n over the corners of t faces along ∇F at each
   // corner whose gradient is known (cached at or near the corner; zero when not yet evaluated)
-  // and that is not on the singular set. An operation may not turn a triangle that agreed into
-  // one that does not: on a tube a few edges around, moves that each tilt a triangle by less
-  // than the guards allow would otherwise flatten it into a band (docs/meshing.md).
+  // and that is not locked (the singular set's vertices are). An operation may not turn a
+  // triangle that agreed into one that does not: on a tube a few edges around, moves that each
+  // tilt a triangle by less than the guards allow would otherwise flatten it into a band
+  // (docs/meshing.md). The dot product first: it nearly always settles it.
   bool agrees_with_gradient(const Vec3& n, const Tri& t) const {
     for (std::uint32_t v : t)
-      if (kind[v] != kLocked && !on_curve[v] && !(n.dot(grad[v]) > 0) && grad[v] != Vec3::Zero())
-        return false;
+      if (!(n.dot(grad[v]) > 0) && kind[v] != kLocked && grad[v] != Vec3::Zero()) return false;
     return true;
   }
 
@@ -224,8 +235,10 @@ struct Remesher {
   // One Jacobi step: every free vertex to the area-weighted centroid of its ring, in the
   // tangent plane, and every clip vertex to its border target along the clip curve; then back
   // onto F = 0 (the curve). Moves that would turn a triangle over or flatten it are undone.
-  // Returns the largest move over L.
+  // Returns the largest move over L. relax() picks the workers and times the step
+  // (measure_workers); relax_step() is the step.
   double relax();
+  double relax_step();
   // Extra repeats of a vertex's step where it moves by rest_move L or more (0, or
   // kSettleRepeats while settling).
   int step_repeats = 0;

@@ -1,5 +1,6 @@
 // The remesher's relaxation, projection and output (include/zeroset/mesh/remesh.h).
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -184,7 +185,7 @@ void Remesher::update_gradients(const std::vector<std::uint32_t>& vs) {
 // next to a node that factor comes close to one, and such a vertex crept on for 40 to 120
 // settling steps while every other vertex was at rest. With step_repeats, a vertex that moved
 // by rest_move L or more repeats its step from where it landed, towards the same centroid.
-double Remesher::relax() {
+double Remesher::relax_step() {
   ++stats.relax_steps;
   triangle_normals();
   const size_t nv = mesh.positions.size();
@@ -323,12 +324,25 @@ double Remesher::relax() {
   return apply_guarded(next);
 }
 
+// The step on the workers worker_choice picks, timed for it (the step's result does not
+// depend on their number).
+double Remesher::relax() {
+  if (!measure_workers) return relax_step();
+  workers = worker_choice.next();
+  const auto t0 = std::chrono::steady_clock::now();
+  const double moved = relax_step();
+  worker_choice.took(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  return moved;
+}
+
 // Moves every vertex to `next` except where a triangle would turn over or flatten: there
 // the triangle's vertices stay (repeated until no triangle is bad). rnormal must be current.
 double Remesher::apply_guarded(std::vector<Vec3>& next) {
   const size_t nv = mesh.positions.size();
+  const long long n = static_cast<long long>(nv);
   std::vector<std::uint8_t> moved(nv);
-  for (size_t v = 0; v < nv; ++v) moved[v] = next[v] != mesh.positions[v];
+#pragma omp parallel for num_threads(workers) schedule(static)
+  for (long long v = 0; v < n; ++v) moved[v] = next[v] != mesh.positions[v];
   // Whether packed triangle t is bad after the moves. An unmoved one is not: its corners are
   // where they were when it was judged good.
   auto is_bad = [&](std::uint32_t t) {
@@ -372,7 +386,8 @@ double Remesher::apply_guarded(std::vector<Vec3>& next) {
       if (bad[j]) revert(judged[j]);
   }
   double worst = 0;  // squared
-  for (size_t v = 0; v < nv; ++v) {
+#pragma omp parallel for num_threads(workers) schedule(static) reduction(max : worst)
+  for (long long v = 0; v < n; ++v) {
     if (!moved[v]) continue;
     worst = std::max(worst, (next[v] - mesh.positions[v]).squaredNorm());
     mesh.positions[v] = next[v];

@@ -42,7 +42,10 @@ struct RemeshOptions {
   /// At rest when no split, collapse or flip applies and every relaxation move is below this
   /// × L.
   double rest_move = 5e-3;
-  int threads = 0;  ///< 0: one per 100 000 vertices, at most all cores (as the improver)
+  /// 0: from 20 000 vertices on, relaxation runs on all cores or on one, whichever its steps
+  /// measure faster (on a busy machine one is); a smaller mesh on one. The mesh is the same
+  /// for any number of workers.
+  int threads = 0;
   /// The surface's singular set when the caller has found it already (mesh_crossings() does),
   /// so that it is not found twice; null: remesh() finds it (with find_singular_points and a
   /// bounded clip). Must outlive the call.

@@ -41,6 +41,51 @@ inline int team_size() {
 #endif
 }
 
+// The number of workers for a loop of similar parallel steps, chosen by timing them: one
+// worker, or `most`. On an idle machine the steps run faster on all cores; on a busy one a
+// preempted worker holds up the others at every barrier, where they spin and take the CPU
+// from it, and one worker is faster (docs/meshing.md). So now and then a step is a probe,
+// run with the count not in use; the choice switches when the probe beat the fastest of the
+// last kRecent steps by kMargin. The probes come every kFirstGap steps at first and after a
+// switch, twice as far apart after each probe that confirmed the choice, at most kLastGap.
+// Only for steps whose results do not depend on the number of workers.
+class MeasuredWorkers {
+ public:
+  // most ≤ 1: always one worker, nothing measured.
+  explicit MeasuredWorkers(int most) : most_(std::max(1, most)), current_(most_) {}
+
+  // The workers for the coming step.
+  int next() {
+    probing_ = most_ > 1 && ++step_ == probe_at_;
+    return probing_ ? other() : current_;
+  }
+  // The seconds the step from next() took.
+  void took(double seconds) {
+    if (!probing_) {
+      recent_[count_++ % kRecent] = seconds;
+      return;
+    }
+    const int n = std::min(count_, kRecent);
+    const double best = n > 0 ? *std::min_element(recent_, recent_ + n) : 0.0;
+    if (n > 0 && seconds < kMargin * best) {
+      current_ = other(), count_ = 0, gap_ = kFirstGap;
+    } else {
+      gap_ = std::min(2 * gap_, kLastGap);
+    }
+    probe_at_ = step_ + gap_;
+  }
+  int current() const { return current_; }
+
+ private:
+  static constexpr int kFirstGap = 4, kLastGap = 32, kRecent = 3;
+  static constexpr double kMargin = 0.85;
+  int other() const { return current_ == 1 ? most_ : 1; }
+  int most_, current_;
+  int step_ = 0, probe_at_ = kFirstGap, gap_ = kFirstGap, count_ = 0;
+  bool probing_ = false;
+  double recent_[kRecent] = {};
+};
+
 // Evaluators own scratch memory and must not be shared, so each worker gets its own.
 class EvaluatorPool {
  public:
