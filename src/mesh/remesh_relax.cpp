@@ -239,7 +239,7 @@ double Remesher::relax_step() {
 #pragma omp parallel num_threads(workers)
   {
     std::vector<std::uint32_t> live;
-    std::vector<double> x, y, z, f, gx, gy, gz;
+    GradientBatch batch;
 #pragma omp for schedule(dynamic, 1)
     for (long long c = 0; c < chunks; ++c) trap.run([&] {
       const long long e = std::min(nf, (c + 1) * kNewtonChunk);
@@ -248,18 +248,13 @@ double Remesher::relax_step() {
         if (state[i] == 1) live.push_back(static_cast<std::uint32_t>(i));
       for (int it = 0; it < kBatchNewtonSteps + 1 && !live.empty(); ++it) {
         const size_t m = live.size();
-        x.resize(m), y.resize(m), z.resize(m), f.resize(m), gx.resize(m), gy.resize(m),
-            gz.resize(m);
-        for (size_t k = 0; k < m; ++k) {
-          const Vec3& q = at[live[k]];
-          x[k] = q.x(), y[k] = q.y(), z[k] = q.z();
-        }
-        pool.local().values_gradients(x, y, z, f, gx, gy, gz);
+        batch.evaluate(pool.local(), m, [&](size_t k) -> const Vec3& { return at[live[k]]; });
+        const std::vector<double>& f = batch.f;
         const bool last = it == kBatchNewtonSteps;
         size_t kept = 0;
         for (size_t k = 0; k < m; ++k) {
           const std::uint32_t i = live[k];
-          const Vec3 g(gx[k], gy[k], gz[k]);
+          const Vec3 g = batch.gradient(k);
           const double gn = g.norm();
           if (!has_residual(f[k], gn)) {
             state[i] = 0;

@@ -100,6 +100,24 @@ class EvaluatorPool {
   std::vector<Evaluator> pool_;
 };
 
+// One worker's scratch for F and ∇F at a batch of points through one evaluator, in
+// structure-of-arrays form (much cheaper per point than one point at a time).
+struct GradientBatch {
+  std::vector<double> x, y, z, f, gx, gy, gz;
+
+  // F and ∇F at point(0), ..., point(m - 1) into f and gradient(k).
+  template <class Point>
+  void evaluate(Evaluator& ev, size_t m, Point point) {
+    x.resize(m), y.resize(m), z.resize(m), f.resize(m), gx.resize(m), gy.resize(m), gz.resize(m);
+    for (size_t k = 0; k < m; ++k) {
+      const Vec3& p = point(k);
+      x[k] = p.x(), y[k] = p.y(), z[k] = p.z();
+    }
+    ev.values_gradients(x, y, z, f, gx, gy, gz);
+  }
+  Vec3 gradient(size_t k) const { return Vec3(gx[k], gy[k], gz[k]); }
+};
+
 // F and ∇F at many points, in structure-of-arrays batches of 1,024 split over the workers
 // (one evaluator each from `pool`, which must have at least `workers` of them).
 inline void values_gradients(EvaluatorPool& pool, int workers, std::span<const Vec3> pts,
@@ -112,21 +130,13 @@ inline void values_gradients(EvaluatorPool& pool, int workers, std::span<const V
   ExceptionTrap trap;
 #pragma omp parallel num_threads(workers)
   {
-    std::vector<double> x, y, z, fv, gx, gy, gz;
+    GradientBatch batch;
 #pragma omp for schedule(static)
     for (long long c = 0; c < chunks; ++c) trap.run([&] {
-      const long long b = c * kChunk, e = std::min(n, b + kChunk);
-      const size_t m = static_cast<size_t>(e - b);
-      x.resize(m), y.resize(m), z.resize(m), fv.resize(m), gx.resize(m), gy.resize(m), gz.resize(m);
-      for (size_t q = 0; q < m; ++q) {
-        const Vec3& p = pts[static_cast<size_t>(b) + q];
-        x[q] = p.x(), y[q] = p.y(), z[q] = p.z();
-      }
-      pool.local().values_gradients(x, y, z, fv, gx, gy, gz);
-      for (size_t q = 0; q < m; ++q) {
-        f[static_cast<size_t>(b) + q] = fv[q];
-        g[static_cast<size_t>(b) + q] = Vec3(gx[q], gy[q], gz[q]);
-      }
+      const size_t b = static_cast<size_t>(c * kChunk);
+      const size_t m = static_cast<size_t>(std::min(n, (c + 1) * kChunk)) - b;
+      batch.evaluate(pool.local(), m, [&](size_t q) -> const Vec3& { return pts[b + q]; });
+      for (size_t q = 0; q < m; ++q) f[b + q] = batch.f[q], g[b + q] = batch.gradient(q);
     });
   }
   trap.rethrow();
