@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <thread>
 
 #include <fmt/core.h>
@@ -13,6 +14,7 @@
 #include "zeroset/mesh/improve.h"
 #include "zeroset/mesh/remesh.h"
 #include "zeroset/mesh/mesh_ops.h"
+#include "zeroset/surface/singular_set.h"
 
 namespace zeroset::viewer {
 namespace {
@@ -364,6 +366,8 @@ void ViewerState::start_mesh_job() {
       frame.mesh = std::move(mesh);
       if (!with_curves) frame.hidden_curves = std::move(frame.mesh.curves), frame.mesh.curves = {};
     };
+    // The singular set the crossings step found, for the remesher (which would search again).
+    std::optional<SingularSet> found;
     // Step by step so the user watches the vertices move; a copy goes to the UI whenever it
     // has taken the previous one. `frame` is the first frame (already filled in).
     auto improve_on = [&](Mesh mesh, std::shared_ptr<MeshFrame> frame) {
@@ -382,7 +386,9 @@ void ViewerState::start_mesh_job() {
       }
       if (remeshing) {
         // The remesher changes the connectivity as it goes: one frame when it is done.
-        const RemeshStats rs = remesh(mesh, surface, remesh_opts, stop);
+        RemeshOptions ro = remesh_opts;
+        if (found) ro.singular_set = &*found;
+        const RemeshStats rs = remesh(mesh, surface, ro, stop);
         if (stop.stop_requested()) return;
         auto next = std::make_shared<MeshFrame>(*frame);
         set_mesh(*next, std::move(mesh));
@@ -448,10 +454,11 @@ void ViewerState::start_mesh_job() {
     PolygonizeStats polygonize_stats;
     Mesh mesh = polygonize(surface, options, &polygonize_stats, stop);
     if (stop.stop_requested()) return;
-    const CrossingStats crossings =
-        mesh.empty() || !with_crossings
-            ? CrossingStats{}
-            : mesh_crossings(mesh, surface, polygonize_stats.cell_size, {}, nullptr, stop);
+    CrossingStats crossings;
+    if (!mesh.empty() && with_crossings) {
+      found.emplace();
+      crossings = mesh_crossings(mesh, surface, polygonize_stats.cell_size, {}, &*found, stop);
+    }
     if (stop.stop_requested()) return;
     auto frame = new_frame();
     set_mesh(*frame, mesh);
