@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <random>
+#include <string>
 
 #include "panel.h"
 #include "settings_panel.h"
@@ -60,16 +61,23 @@ class Gui {
   double time_ = 0;
 };
 
-TEST(Panel, RandomClicksAndDragsInEveryModeKeepTheViewerWorking) {
-  const auto dir = std::filesystem::temp_directory_path() / "zeroset_panel_test";
+// A panel whose files (scene, screenshot, mesh, floaters, POV-Ray scene) all go to a
+// directory of the test's own under the temporary directory, never to the working directory.
+PanelState panel_writing_to(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / name;
   std::filesystem::create_directories(dir);
-  ViewerState state(Scene{make_surface(*find_catalog_entry("kummer")), {}}, Mode::kRaytrace, 2);
   PanelState panel;
   panel.scene_path = (dir / "scene.json").string();
   panel.screenshot_path = (dir / "shot.png").string();
   panel.mesh_path = (dir / "mesh.ply").string();
   panel.floaters_path = (dir / "floaters.ply").string();
   panel.pov_path = (dir / "scene.pov").string();
+  return panel;
+}
+
+TEST(Panel, RandomClicksAndDragsInEveryModeKeepTheViewerWorking) {
+  ViewerState state(Scene{make_surface(*find_catalog_entry("kummer")), {}}, Mode::kRaytrace, 2);
+  PanelState panel = panel_writing_to("zeroset_panel_test");
   Gui gui;
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> x(0, kPanelWidth), y(0, 800), step(-60, 60);
@@ -102,8 +110,7 @@ TEST(Panel, RandomClicksOnTheKeyframesKeepThemValid) {
       {"frame": 30, "params": {"R": 1.2}, "camera": {"azimuth_deg": 90}, "ease": "out"},
       {"time": 1, "params": {"a": -0.2}, "camera": {"distance": 7}}]}})j"), "keys.json");
   ViewerState state(scene, Mode::kRaytrace, 2);
-  PanelState panel;
-  panel.scene_path = (std::filesystem::temp_directory_path() / "zeroset_panel_keys.json").string();
+  PanelState panel = panel_writing_to("zeroset_panel_keys");
   Gui gui;
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> x(0, kPanelWidth), y(0, 800), step(-60, 60);
@@ -135,8 +142,7 @@ TEST(Panel, DeletingAKeyframeFromTheListLeavesTheRowsBelowIntact) {
     "animation": {"keyframes": [{"time": 0, "params": {"R": 0.8}},
       {"time": 0.5, "params": {"R": 1.2}}, {"time": 1, "params": {"R": 1}}]}})j"), "keys.json");
   ViewerState state(scene, Mode::kRaytrace, 2);
-  PanelState panel;
-  panel.scene_path = (std::filesystem::temp_directory_path() / "zeroset_panel_rows.json").string();
+  PanelState panel = panel_writing_to("zeroset_panel_rows");
   Gui gui(3000);  // tall enough for every section unscrolled
   int deletions = 0;
   for (float y = 3000; y > 0; y -= 4)
