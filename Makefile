@@ -23,20 +23,25 @@ demo: build
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) --timeout 600
 
-# The same tests with AddressSanitizer and UndefinedBehaviorSanitizer.
+# The tests again with AddressSanitizer and UndefinedBehaviorSanitizer, at -O1 -g1 (line tables
+# for the reports), without the targets only the Release build needs: the tests that open the
+# window (label gui), the package tests (label package), the benchmarks and the Python module.
+ASAN_CMAKE_FLAGS = -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" \
+	-DZEROSET_SANITIZE=ON -DZEROSET_BUILD_BENCH=OFF -DZEROSET_BUILD_GUI_TESTS=OFF
 test-asan: deps
-	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DZEROSET_SANITIZE=ON \
-	      -DZEROSET_BUILD_BENCH=OFF $(CMAKE_FLAGS)
+	cmake -S . -B $(ASAN_BUILD) $(ASAN_CMAKE_FLAGS) $(CMAKE_FLAGS)
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
 	cd $(ASAN_BUILD) && LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 \
-	      ctest --output-on-failure -j $(JOBS) --timeout 1200
+	      ctest --output-on-failure -j $(JOBS) --timeout 1200 -LE package
 
 # Runs the fuzz targets (libFuzzer, clang) for FUZZ_SECONDS each: the surface language's
 # parser, then scene files (JSON and SURFER's .jsurf).
 FUZZ_SECONDS ?= 60
 fuzz: deps
 	CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -DZEROSET_BUILD_FUZZ=ON -DZEROSET_BUILD_TESTS=OFF \
-	      -DZEROSET_BUILD_BENCH=OFF -DZEROSET_BUILD_VIEWER=OFF
+	      -DZEROSET_BUILD_BENCH=OFF -DZEROSET_BUILD_VIEWER=OFF -DZEROSET_BUILD_PYTHON=OFF \
+	      -DZEROSET_BUILD_EXAMPLES=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	      "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG"
 	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target parse_fuzz scene_fuzz
 	mkdir -p $(FUZZ_BUILD)/corpus && cp tests/fuzz/corpus/* $(FUZZ_BUILD)/corpus/
 	$(FUZZ_BUILD)/tests/fuzz/parse_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=5 -max_len=512 \

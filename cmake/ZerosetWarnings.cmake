@@ -6,6 +6,13 @@ if(ZEROSET_SANITIZE)
   add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
   add_link_options(-fsanitize=address,undefined)
 endif()
+# The fuzz build (tests/fuzz, clang): every library the fuzzers link gets libFuzzer's coverage
+# instrumentation and the sanitizers; only the fuzz targets link the fuzzer's main.
+if(ZEROSET_BUILD_FUZZ)
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer
+                      -fno-sanitize-recover=undefined)
+  add_link_options(-fsanitize=address,undefined)
+endif()
 
 # Code generation for the processor that builds (AVX2, FMA, POPCNT where present): the hot
 # loops (field evaluation, grid sampling, bit sets, ray casting, particle forces) vectorise much

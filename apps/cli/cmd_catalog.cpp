@@ -8,6 +8,7 @@
 #include "zeroset/expr/polynomial.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/singular_set.h"
+#include "zeroset/surface/json_read.h"
 
 namespace zeroset::cli {
 namespace {
@@ -80,7 +81,7 @@ void run_info(const SurfaceArgs& args, bool as_json) {
     for (const Vec3& p : sing) {
       Vec3 g;
       const double f = ev.value_gradient(p, g);
-      pts.push_back({{"point", {p.x(), p.y(), p.z()}}, {"F", f}, {"grad_norm", g.norm()}});
+      pts.push_back({{"point", json_read::from_vec3(p)}, {"F", f}, {"grad_norm", g.norm()}});
     }
     j["singular_points"] = pts;
     if (s.clip.is_bounded()) j["singular_set"] = singular_set_json(find_singular_set(s));
@@ -131,7 +132,7 @@ void run_eval(const SurfaceArgs& args, const std::vector<std::string>& at, bool 
     const FieldSample r = ev.sample(p, true, true);
     if (as_json) {
       nlohmann::json j;
-      j["point"] = {p.x(), p.y(), p.z()};
+      j["point"] = json_read::from_vec3(p);
       j["value"] = r.value;
       j["gradient"] = {r.gradient.x(), r.gradient.y(), r.gradient.z()};
       j["hessian"] = nlohmann::json::array();

@@ -20,6 +20,7 @@
 #include "zeroset/mesh/remesh.h"
 #include "zeroset/mesh/settings.h"
 #include "zeroset/render/render.h"
+#include "zeroset/surface/json_read.h"
 
 namespace zeroset::cli {
 namespace {
@@ -110,8 +111,6 @@ MeshSettings settings_from(const MeshArgs& a, const Scene& scene) {
   return m;
 }
 
-nlohmann::json vec_json(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
-
 nlohmann::json quality_json(const MeshQuality& q) {
   nlohmann::json j;
   j["vertices"] = q.vertices;
@@ -137,7 +136,7 @@ nlohmann::json quality_json(const MeshQuality& q) {
   j["boundary"] = {{"vertices", q.boundary_vertices}, {"max_abs_clip_value", q.max_boundary_clip_value}};
   nlohmann::json sing = nlohmann::json::array();
   for (size_t k = 0; k < q.singular_points.size(); ++k)
-    sing.push_back({{"point", vec_json(q.singular_points[k])},
+    sing.push_back({{"point", json_read::from_vec3(q.singular_points[k])},
                     {"nearest_vertex_distance", q.singular_point_distance[k]},
                     {"in_mean_edge_lengths", q.mean_edge_length > 0 ? q.singular_point_distance[k] / q.mean_edge_length : 0.0}});
   j["singular_points"] = sing;
@@ -290,7 +289,7 @@ void run_mesh(const MeshArgs& a) {
     is.steps = rs.iterations, is.converged = rs.converged, is.seconds = rs.seconds;
     is.undefined_vertices = rs.undefined_vertices;
     nlohmann::json held = nlohmann::json::array();
-    for (const Vec3& p : rs.singular_points) held.push_back(vec_json(p));
+    for (const Vec3& p : rs.singular_points) held.push_back(json_read::from_vec3(p));
     stats["improve"] = {{"improver", "remesh"},
                         {"iterations", rs.iterations},
                         {"max_iterations", ro.max_iterations},
@@ -324,7 +323,7 @@ void run_mesh(const MeshArgs& a) {
     is = improver.stats();
     mesh = improver.take_mesh();
     nlohmann::json found = nlohmann::json::array();
-    for (const Vec3& p : is.singular_points) found.push_back(vec_json(p));
+    for (const Vec3& p : is.singular_points) found.push_back(json_read::from_vec3(p));
     stats["improve"] = {{"improver", "paper"},
                         {"steps", is.steps},
                         {"max_steps", max_steps},

@@ -16,6 +16,7 @@
 #include "zeroset/io/image.h"
 #include "zeroset/io/output_transaction.h"
 #include "zeroset/render/render.h"
+#include "zeroset/surface/json_read.h"
 
 namespace zeroset::cli {
 namespace {
@@ -108,8 +109,6 @@ FloaterOptions options_from(const SampleArgs& a, const Scene& scene) {
   return o;
 }
 
-nlohmann::json vec_json(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
-
 nlohmann::json metrics_json(const SampleMetrics& m, double band) {
   nlohmann::json j;
   j["count"] = m.count;
@@ -122,7 +121,7 @@ nlohmann::json metrics_json(const SampleMetrics& m, double band) {
                    {"reference_points", m.reference_count}};
   nlohmann::json sing = nlohmann::json::array();
   for (const auto& c : m.singular)
-    sing.push_back({{"point", vec_json(c.point)},
+    sing.push_back({{"point", json_read::from_vec3(c.point)},
                     {"distance", c.distance},
                     {"local_spacing", c.local_spacing},
                     {"ratio", c.ratio}});

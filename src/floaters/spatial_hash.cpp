@@ -13,7 +13,7 @@ namespace {
 constexpr std::int64_t kDenseRowsPerPoint = 8;
 constexpr std::int64_t kDenseMinRows = 1 << 14;
 // Fewer points than this are sorted on one thread.
-constexpr std::int64_t kParallelMin = 4096;
+constexpr std::int64_t kSortParallelMin = 4096;
 }  // namespace
 
 std::size_t SpatialHash::lay_grid(const Box3& region, double cell, std::size_t points) {
@@ -57,7 +57,7 @@ std::size_t SpatialHash::lay_grid(const Box3& region, double cell, std::size_t p
 void SpatialHash::build(std::span<const Vec3> points, const Box3& region, double cell,
                         int threads) {
   const std::size_t n = points.size();
-  const int team = n >= kParallelMin ? std::max(threads, 1) : 1;
+  const int team = n >= kSortParallelMin ? std::max(threads, 1) : 1;
   keys_.resize(n);
   order_.resize(n);
   key_in_.resize(n);

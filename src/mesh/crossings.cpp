@@ -10,6 +10,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "mesh_detail.h"
 #include "zeroset/mesh/mesh_ops.h"
 #include "zeroset/surface/analysis.h"
 #include "zeroset/surface/singular_index.h"
@@ -17,7 +18,7 @@
 namespace zeroset {
 namespace {
 
-constexpr std::uint32_t kNone = 0xffffffffu;
+using detail::kNone;
 // A rim that turns back this many tube radii or less before a curve's free end (a pinch
 // point) is joined to the end: towards a pinch point the sheets close like a book, and the
 // grid loses them a few cells before it.

@@ -21,7 +21,7 @@ namespace zeroset {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-constexpr std::uint32_t kNone = 0xffffffffu;
+using detail::kNone;
 // Radians of Delaunay excess (and mean-ratio gain) an edge flip needs.
 constexpr double kFlipMargin = 0.05;
 

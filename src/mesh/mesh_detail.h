@@ -14,6 +14,9 @@
 
 namespace zeroset::detail {
 
+// No vertex, triangle or curve: the index the mesh code stores where there is none.
+inline constexpr std::uint32_t kNone = 0xffffffffu;
+
 struct ClipCutStats {
   long long cut_edges = 0;  // new vertices where an edge crosses G = 0
   long long snapped = 0;    // vertices moved onto the clip curve instead

@@ -38,7 +38,7 @@ size_t remove_unreferenced_vertices(Mesh& mesh) {
 }
 
 size_t collapse_short_edges(Mesh& mesh, double min_length) {
-  constexpr std::uint32_t kNone = 0xffffffffu;
+  using detail::kNone;
   auto& tris = mesh.triangles;
   std::erase_if(tris, [](const auto& t) { return t[0] == t[1] || t[1] == t[2] || t[2] == t[0]; });
   if (!(min_length > 0)) return 0;

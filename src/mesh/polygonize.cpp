@@ -22,7 +22,7 @@ namespace {
 // cubes makes around a node where F touches zero). Vertices within 1e-9 cells of a node are
 // on it up to the rounding of the refinement. Returns the vertices merged.
 long long weld_grid_nodes(Mesh& mesh, const detail::Grid& g) {
-  constexpr std::uint32_t kNone = 0xffffffffu;
+  using detail::kNone;
   const double tol = 1e-9 * g.h;
   std::unordered_map<long long, std::uint32_t> node_vertex;
   std::vector<std::uint32_t> remap(mesh.positions.size(), kNone);

@@ -19,7 +19,6 @@
 namespace zeroset::detail {
 
 using Tri = std::array<std::uint32_t, 3>;
-constexpr std::uint32_t kNone = 0xffffffffu;
 
 // kFree: moves on F = 0. kClip: slides along the clip curve. kLocked: never moves or goes away
 // (singular points, singular curves, an open border that is not the clip, a fixed boundary).

@@ -35,7 +35,7 @@ constexpr int kCapacity = D > 0 ? D + 1 : kN;
 
 /// Bernstein coefficients of g on [a, c], in the unit parameter u of the search interval.
 template <int D>
-struct Interval {
+struct BernsteinPiece {
   double a, c;
   double b[kCapacity<D>];
 };
@@ -243,11 +243,11 @@ ZS_NO_VECTORIZE double isolate(const double* g, int d_, double t0, double t1, do
     u_guess = (guess.t - t0) * inverse_w;
     split = std::min(1.0, u_guess + std::max(guess.spread, 0.0) * inverse_w);
   }
-  Interval<D> stack[kMaxStack];
+  BernsteinPiece<D> stack[kMaxStack];
   for (double lo = 0, hi = split;;) {
     const bool guided = hi < 1;
     // A root refined from the interval iv (start: where Newton begins), then polished.
-    auto refined = [&](const Interval<D>& iv, double start) {
+    auto refined = [&](const BernsteinPiece<D>& iv, double start) {
       stats.guided_roots += guided;
       // |g''| ≤ d(d−1)·max|second difference of the Bernstein coefficients| / (c − a)² on
       // [a, c], or the power form's bound over [0, c]: the smaller. The polish may look
@@ -278,7 +278,7 @@ ZS_NO_VECTORIZE double isolate(const double* g, int d_, double t0, double t1, do
     };
     int top = 0;
     {
-      Interval<D>& piece = stack[top++];
+      BernsteinPiece<D>& piece = stack[top++];
       piece.a = lo;
       piece.c = hi;
       to_bernstein<D>(g, d, lo, hi, piece.b);
@@ -286,7 +286,7 @@ ZS_NO_VECTORIZE double isolate(const double* g, int d_, double t0, double t1, do
     int budget = kGuidedSplits;
     bool abandoned = false;
     while (top > 0) {
-      Interval<D>& iv = stack[--top];
+      BernsteinPiece<D>& iv = stack[--top];
       const double b0 = iv.b[0], bd = iv.b[d];
       // Convex hull property: the graph lies within the hull of the coefficients, so when
       // they all lie beyond the band on one side there is no root here.
@@ -330,8 +330,8 @@ ZS_NO_VECTORIZE double isolate(const double* g, int d_, double t0, double t1, do
       ZS_ASSERT(top + 2 <= kMaxStack);
       ++stats.subdivisions;
       const double a = iv.a, c = iv.c, m = 0.5 * (a + c);
-      Interval<D>& right = stack[top];
-      Interval<D>& left = stack[top + 1];
+      BernsteinPiece<D>& right = stack[top];
+      BernsteinPiece<D>& left = stack[top + 1];
       split_half<D>(iv.b, d, left.b, right.b);
       right.a = m;
       right.c = c;

@@ -58,6 +58,8 @@ Vec3 vec3(const json& j, const std::string& origin, const std::string& where) {
           number(j[2], origin, where + "/2")};
 }
 
+json from_vec3(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
 void known_keys(const json& object, std::initializer_list<const char*> known,
                 const std::string& origin, const std::string& where) {
   for (auto it = object.begin(); it != object.end(); ++it) {

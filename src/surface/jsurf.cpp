@@ -12,6 +12,7 @@
 #include <cmath>
 #include <optional>
 
+#include "jsurf_detail.h"
 #include "properties_detail.h"
 #include "zeroset/error.h"
 #include "zeroset/expr/parse.h"
@@ -27,17 +28,14 @@ using detail::PropertyValue;
 using Props = std::map<std::string, PropertyValue>;
 using Mat4 = Eigen::Matrix4d;
 
-// SURFER's colours are what the screen shows; zeroset shades in linear values and encodes its
-// pictures with gamma 2.2 (zeroset/render/settings.h), so a colour goes through this power.
-constexpr double kGamma = 2.2;
 // jsurf's camera defaults: a file without camera_fov_y is seen with 60 degrees.
 constexpr double kJsurfFovDeg = 60;
-// jsurf has eight light slots.
-constexpr int kJsurfLights = 8;
+using detail::kJsurfGamma;
+using detail::kJsurfLights;
 
 json linear_json(const Vec3& display) {
-  return {std::pow(display.x(), kGamma), std::pow(display.y(), kGamma),
-          std::pow(display.z(), kGamma)};
+  return {std::pow(display.x(), kJsurfGamma), std::pow(display.y(), kJsurfGamma),
+          std::pow(display.z(), kJsurfGamma)};
 }
 
 class Reader {

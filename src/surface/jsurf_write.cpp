@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 
+#include "jsurf_detail.h"
 #include "properties_detail.h"
 #include "zeroset/error.h"
 #include "zeroset/expr/parse.h"
@@ -17,8 +18,8 @@ namespace {
 
 using json = nlohmann::json;
 
-constexpr double kGamma = 2.2;  // as in jsurf.cpp: SURFER's colours are display values
-constexpr int kJsurfLights = 8;
+using detail::kJsurfGamma;
+using detail::kJsurfLights;
 
 bool is_identifier_start(char c) { return std::isalpha(static_cast<unsigned char>(c)) || c == '_'; }
 bool is_identifier_char(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; }
@@ -98,7 +99,7 @@ Vec3 display(const json& j, const std::string& what) {
   } else if (j.is_array() && j.size() == 3 && j[0].is_number() && j[1].is_number() &&
              j[2].is_number()) {
     const Vec3 linear(j[0].get<double>(), j[1].get<double>(), j[2].get<double>());
-    return linear.cwiseMax(Vec3::Zero()).array().pow(1 / kGamma).matrix();
+    return linear.cwiseMax(Vec3::Zero()).array().pow(1 / kJsurfGamma).matrix();
   }
   throw BadInput(fmt::format("render/{}: expected '#rrggbb' or [r, g, b]", what));
 }

@@ -13,6 +13,7 @@
 
 #include "singular_detail.h"
 #include "zeroset/error.h"
+#include "zeroset/surface/json_read.h"
 
 namespace zeroset {
 namespace {
@@ -487,30 +488,29 @@ SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& 
 }
 
 namespace {
-nlohmann::json json_vec(const Vec3& p) { return {p.x(), p.y(), p.z()}; }
 }  // namespace
 
 nlohmann::json singular_set_json(const SingularSet& set, bool with_polylines) {
   nlohmann::json j;
   j["points"] = nlohmann::json::array();
   for (const SingularPoint& p : set.points)
-    j["points"].push_back({{"kind", to_string(p.kind)}, {"position", json_vec(p.position)}});
+    j["points"].push_back({{"kind", to_string(p.kind)}, {"position", json_read::from_vec3(p.position)}});
   j["curves"] = nlohmann::json::array();
   for (const SingularCurve& c : set.curves) {
     nlohmann::json jc = {{"kind", to_string(c.kind)},
                          {"closed", c.closed},
                          {"length", c.length()},
                          {"vertices", c.points.size()},
-                         {"from", json_vec(c.points.front())},
-                         {"to", json_vec(c.points.back())}};
+                         {"from", json_read::from_vec3(c.points.front())},
+                         {"to", json_read::from_vec3(c.points.back())}};
     if (with_polylines) {
       jc["points"] = nlohmann::json::array();
-      for (const Vec3& p : c.points) jc["points"].push_back(json_vec(p));
+      for (const Vec3& p : c.points) jc["points"].push_back(json_read::from_vec3(p));
     }
     j["curves"].push_back(std::move(jc));
   }
   j["singular_sheet"] = set.has_singular_sheet;
-  if (set.has_singular_sheet) j["singular_sheet_example"] = json_vec(set.singular_sheet_example);
+  if (set.has_singular_sheet) j["singular_sheet_example"] = json_read::from_vec3(set.singular_sheet_example);
   return j;
 }
 

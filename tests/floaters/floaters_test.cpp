@@ -13,6 +13,7 @@
 #include "zeroset/floaters/metrics.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/scene.h"
+#include "support/equation.h"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -23,11 +24,7 @@ namespace {
 
 using test::catalog_surface;
 
-Surface with_clip(const char* spec, const char* clip) {
-  SurfaceOverrides o;
-  o.clip_specs = {clip};
-  return resolve_surface(spec, o);
-}
+using test::with_clip;
 
 // Runs until StepStats::converged, at most `limit` steps; returns the step it settled at or 0.
 std::size_t settle(FloaterSystem& sys, std::size_t limit) {

@@ -8,15 +8,12 @@
 #include <numbers>
 
 #include "zeroset/surface/scene.h"
+#include "support/equation.h"
 
 namespace zeroset {
 namespace {
 
-Surface with_clip(const char* spec, const char* clip) {
-  SurfaceOverrides o;
-  o.clip_specs = {clip};
-  return resolve_surface(spec, o);
-}
+using test::with_clip;
 
 TEST(ReferenceSampling, PointsLieOnTheSurfaceInsideTheClip) {
   SurfaceOverrides o;

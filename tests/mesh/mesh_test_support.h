@@ -8,10 +8,6 @@
 
 namespace zeroset::test {
 
-inline Surface catalog_surface(const std::string& name) {
-  return make_surface(*find_catalog_entry(name));
-}
-
 inline Surface kummer(double mu, double clip_radius = 3) {
   Surface s = catalog_surface("kummer");
   s.field.set_parameter("mu", mu);

@@ -14,6 +14,7 @@
 #include "zeroset/render/view.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/singular_set.h"
+#include "support/equation.h"
 
 namespace zeroset {
 namespace {
@@ -21,9 +22,9 @@ namespace {
 using test::sphere_points;
 using test::uv_sphere;
 
-Surface catalog_surface(const char* name) { return make_surface(*find_catalog_entry(name)); }
+using test::catalog_surface;
 
-RenderOptions small(int size, int samples = 1) {
+RenderOptions small_picture(int size, int samples = 1) {
   RenderOptions o;
   o.width = o.height = size;
   o.samples = samples;
@@ -49,7 +50,7 @@ TEST(SingularOverlay, ShowsWhitneysHandleWhereTheSurfaceIsNot) {
   // x² = y²z has no sheet below z = 0, only the z axis (the handle): the ray caster cannot
   // see it, the overlay draws it in the isolated colour.
   const Surface s = catalog_surface("whitney");
-  RenderOptions o = small(120);
+  RenderOptions o = small_picture(120);
   const Image plain = render_surface(s, o);
   o.singular_overlay = SingularOverlay{.set = find_singular_set(s), .tube_radius = 0.03};
   ASSERT_EQ(o.singular_overlay->set.count(CurveKind::kIsolated), 1);
@@ -91,7 +92,7 @@ std::vector<std::pair<std::string, std::function<Image(const RenderOptions&)>>> 
 TEST(SingularOverlay, IsHiddenBehindTheSurfaceAndShowsInFrontOfIt) {
   const Surface s = catalog_surface("sphere");
   for (int samples : {1, 2}) {
-    RenderOptions o = small(100, samples);
+    RenderOptions o = small_picture(100, samples);
     const View v = View::from_camera(s.camera, s.scene_radius(), o.width, o.height);
     const SingularSet set = set_around_the_sphere(v);
     for (const auto& [name, render] : renderers()) {
@@ -116,7 +117,7 @@ TEST(SingularOverlay, IsHiddenBehindTheSurfaceAndShowsInFrontOfIt) {
 }
 
 TEST(SingularOverlay, WithNothingToDrawLeavesThePictureAsItWas) {
-  RenderOptions o = small(64, 2);
+  RenderOptions o = small_picture(64, 2);
   for (const auto& [name, render] : renderers()) {
     o.singular_overlay.reset();
     const Image plain = render(o);
@@ -127,7 +128,7 @@ TEST(SingularOverlay, WithNothingToDrawLeavesThePictureAsItWas) {
 
 TEST(SingularOverlay, GivesTheSameImageWithAnyNumberOfThreads) {
   const Surface s = catalog_surface("roman");
-  RenderOptions o = small(96, 2);
+  RenderOptions o = small_picture(96, 2);
   o.singular_overlay = SingularOverlay{.set = find_singular_set(s)};
   o.threads = 1;
   const Image one = render_surface(s, o);
@@ -137,7 +138,7 @@ TEST(SingularOverlay, GivesTheSameImageWithAnyNumberOfThreads) {
 
 TEST(SingularOverlay, RejectsNegativeRadii) {
   const Surface s = catalog_surface("sphere");
-  RenderOptions o = small(32);
+  RenderOptions o = small_picture(32);
   o.singular_overlay = SingularOverlay{.set = {}, .tube_radius = -1};
   EXPECT_THROW(render_surface(s, o), InvalidArgument);
   o.singular_overlay = SingularOverlay{.set = {}, .tube_radius = 0, .point_radius = std::nan("")};

@@ -18,6 +18,7 @@
 #include "zeroset/render/view.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/scene.h"
+#include "support/equation.h"
 
 namespace zeroset {
 namespace {
@@ -28,7 +29,7 @@ using test::sphere_points;
 using test::surface_mask;
 using test::uv_sphere;
 
-Surface catalog_surface(const char* name) { return make_surface(*find_catalog_entry(name)); }
+using test::catalog_surface;
 
 RenderOptions small(int size = 160) {
   RenderOptions o;

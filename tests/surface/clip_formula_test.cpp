@@ -12,6 +12,7 @@
 #include "zeroset/expr/parse.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/scene.h"
+#include "support/refusal.h"
 
 namespace zeroset {
 namespace {
@@ -22,16 +23,7 @@ Field field_with(const char* equation, std::initializer_list<std::pair<const cha
   return f;
 }
 
-// The message of the BadInput `fn` throws ("" when it throws none).
-template <class Fn>
-std::string refusal(Fn fn) {
-  try {
-    fn();
-  } catch (const BadInput& e) {
-    return e.what();
-  }
-  return "";
-}
+using test::refusal;
 
 TEST(ClipFormula, SizesFollowTheParameters) {
   Clip c;

@@ -11,22 +11,14 @@
 #include "zeroset/surface/json_read.h"
 #include "zeroset/surface/keyframes.h"
 #include "zeroset/surface/scene.h"
+#include "support/refusal.h"
 
 namespace zeroset {
 namespace {
 
 using nlohmann::json;
 
-// The message of the BadInput that `f` throws ("" when it throws none).
-template <typename F>
-std::string refusal(F&& f) {
-  try {
-    f();
-  } catch (const BadInput& e) {
-    return e.what();
-  }
-  return "";
-}
+using test::refusal;
 
 std::string nested_arrays(int depth, const std::string& key = "junk") {
   return "{\"equation\": \"x^2+y^2+z^2-1\", \"" + key + "\": " + std::string(depth, '[') +

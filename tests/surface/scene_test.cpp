@@ -6,13 +6,12 @@
 #include <fstream>
 
 #include "zeroset/error.h"
+#include "support/temp_path.h"
 
 namespace zeroset {
 namespace {
 
-std::string temp_path(const std::string& name) {
-  return (std::filesystem::temp_directory_path() / ("zeroset_scene_test_" + name)).string();
-}
+using zeroset::test::temp_path;
 
 TEST(Scene, ResolvesCatalogNamesWithDefaults) {
   const Surface s = resolve_surface("kummer");

@@ -7,6 +7,7 @@
 
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/scene.h"
+#include "support/equation.h"
 
 namespace zeroset {
 namespace {
@@ -28,7 +29,7 @@ void expect_on_singular_set(const Surface& s, const SingularSet& set) {
     }
 }
 
-Surface catalog_surface(const std::string& name) { return make_surface(*find_catalog_entry(name)); }
+using test::catalog_surface;
 
 int points_of(const SingularSet& set, SingularPointKind kind) {
   return static_cast<int>(set.points_of(kind).size());

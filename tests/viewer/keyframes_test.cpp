@@ -11,6 +11,7 @@
 #include "zeroset/error.h"
 #include "zeroset/surface/keyframes.h"
 #include "zeroset/surface/scene.h"
+#include "support/temp_path.h"
 
 namespace zeroset::viewer {
 namespace {
@@ -18,11 +19,7 @@ namespace {
 using json = nlohmann::json;
 using test::file_bytes;
 
-std::string temp_path(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / "zeroset_viewer_keyframes_test";
-  std::filesystem::create_directories(dir);
-  return (dir / name).string();
-}
+using zeroset::test::temp_path;
 
 // A torus whose radii and camera move through three keyframes with three eases, one of them
 // placed by frame.

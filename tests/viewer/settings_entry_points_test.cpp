@@ -15,15 +15,12 @@
 #include "zeroset/render/settings.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/scene.h"
+#include "support/temp_path.h"
 
 namespace zeroset::viewer {
 namespace {
 
-std::string temp_path(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / "zeroset_settings_entry_points";
-  std::filesystem::create_directories(dir);
-  return (dir / name).string();
-}
+using zeroset::test::temp_path;
 
 Scene sphere_scene() { return Scene{make_surface(*find_catalog_entry("sphere")), {}}; }
 

@@ -18,6 +18,7 @@
 #include "zeroset/mesh/settings.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/scene.h"
+#include "support/temp_path.h"
 
 namespace zeroset::viewer {
 namespace {
@@ -28,11 +29,7 @@ using test::kFloaterValues;
 using test::kMeshValues;
 using test::run_until;
 
-std::string temp_path(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / "zeroset_settings_switches_test";
-  std::filesystem::create_directories(dir);
-  return (dir / name).string();
-}
+using zeroset::test::temp_path;
 
 Scene catalog_scene(const std::string& name) {
   return Scene{make_surface(*find_catalog_entry(name)), {}};

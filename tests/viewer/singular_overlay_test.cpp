@@ -16,6 +16,7 @@
 #include "zeroset/expr/parse.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/scene.h"
+#include "support/temp_path.h"
 
 namespace zeroset::viewer {
 namespace {
@@ -36,11 +37,7 @@ Scene equation_scene(const std::string& equation, const Clip& clip) {
   return Scene{std::move(s), {}};
 }
 
-std::string temp_path(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / "zeroset_singular_overlay_test";
-  std::filesystem::create_directories(dir);
-  return (dir / name).string();
-}
+using zeroset::test::temp_path;
 
 TEST(ViewerSingular, RomanShowsWhatTheLibraryFinds) {
   for (const Mode mode : {Mode::kRaytrace, Mode::kMesh, Mode::kFloaters}) {

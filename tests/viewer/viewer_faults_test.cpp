@@ -12,6 +12,7 @@
 #include "support/run_command.h"
 #include "support/xvfb.h"
 #include "zeroset/surface/clip.h"
+#include "support/temp_path.h"
 
 namespace zeroset {
 namespace {
@@ -20,11 +21,7 @@ using test::run_command;
 
 using test::has_xvfb;
 
-std::string temp_path(const std::string& name) {
-  const auto d = std::filesystem::temp_directory_path() / "zeroset_viewer_faults_test";
-  std::filesystem::create_directories(d);
-  return (d / name).string();
-}
+using zeroset::test::temp_path;
 
 std::string write_file(const std::string& name, const std::string& text) {
   const std::string path = temp_path(name);

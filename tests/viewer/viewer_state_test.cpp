@@ -18,6 +18,7 @@
 #include "zeroset/expr/field.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/scene.h"
+#include "support/temp_path.h"
 
 namespace zeroset::viewer {
 namespace {
@@ -26,11 +27,7 @@ Scene kummer_scene() { return Scene{make_surface(*find_catalog_entry("kummer")),
 
 using test::run_until;
 
-std::string temp_path(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / "zeroset_viewer_state_test";
-  std::filesystem::create_directories(dir);
-  return (dir / name).string();
-}
+using zeroset::test::temp_path;
 
 TEST(ViewerState, MalformedEquationShowsCaretAndKeepsTheLastGoodSurface) {
   ViewerState state(kummer_scene(), Mode::kRaytrace);

@@ -47,6 +47,8 @@ bool boolean(const nlohmann::json& j, const std::string& origin, const std::stri
 std::string string(const nlohmann::json& j, const std::string& origin, const std::string& where);
 /// [x, y, z], finite.
 Vec3 vec3(const nlohmann::json& j, const std::string& origin, const std::string& where);
+/// The inverse of vec3: `v` as [x, y, z], as scene and statistics files write points.
+nlohmann::json from_vec3(const Vec3& v);
 
 /// Every key of `object` must be among `known`: a misspelt key would otherwise be ignored.
 void known_keys(const nlohmann::json& object, std::initializer_list<const char*> known,

@@ -1,0 +1,23 @@
+# Build speed (docs/contributing.md, "How CI is built").
+
+# Unity builds: the test programs, the command line, the viewer and the Python module are each
+# compiled as a few large files instead of one per source, so the headers they share
+# (GoogleTest, CLI11, nlohmann-json, Eigen, fmt) are parsed and instantiated once per batch.
+# The libraries in src/ stay one object per file, so a change there recompiles one file.
+# zeroset_unity_build() is called at the top of those directories; ZEROSET_UNITY_BUILD=OFF
+# builds every file alone (e.g. to check that each includes what it uses).
+option(ZEROSET_UNITY_BUILD "Compile the tests, apps and Python module as unity builds" ON)
+macro(zeroset_unity_build)
+  set(CMAKE_UNITY_BUILD ${ZEROSET_UNITY_BUILD})
+  set(CMAKE_UNITY_BUILD_BATCH_SIZE 8)
+endmacro()
+
+# ccache when it is installed (never required): a rebuild of unchanged files is a cache hit.
+option(ZEROSET_CCACHE "Compile through ccache when it is installed" ON)
+if(ZEROSET_CCACHE AND NOT CMAKE_CXX_COMPILER_LAUNCHER)
+  find_program(ZEROSET_CCACHE_PROGRAM ccache)
+  if(ZEROSET_CCACHE_PROGRAM)
+    set(CMAKE_CXX_COMPILER_LAUNCHER ${ZEROSET_CCACHE_PROGRAM})
+    message(STATUS "zeroset: compiling through ${ZEROSET_CCACHE_PROGRAM}")
+  endif()
+endif()
