@@ -5,10 +5,9 @@
 JOBS ?= $(shell nproc)
 BUILD ?= build
 ASAN_BUILD ?= build-asan
-FUZZ_BUILD ?= build-fuzz
 CMAKE_FLAGS ?=
 
-.PHONY: deps build demo test test-asan fuzz bench format clean
+.PHONY: deps build demo test asan-configure test-asan fuzz bench format clean
 
 deps:
 	scripts/install-deps.sh
@@ -23,32 +22,33 @@ demo: build
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) --timeout 600
 
-# The tests again with AddressSanitizer and UndefinedBehaviorSanitizer, at -O1 -g1 (line tables
-# for the reports), without the targets only the Release build needs: the tests that open the
-# window (label gui), the package tests (label package), the benchmarks and the Python module.
-ASAN_CMAKE_FLAGS = -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" \
-	-DZEROSET_SANITIZE=ON -DZEROSET_BUILD_BENCH=OFF -DZEROSET_BUILD_GUI_TESTS=OFF
-test-asan: deps
+# The sanitizer build (clang, build-asan/): AddressSanitizer and UndefinedBehaviorSanitizer at
+# -O1 -g1 (line tables for the reports), with libFuzzer's coverage counters so that the fuzz
+# targets link the same libraries; without what only the Release build needs: the tests that
+# open the window (label gui), the benchmarks and the Python module. test-asan runs every test
+# but the package tests (label package); fuzz runs the fuzz targets for FUZZ_SECONDS each: the
+# surface language's parser, then scene files (JSON and SURFER's .jsurf).
+ASAN_CMAKE_FLAGS = -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	"-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" -DZEROSET_SANITIZE=ON -DZEROSET_BUILD_FUZZ=ON \
+	-DZEROSET_BUILD_BENCH=OFF -DZEROSET_BUILD_GUI_TESTS=OFF
+FUZZ_SECONDS ?= 60
+
+asan-configure: deps
 	cmake -S . -B $(ASAN_BUILD) $(ASAN_CMAKE_FLAGS) $(CMAKE_FLAGS)
+
+test-asan: asan-configure
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
 	cd $(ASAN_BUILD) && LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 \
 	      ctest --output-on-failure -j $(JOBS) --timeout 1200 -LE package
 
-# Runs the fuzz targets (libFuzzer, clang) for FUZZ_SECONDS each: the surface language's
-# parser, then scene files (JSON and SURFER's .jsurf).
-FUZZ_SECONDS ?= 60
-fuzz: deps
-	CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -DZEROSET_BUILD_FUZZ=ON -DZEROSET_BUILD_TESTS=OFF \
-	      -DZEROSET_BUILD_BENCH=OFF -DZEROSET_BUILD_VIEWER=OFF -DZEROSET_BUILD_PYTHON=OFF \
-	      -DZEROSET_BUILD_EXAMPLES=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-	      "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG"
-	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target parse_fuzz scene_fuzz
-	mkdir -p $(FUZZ_BUILD)/corpus && cp tests/fuzz/corpus/* $(FUZZ_BUILD)/corpus/
-	$(FUZZ_BUILD)/tests/fuzz/parse_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=5 -max_len=512 \
-	      -print_final_stats=1 $(FUZZ_BUILD)/corpus
-	mkdir -p $(FUZZ_BUILD)/scene_corpus && cp tests/fuzz/scene_corpus/* $(FUZZ_BUILD)/scene_corpus/
-	$(FUZZ_BUILD)/tests/fuzz/scene_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=5 -max_len=4096 \
-	      -rss_limit_mb=2048 -print_final_stats=1 $(FUZZ_BUILD)/scene_corpus
+fuzz: asan-configure
+	cmake --build $(ASAN_BUILD) -j $(JOBS) --target parse_fuzz scene_fuzz
+	mkdir -p $(ASAN_BUILD)/corpus && cp tests/fuzz/corpus/* $(ASAN_BUILD)/corpus/
+	$(ASAN_BUILD)/tests/fuzz/parse_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=5 -max_len=512 \
+	      -print_final_stats=1 $(ASAN_BUILD)/corpus
+	mkdir -p $(ASAN_BUILD)/scene_corpus && cp tests/fuzz/scene_corpus/* $(ASAN_BUILD)/scene_corpus/
+	$(ASAN_BUILD)/tests/fuzz/scene_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=5 -max_len=4096 \
+	      -rss_limit_mb=2048 -print_final_stats=1 $(ASAN_BUILD)/scene_corpus
 
 # Peer comparisons (installs the peer tools) and micro-benchmarks; writes docs/benchmarks.md.
 bench: build
@@ -61,4 +61,4 @@ format:
 	find $(FORMAT_DIRS) \( -name '*.cpp' -o -name '*.h' \) -print0 | xargs -0 clang-format -i
 
 clean:
-	rm -rf $(BUILD) $(ASAN_BUILD) $(FUZZ_BUILD)
+	rm -rf $(BUILD) $(ASAN_BUILD)

@@ -2,16 +2,18 @@
 # never set globally.
 add_library(zeroset_warnings INTERFACE)
 target_compile_options(zeroset_warnings INTERFACE -Wall -Wextra -Wpedantic -Wno-unused-parameter)
+if(ZEROSET_BUILD_FUZZ AND NOT ZEROSET_SANITIZE)
+  message(FATAL_ERROR "ZEROSET_BUILD_FUZZ needs ZEROSET_SANITIZE=ON (make fuzz sets both)")
+endif()
 if(ZEROSET_SANITIZE)
   add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
   add_link_options(-fsanitize=address,undefined)
 endif()
-# The fuzz build (tests/fuzz, clang): every library the fuzzers link gets libFuzzer's coverage
-# instrumentation and the sanitizers; only the fuzz targets link the fuzzer's main.
+# The sanitizer build with the fuzz targets (clang, `make test-asan` and `make fuzz`): every
+# library also gets libFuzzer's coverage counters, so the fuzzers link the libraries of the
+# same build the sanitized tests run on; only the fuzz targets link the fuzzer's main.
 if(ZEROSET_BUILD_FUZZ)
-  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer
-                      -fno-sanitize-recover=undefined)
-  add_link_options(-fsanitize=address,undefined)
+  add_compile_options(-fsanitize=fuzzer-no-link)
 endif()
 
 # Code generation for the processor that builds (AVX2, FMA, POPCNT where present): the hot

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "cli/cli_support.h"
+#include "support/sanitizers.h"
 
 namespace zeroset {
 namespace {
@@ -20,7 +21,7 @@ using test::zs;
 // AddressSanitizer reserves terabytes of address space for its shadow memory at start-up, so a
 // sanitized `zeroset` cannot start under `ulimit -v` at all: the tests of the process limit
 // run in the ordinary build only.
-#if defined(__SANITIZE_ADDRESS__)
+#if ZEROSET_TEST_UNDER_ASAN
 #define ZS_SKIP_UNDER_ASAN() GTEST_SKIP() << "AddressSanitizer cannot run under ulimit -v"
 #else
 #define ZS_SKIP_UNDER_ASAN() (void)0

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cli_support.h"
+#include "support/sanitizers.h"
 
 namespace zeroset {
 namespace {
@@ -182,7 +183,7 @@ TEST(HostileInputs, InfoWithManyParametersIsNearLinear) {
   // of it the singular set's grid evaluating n terms per point.
   const std::string d = fresh_dir("hostile_many_params");
   std::string eq;
-#if defined(__SANITIZE_ADDRESS__)
+#if ZEROSET_TEST_UNDER_ASAN
   const int n = 5'000;  // the sanitized build runs several times slower
 #else
   const int n = 20'000;
