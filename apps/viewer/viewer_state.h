@@ -132,7 +132,7 @@ inline constexpr std::size_t kMaxLiveFloaters = 2'000'000;
 inline constexpr int kMinLiveCells = 4;
 inline constexpr int kMaxLiveCells = 512;
 /// The viewer's mesh settings before a scene or the user changes them.
-inline constexpr MeshSettings kLiveMeshDefaults{.cells = 64,
+inline const MeshSettings kLiveMeshDefaults{.cells = 64,
                                                 .improve = true,
                                                 .max_improve_steps = std::nullopt,
                                                 .boundary = BoundaryMode::kConstrained};

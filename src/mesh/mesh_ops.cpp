@@ -110,7 +110,8 @@ size_t collapse_short_edges(Mesh& mesh, double min_length) {
     // Link condition: the common neighbours are exactly the opposite corners of `shared`.
     size_t common = 0;
     bool link_ok = true;
-    for (const auto& [w, c] : nb_u) {
+    for (const auto& neighbour : nb_u) {
+      const std::uint32_t w = neighbour.first;  // a name of its own: lambdas capture it
       if (w == v) continue;
       if (std::none_of(nb_v.begin(), nb_v.end(), [&](const auto& p) { return p.first == w; }))
         continue;

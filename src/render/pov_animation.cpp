@@ -163,7 +163,9 @@ std::string pov_camera_and_lights(const Surface& surface, const RenderOptions& o
       {"azimuth_deg", base.azimuth_deg}, {"elevation_deg", base.elevation_deg},
       {"distance", base.distance},       {"roll_deg", base.roll_deg},
       {"fov_deg", base.fov_deg}};
-  for (const auto& [name, value] : fields) {
+  for (const auto& field : fields) {
+    const std::string& name = field.first;  // names of their own: the lambda captures `name`
+    const double value = field.second;
     const auto t = std::find_if(keys.camera.begin(), keys.camera.end(),
                                 [&](const KeyTrack& k) { return k.name == name; });
     out += t == keys.camera.end() ? fmt::format("#declare ZS_{} = {};\n", name, num(value))

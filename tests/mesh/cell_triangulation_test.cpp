@@ -85,7 +85,9 @@ void for_random_cycles(int n, std::uint64_t seed, Check&& check) {
   ASSERT_FALSE(cycles.empty());
   std::mt19937_64 rng(seed);
   for (int trial = 0; trial < 20000; ++trial) {
-    const auto& [edges, chords] = cycles[static_cast<size_t>(trial) % cycles.size()];
+    const auto& cycle = cycles[static_cast<size_t>(trial) % cycles.size()];
+    const auto& edges = cycle.first;  // names of their own: lambdas capture them
+    const auto& chords = cycle.second;
     const std::array<Vec3, 12> p = random_points(rng);
     auto pos = [&](int e) -> const Vec3& { return p[static_cast<size_t>(e)]; };
     const auto fast = triangles_of([&](auto emit) { triangulate_cycle(edges, chords, n, pos, emit); });
