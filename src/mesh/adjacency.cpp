@@ -49,6 +49,7 @@ void bucket_edges(size_t nv, Triangles triangles, std::vector<std::uint32_t>& st
 // std::sort's set-up.
 template <class T, class Less>
 void sort_bucket(T* b, T* e, Less less) {
+  if (e - b < 2) return;  // also an empty bucket of an empty mesh: b is null, b + 1 undefined
   if (e - b > 32) {
     std::sort(b, e, less);
     return;
