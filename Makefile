@@ -26,7 +26,8 @@ test: build
 # -O1 -g1 (line tables for the reports), with libFuzzer's coverage counters so that the fuzz
 # targets link the same libraries; without what only the Release build needs: the tests that
 # open the window (label gui), the benchmarks and the Python module. test-asan runs every test
-# but the package tests and the long mesh suites (labels package, mesh_heavy); fuzz runs the
+# but the package tests and the long mesh and viewer sweeps (labels package, mesh_heavy,
+# viewer_heavy); fuzz runs the
 # fuzz targets for FUZZ_SECONDS each: the surface language's parser, then scene files (JSON and
 # SURFER's .jsurf).
 ASAN_CMAKE_FLAGS = -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
@@ -40,7 +41,7 @@ asan-configure: deps
 test-asan: asan-configure
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
 	cd $(ASAN_BUILD) && LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 \
-	      ctest --output-on-failure -j $(JOBS) --timeout 1200 -LE 'package|mesh_heavy'
+	      ctest --output-on-failure -j $(JOBS) --timeout 1200 -LE 'package|mesh_heavy|viewer_heavy'
 
 fuzz: asan-configure
 	cmake --build $(ASAN_BUILD) -j $(JOBS) --target parse_fuzz scene_fuzz
