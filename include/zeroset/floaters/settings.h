@@ -17,7 +17,7 @@
 /// the same words.
 #include <cstddef>
 #include <cstdint>
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 
 #include "zeroset/floaters/floaters.h"

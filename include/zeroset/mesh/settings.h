@@ -16,7 +16,7 @@
 /// validate_settings below, so each refuses a bad value with the same words.
 #include <algorithm>
 #include <array>
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
 #include <string_view>

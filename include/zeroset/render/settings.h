@@ -14,7 +14,7 @@
 /// linear values in [0, 1]. Every key is optional; missing ones keep their current value. The
 /// command line, scene files and the viewer check these settings with validate_settings below,
 /// so each refuses a bad value with the same words.
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 
 #include "zeroset/render/render.h"

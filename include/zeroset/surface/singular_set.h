@@ -4,7 +4,7 @@
 /// by the Hessian across them, and the special points where curves change (pinch points,
 /// triple points, ends on the clip). See docs/singular.md for the method and its limits.
 #include <cstdint>
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 #include <stop_token>
 #include <string>
 #include <string_view>
