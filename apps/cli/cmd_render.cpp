@@ -268,7 +268,7 @@ int frame_number_of(const std::string& name) {
 void encode_video(const std::string& first_frame_temp, const std::string& video_temp,
                   double fps, const std::string& video) {
   // The temp files keep the frames' names without their extension: frame_0000 in
-  // .frame_0000.tmp-PID-N.png becomes frame_%04d.
+  // .frame_0000.tmp-TOKEN.png becomes frame_%04d.
   fs::path pattern(first_frame_temp);
   std::string name = pattern.filename().string();
   const std::string number = fs::path(frame_file_name(0)).stem().string();

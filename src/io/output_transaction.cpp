@@ -1,5 +1,6 @@
 #include "zeroset/io/output_transaction.h"
 
+#include <fcntl.h>
 #include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -9,11 +10,13 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
+#include <ostream>
 #include <new>
+#include <utility>
 
 #include "zeroset/error.h"
 #include "zeroset/io/atomic_file.h"
+#include "temp_file_detail.h"
 
 namespace zeroset {
 namespace fs = std::filesystem;
@@ -130,20 +133,29 @@ fs::path canonical_or_absolute(const fs::path& p) {
   return ec ? absolute : c;
 }
 
-/// ".NAME.tmp-PID-ID.EXT" beside `target`: hidden, unique per process and transaction (two
-/// outputs of one transaction never share a target), and with the target's extension for
-/// programs that go by it.
-std::string temp_name_for(const fs::path& target, unsigned id) {
-  std::string stem = target.stem().string().substr(0, 180);
-  return (parent_or_dot(target) / ("." + stem + ".tmp-" + std::to_string(::getpid()) + "-" +
-                                   std::to_string(id) + target.extension().string()))
-      .string();
-}
-
-std::atomic<unsigned> g_next_id{0};
 thread_local OutputTransaction* t_active = nullptr;
 
 std::string errno_text(int err) { return err != 0 ? std::strerror(err) : "unknown error"; }
+
+/// Closes a file descriptor when it goes out of scope (an exception of a writer).
+class FdCloser {
+ public:
+  explicit FdCloser(int fd) : fd_(fd) {}
+  ~FdCloser() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  FdCloser(const FdCloser&) = delete;
+  FdCloser& operator=(const FdCloser&) = delete;
+  int get() const { return fd_; }
+  /// Closes it now: 0, or close(2)'s errno (NFS reports failed writes here).
+  int close() {
+    const int fd = std::exchange(fd_, -1);
+    return fd < 0 || ::close(fd) == 0 ? 0 : errno;
+  }
+
+ private:
+  int fd_;
+};
 
 }  // namespace
 
@@ -162,17 +174,20 @@ void check_writable(const std::string& path) { check_output_path(path); }
 
 // -------------------------------------------------------------------------- transaction
 struct OutputTransaction::Output {
-  std::string path;  // as given
+  std::string path;        // as given
   std::string flag;
-  fs::path target;   // links followed
-  std::string temp;  // empty: written directly
-  int slot = -1;     // of `temp` in the signal clean-up
+  fs::path target;         // links followed
+  detail::TempFile temp;   // path empty: written directly
+  int mode = -1;           // the permission bits of the file it replaces; -1: a new file
+  int slot = -1;           // of `temp` in the signal clean-up
   bool written = false;
   bool external = false;
   bool renamed = false;
 };
 
-OutputTransaction::OutputTransaction() : id_(g_next_id++), outer_(t_active) { t_active = this; }
+OutputTransaction::OutputTransaction() : token_(detail::random_token()), outer_(t_active) {
+  t_active = this;
+}
 
 OutputTransaction::~OutputTransaction() {
   if (!committed_) roll_back();
@@ -202,13 +217,29 @@ void OutputTransaction::declare(const std::string& path, const std::string& flag
   o.path = path;
   o.flag = flag;
   o.target = c.target;
+  outputs_.reserve(outputs_.size() + 1);  // the push_back below does not throw
   if (!c.direct) {
-    o.temp = temp_name_for(c.target, id_);
-    o.slot = register_path(g_files, kFileSlots, &g_next_file, o.temp);
-    by_name_[name] = outputs_.size();
-    if (exists) by_inode_[inode] = outputs_.size();
+    // The temp file is made now, before any work, under a name nobody can guess and never
+    // through a symbolic link (a path where it cannot be made is bad input). It replaces an
+    // existing file with that file's permission bits, set when it is written (until then it is
+    // the owner's alone); a new file gets 0666 less the umask, as any new file.
+    if (exists) o.mode = static_cast<int>(st.st_mode & 0777);
+    o.temp = detail::create_temp_file(c.target, token_, exists ? 0600 : 0666, path);
+    try {
+      o.slot = register_path(g_files, kFileSlots, &g_next_file, o.temp.path);
+      by_name_[name] = outputs_.size();
+      if (exists) by_inode_[inode] = outputs_.size();
+      by_path_.emplace(path, outputs_.size());
+    } catch (...) {
+      unregister_path(g_files, o.slot);
+      ::unlink(o.temp.path.c_str());
+      by_name_.erase(name);
+      if (exists) by_inode_.erase(inode);
+      throw;
+    }
+  } else {
+    by_path_.emplace(path, outputs_.size());
   }
-  by_path_.emplace(path, outputs_.size());
   outputs_.push_back(std::move(o));
 }
 
@@ -222,24 +253,32 @@ void OutputTransaction::write(const std::string& path,
                               const std::function<void(std::ostream&)>& write) {
   Output& o = find_or_declare(path);
   if (o.written || o.external) throw Error("internal error: '" + path + "' written twice");
-  const std::string file = o.temp.empty() ? o.target.string() : o.temp;
-  std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  if (!out)
-    throw WriteError(path, (o.temp.empty() ? "cannot open: " : "cannot create its temp file: ") +
-                               errno_text(errno));
-  o.written = true;  // from here on the temp file exists: roll_back removes it
+  int raw = -1;
+  if (o.temp.path.empty()) {  // a device or a FIFO, written in place
+    raw = ::open(o.target.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    if (raw < 0) throw WriteError(path, "cannot open: " + errno_text(errno));
+  } else {
+    raw = detail::open_temp_for_writing(o.temp, path);
+  }
+  FdCloser fd(raw);
+  o.written = true;
+  const int mode = o.mode;  // `o` may move while `write` runs (a writer declaring an output)
+  detail::FdOutBuf buf(fd.get());
+  std::ostream out(&buf);
   write(out);
-  errno = 0;
   out.flush();
-  if (out) out.close();
-  if (!out) throw WriteError(path, "write failed: " + errno_text(errno));
+  int err = buf.error();
+  if (out && err == 0 && mode >= 0 && ::fchmod(fd.get(), static_cast<mode_t>(mode)) != 0)
+    err = errno;
+  if (const int close_err = fd.close(); err == 0) err = close_err;
+  if (!out || err != 0) throw WriteError(path, "write failed: " + errno_text(err));
 }
 
 std::string OutputTransaction::temp_path(const std::string& path) const {
   const auto it = by_path_.find(path);
   if (it == by_path_.end()) throw Error("internal error: '" + path + "' was not declared");
   const Output& o = outputs_[it->second];
-  return o.temp.empty() ? o.target.string() : o.temp;
+  return o.temp.path.empty() ? o.target.string() : o.temp.path;
 }
 
 std::string OutputTransaction::external_temp_path(const std::string& path) {
@@ -274,13 +313,18 @@ void OutputTransaction::commit() {
   if (committed_) throw Error("internal error: an output transaction committed twice");
   std::error_code ec;
   for (const Output& o : outputs_)
-    if (!o.written && !(o.external && fs::exists(o.temp.empty() ? o.target : fs::path(o.temp), ec)))
+    if (!o.written && !(o.external && external_output_exists(o)))
       throw WriteError(o.path, o.external ? "the program that makes it wrote nothing"
                                           : "internal error: declared but never written");
   for (Output& o : outputs_) {
-    if (o.temp.empty()) continue;
-    fs::rename(o.temp, o.target, ec);
-    if (ec) throw WriteError(o.path, "cannot move into place: " + ec.message());
+    if (o.temp.path.empty()) continue;
+    if (o.external) {
+      finish_external_output(o);
+    } else if (!detail::is_made_file(o.temp)) {
+      throw WriteError(o.path, "its temp file '" + o.temp.path + "' was replaced by another file");
+    }
+    if (::rename(o.temp.path.c_str(), o.target.c_str()) != 0)
+      throw WriteError(o.path, "cannot move into place: " + errno_text(errno));
     o.renamed = true;
     unregister_path(g_files, o.slot);
     o.slot = -1;
@@ -294,9 +338,25 @@ void OutputTransaction::commit() {
   }
 }
 
+bool OutputTransaction::external_output_exists(const Output& o) {
+  // Its temp file exists from the start: the program wrote something if it is not empty.
+  struct stat st {};
+  if (o.temp.path.empty()) return ::stat(o.target.c_str(), &st) == 0;
+  return ::lstat(o.temp.path.c_str(), &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0;
+}
+
+void OutputTransaction::finish_external_output(const Output& o) {
+  if (o.mode < 0) return;
+  const int raw = ::open(o.temp.path.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+  if (raw < 0) throw WriteError(o.path, "cannot open its temp file: " + errno_text(errno));
+  FdCloser fd(raw);
+  if (::fchmod(fd.get(), static_cast<mode_t>(o.mode)) != 0)
+    throw WriteError(o.path, "cannot set the permissions of its temp file: " + errno_text(errno));
+}
+
 void OutputTransaction::roll_back() noexcept {
   for (Output& o : outputs_) {
-    if (!o.temp.empty() && !o.renamed) ::unlink(o.temp.c_str());
+    if (!o.temp.path.empty() && !o.renamed) ::unlink(o.temp.path.c_str());
     unregister_path(g_files, o.slot);
     o.slot = -1;
   }

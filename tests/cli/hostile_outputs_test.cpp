@@ -1,9 +1,11 @@
 // The outputs of `zeroset` under a hostile but fair user: two outputs naming one file, symbolic
-// links, a full disk, SIGINT and SIGTERM in the middle of a long run, animations rerun with
-// fewer frames or interrupted. Every run leaves each target whole (old or new) and no temp file.
+// links, links planted at temp names in a shared directory, a full disk, SIGINT and SIGTERM in
+// the middle of a long run, animations rerun with fewer frames or interrupted, two runs writing
+// one file. Every run leaves each target whole (old or new) and no temp file.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -46,6 +48,19 @@ bool has_temp_file(const std::string& dir) {
   for (const auto& [name, bytes] : contents(dir))
     if (name.find(".tmp-") != std::string::npos) return true;
   return false;
+}
+
+/// A temp file with bytes in it: an output written and waiting for the commit. (Temp files are
+/// made empty when the outputs are declared, before any work.)
+bool has_staged_file(const std::string& dir) {
+  for (const auto& [name, bytes] : contents(dir))
+    if (name.find(".tmp-") != std::string::npos && !bytes.empty()) return true;
+  return false;
+}
+
+unsigned mode_of(const std::string& path) {
+  struct stat st {};
+  return ::lstat(path.c_str(), &st) == 0 ? static_cast<unsigned>(st.st_mode & 07777) : ~0u;
 }
 
 void put(const std::string& path, const std::string& text) {
@@ -132,6 +147,95 @@ TEST(HostileOutputs, AnOutputThroughASymbolicLinkReplacesItsTargetAndTheLinkStay
   EXPECT_FALSE(has_temp_file(d));
 }
 
+// ---- temp files in a shared directory -------------------------------------------------------
+
+/// A shell command that, in `dir`, plants symbolic links to `victim` at the temp names the
+/// outputs `names` (relative to `dir`) used to take, ".STEM.tmp-PID-ID.EXT" for the IDs 0 to 7
+/// and the shell's PID, then becomes `zeroset args` (exec keeps the PID).
+std::string with_planted_links(const std::string& dir, const std::vector<std::string>& names,
+                               const std::string& victim, const std::string& args) {
+  std::string cmd = "cd '" + dir + "' && for i in 0 1 2 3 4 5 6 7; do";
+  for (const std::string& name : names) {
+    const fs::path p(name);
+    const std::string head = (p.parent_path() / ("." + p.stem().string())).string();
+    cmd += " ln -s '" + victim + "' '" + head + ".tmp-'$$-$i'" + p.extension().string() + "' &&";
+  }
+  return cmd + " :; done && exec " + zs(args);
+}
+
+TEST(HostileOutputs, ALinkPlantedAtATempNameRedirectsNoOutput) {
+  const std::string d = fresh_dir("hostile-planted-links");
+  const std::string victim = d + "/victim.txt";
+  put(victim, "precious");
+  fs::create_directories(d + "/frames");
+  const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
+      {"mesh sphere -r 8 -o " + d + "/m.obj", {"m.obj"}},
+      {"render sphere --size 16x16 --aa 1 -o " + d + "/a.png --stats " + d + "/a.json",
+       {"a.png", "a.json"}},
+      {"sample sphere --max-count 50 --steps 2 -o " + d + "/s.ply", {"s.ply"}},
+      {"animate torus --param r=0.2:0.9 --size 16x16 --aa 1 --no-video --frames 2 -o " + d +
+           "/frames",
+       {"frames/frame_0000.png", "frames/frame_0001.png"}}};
+  size_t planted = 0;
+  for (const auto& [args, outputs] : cases) {
+    const auto r = run_command(with_planted_links(d, outputs, victim, "-q " + args));
+    ASSERT_EQ(r.exit_code, 0) << args << "\n" << r.output;
+    planted += 8 * outputs.size();
+    EXPECT_EQ(contents(d).at("victim.txt"), "precious") << args;
+    for (const std::string& out : outputs) {
+      EXPECT_TRUE(fs::is_regular_file(fs::symlink_status(d + "/" + out))) << out;
+      EXPECT_FALSE(contents(d).at(out).empty()) << out;
+    }
+  }
+  // The planted links are all there, still links; no other temp name is left.
+  size_t links = 0;
+  for (const auto& [name, bytes] : contents(d)) {
+    if (name.find(".tmp-") == std::string::npos) continue;
+    EXPECT_TRUE(fs::is_symlink(d + "/" + name)) << name;
+    ++links;
+  }
+  EXPECT_EQ(links, planted);
+  EXPECT_FALSE(fs::is_symlink(d + "/m.obj"));
+}
+
+TEST(HostileOutputs, AReplacedOutputKeepsItsPermissionBits) {
+  const std::string d = fresh_dir("hostile-modes");
+  put(d + "/m.obj", "old mesh");
+  fs::permissions(d + "/m.obj", static_cast<fs::perms>(0600));
+  put(d + "/a.png", "old picture");
+  fs::permissions(d + "/a.png", static_cast<fs::perms>(0640));
+  auto r = run_command("umask 022 && exec " + zs("-q mesh sphere -r 8 -o " + d + "/m.obj --png " +
+                                                  d + "/a.png --size 16x16 --stats " + d +
+                                                  "/new.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(contents(d).at("m.obj"), "old mesh");
+  EXPECT_EQ(mode_of(d + "/m.obj"), 0600u);
+  EXPECT_EQ(mode_of(d + "/a.png"), 0640u);
+  // A new file gets the usual mode: 0666 less the umask.
+  EXPECT_EQ(mode_of(d + "/new.json"), 0644u);
+  r = run_command("umask 027 && exec " + zs("-q render sphere --size 16x16 -o " + d + "/b.png"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(mode_of(d + "/b.png"), 0640u);
+}
+
+TEST(HostileOutputs, TwoRunsWritingOneOutputAtOnceDoNotCollide) {
+  const std::string d = fresh_dir("hostile-two-runs");
+  const std::vector<std::string> args = {"-q", "mesh", "sphere", "-r", "12", "-o", d + "/m.obj"};
+  for (int round = 0; round < 3; ++round) {
+    const pid_t a = spawn(args, d + "/../hostile-two-runs-a.log");
+    const pid_t b = spawn(args, d + "/../hostile-two-runs-b.log");
+    ASSERT_GT(a, 0);
+    ASSERT_GT(b, 0);
+    EXPECT_EQ(wait_status(a), 0);
+    EXPECT_EQ(wait_status(b), 0);
+  }
+  auto r = run_command(zs("-q mesh sphere -r 12 -o " + d + "/ref.obj"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto files = contents(d);
+  EXPECT_EQ(files.size(), 2u);  // m.obj and ref.obj: no temp file
+  EXPECT_EQ(files.at("m.obj"), files.at("ref.obj"));
+}
+
 // ---- failing writes and bad paths ------------------------------------------------------------
 
 TEST(HostileOutputs, AFullDiskIsAFailureAndTheEarlierOutputsAreNotWritten) {
@@ -203,10 +307,10 @@ TEST(HostileOutputs, SigintAndSigtermDuringALongRenderLeaveTheOldPicture) {
 
 TEST(HostileOutputs, ASignalWhileAMeshIsStagedRemovesIt) {
   // The mesh is staged before the --png picture is drawn: the signal comes while its temp file
-  // exists.
+  // holds it.
   const std::string d = fresh_dir("hostile-signal-mesh");
   put(d + "/m.obj", "old mesh");
-  const auto staged = [&] { return has_temp_file(d); };
+  const auto staged = [&] { return has_staged_file(d); };
   for (const int sig : {SIGINT, SIGTERM})
     expect_interrupted_cleanly(d, {"mesh", "sphere", "-r", "24", "--improve", "off", "-o",
                                    d + "/m.obj", "--png", d + "/m.png", "--size", "4000x4000"},
@@ -215,7 +319,7 @@ TEST(HostileOutputs, ASignalWhileAMeshIsStagedRemovesIt) {
 
 TEST(HostileOutputs, ASignalWhileFloatersAreStagedRemovesThem) {
   const std::string d = fresh_dir("hostile-signal-sample");
-  const auto staged = [&] { return has_temp_file(d); };
+  const auto staged = [&] { return has_staged_file(d); };
   expect_interrupted_cleanly(d, {"sample", "sphere", "--max-count", "200", "--steps", "5", "-o",
                                  d + "/s.ply", "--png", d + "/s.png", "--size", "4000x4000"},
                              SIGTERM, staged);
@@ -264,13 +368,13 @@ TEST(HostileOutputs, AnInterruptedAnimationLeavesTheDirectoryAsItWas) {
   std::vector<std::string> args = kAnimate;
   for (const char* a : {"--frames", "400", "-o"}) args.push_back(a);
   args.push_back(d);
-  const auto staged = [&] { return has_temp_file(d); };
+  const auto staged = [&] { return has_staged_file(d); };
   for (const int sig : {SIGINT, SIGTERM}) expect_interrupted_cleanly(d, args, sig, staged);
   // A directory the run made is removed again.
   const std::string fresh = root + "/new/frames";
   args.back() = fresh;
   fs::create_directories(root + "/new");
-  expect_interrupted_cleanly(root + "/new", args, SIGTERM, [&] { return has_temp_file(fresh); });
+  expect_interrupted_cleanly(root + "/new", args, SIGTERM, [&] { return has_staged_file(fresh); });
   EXPECT_FALSE(fs::exists(fresh));
 }
 

@@ -14,30 +14,15 @@
 
 #include "zeroset/error.h"
 #include "zeroset/io/atomic_file.h"
+#include "support/scratch_dir.h"
 
 namespace zeroset {
 namespace {
 
 namespace fs = std::filesystem;
 
-class OutputTransactionTest : public ::testing::Test {
+class OutputTransactionTest : public test::ScratchDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("zeroset_io_tx_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  static void put(const std::string& p, const std::string& text) {
-    std::ofstream(p, std::ios::binary) << text;
-  }
-  static std::string text_of(const std::string& p) {
-    std::ifstream in(p, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), {}};
-  }
   /// Every name in `d` (recursively, relative), temp files included.
   std::set<std::string> files(const fs::path& d = {}) const {
     std::set<std::string> names;
@@ -50,7 +35,6 @@ class OutputTransactionTest : public ::testing::Test {
     return [text](std::ostream& out) { out << text; };
   }
 
-  fs::path dir_;
 };
 
 TEST_F(OutputTransactionTest, OutputsAppearTogetherAtCommit) {

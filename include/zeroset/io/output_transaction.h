@@ -2,7 +2,8 @@
 /// All output files of one command as one transaction (docs/architecture.md, "Errors"): each
 /// output is written into a temp file beside its target and renamed into place only when every
 /// output was written; after an error, an exception or SIGINT/SIGTERM no temp file is left and
-/// every target is as before.
+/// every target is as before. Temp files have names nobody can guess and are made exclusively,
+/// never through a symbolic link, so that a link planted in a shared directory redirects nothing.
 #include <functional>
 #include <map>
 #include <ostream>
@@ -21,6 +22,13 @@ namespace zeroset {
 ///     ... work, write_png(image, output), write_json(j, stats) ...
 ///     tx.commit();                       // every output renamed into place
 ///
+/// Each output's temp file, ".NAME.tmp-TOKEN.EXT" beside its target, is made when the output is
+/// declared, with open(O_CREAT | O_EXCL | O_NOFOLLOW): TOKEN is random (80 bits, one per
+/// transaction, so that the temp names of numbered frames still form a pattern; a name that is
+/// taken is never opened, another random one is tried). Writing reopens it without following
+/// links and checks it is still the file made. A file replaced keeps its permission bits; a new
+/// file gets 0666 less the umask.
+///
 /// Destroyed without commit() (an exception, an error), it removes its temp files and the
 /// directories it created. A target that is a symbolic link is written through: the temp file
 /// goes beside the link's final target and replaces that, the link stays. A target that exists
@@ -37,9 +45,9 @@ class OutputTransaction {
   /// one), or nullptr.
   static OutputTransaction* active();
 
-  /// Declares the output `path` (set by `flag`, named in messages) before any work. Throws
-  /// IoError (bad input) when it cannot be created (no such directory, not writable, a
-  /// directory) and InvalidArgument when an output declared before names the same file, by any
+  /// Declares the output `path` (set by `flag`, named in messages) before any work and makes its
+  /// temp file. Throws IoError (bad input) when it cannot be created (no such directory, not
+  /// writable, a directory, its temp file cannot be made) and InvalidArgument when an output declared before names the same file, by any
   /// spelling (./a.png, a symbolic link to it, a hard link). Throws Error when more outputs are
   /// pending in the process than the signal clean-up can hold (65,536).
   void declare(const std::string& path, const std::string& flag);
@@ -54,7 +62,7 @@ class OutputTransaction {
   std::string temp_path(const std::string& path) const;
 
   /// The temp file of the declared output `path`, for another program to write (ffmpeg); it
-  /// must exist at commit(). Its name keeps the target's extension.
+  /// must not be empty at commit(). Its name keeps the target's extension.
   std::string external_temp_path(const std::string& path);
 
   /// Creates `dir` and its missing parents; those it created are removed again (when empty) if
@@ -65,7 +73,8 @@ class OutputTransaction {
   void remove_on_commit(const std::string& path);
 
   /// Renames every output into place and removes the files given to remove_on_commit. Throws
-  /// WriteError when an output was not written or a rename fails; the outputs not yet renamed
+  /// WriteError when an output was not written, its temp file was replaced by another file
+  /// (a directory others can write to) or a rename fails; the outputs not yet renamed
   /// are then removed (those renamed before stay: renames in place do not fail but when the
   /// directory was changed under the command).
   void commit();
@@ -77,6 +86,8 @@ class OutputTransaction {
   struct Output;
   void roll_back() noexcept;
   Output& find_or_declare(const std::string& path);
+  static bool external_output_exists(const Output& o);
+  static void finish_external_output(const Output& o);
 
   std::vector<Output> outputs_;
   // Which output has a file: by its path as given, its canonical path and (when it exists) its
@@ -87,7 +98,7 @@ class OutputTransaction {
   std::vector<std::string> made_dirs_;     // in the order made: parents first
   std::vector<int> dir_slots_;             // their signal clean-up slots
   std::vector<std::string> remove_at_commit_;
-  unsigned id_;
+  std::string token_;  // the random part of this transaction's temp names
   bool committed_ = false;
   OutputTransaction* outer_;
 };
