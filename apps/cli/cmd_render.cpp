@@ -34,6 +34,7 @@ struct LookArgs {
   std::string size = "800x800";
   int aa = 2;
   std::string camera;  // az,el[,dist]
+  std::string projection;  // perspective | ortho[:height]
   std::string target;  // x,y,z
   double fov = 0;
   std::string background, front, back;
@@ -54,6 +55,12 @@ struct LookArgs {
                     "ROLL turns the camera about its view direction); distance 0 or omitted "
                     "fits the clip volume")
         ->type_name("AZ,EL[,D[,R]]");
+    cmd->add_option("--projection", projection,
+                    "Camera projection: perspective, or ortho[:HEIGHT] for parallel rays "
+                    "showing a window HEIGHT world units high (omitted: fits the clip "
+                    "volume); default: the surface's (perspective unless its scene file says "
+                    "otherwise)")
+        ->type_name("perspective|ortho[:H]");
     cmd->add_option("--target", target, "Point the camera orbits and looks at (default: the "
                                         "surface's, usually the origin)")
         ->type_name("X,Y,Z");
@@ -80,7 +87,7 @@ struct LookArgs {
     if (size_opt && size_opt->count() > 0) std::tie(o.width, o.height) = parse_size(size, "--size");
     if (aa_opt && aa_opt->count() > 0) o.samples = aa;
     o.threads = global_flags().threads;
-    Camera cam = with_camera_flag(surface.camera, camera);
+    Camera cam = with_projection_flag(with_camera_flag(surface.camera, camera), projection);
     if (!target.empty()) {
       const std::vector<double> v = parse_numbers(target, "--target");
       if (v.size() != 3) throw InvalidArgument("--target", target, "expected three numbers x,y,z");

@@ -236,6 +236,10 @@ Camera with_camera_flag(Camera camera, const std::string& spec) {
   return camera;
 }
 
+Camera with_projection_flag(Camera camera, const std::string& spec) {
+  return spec.empty() ? camera : with_projection(camera, spec, "--projection");
+}
+
 Progress::Progress(std::string label, bool quiet)
     : label_(std::move(label)), enabled_(!quiet && ::isatty(STDERR_FILENO)) {}
 

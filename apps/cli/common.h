@@ -76,6 +76,9 @@ std::vector<double> parse_numbers(const std::string& text, const std::string& fl
 /// `camera` with --camera AZIMUTH,ELEVATION[,DISTANCE[,ROLL]] applied (nothing when `spec` is
 /// empty; a missing ROLL is 0), checked by validate_camera with the flag's name in the message.
 Camera with_camera_flag(Camera camera, const std::string& spec);
+/// `camera` with --projection perspective|ortho[:HEIGHT] applied (nothing when `spec` is
+/// empty): ortho without a HEIGHT fits the clip volume; checked by validate_camera.
+Camera with_projection_flag(Camera camera, const std::string& spec);
 
 /// A progress bar on stderr; silent when stderr is not a terminal or --quiet was given.
 class Progress {

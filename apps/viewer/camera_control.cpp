@@ -12,13 +12,18 @@ void orbit(Camera& camera, double dx_px, double dy_px) {
 }
 
 void pan(Camera& camera, const View& view, double dx_px, double dy_px) {
-  // One pixel at the target's depth spans pixel_angle() * distance world units.
+  // One pixel at the target's depth spans pixel_size(depth) world units.
   const double depth = (view.target - view.eye).norm();
-  const double unit = view.pixel_angle() * depth;
+  const double unit = view.pixel_size(depth);
   camera.target += unit * (-dx_px * view.right + dy_px * view.up);
 }
 
 void zoom(Camera& camera, double factor, double scene_radius) {
+  if (camera.is_orthographic()) {  // parallel rays: zooming is the window's height
+    camera.ortho_height = std::clamp(camera.view_height(scene_radius) * factor,
+                                     0.02 * scene_radius, 100 * scene_radius);
+    return;
+  }
   Camera c = with_explicit_distance(camera, scene_radius);
   c.distance = std::clamp(c.distance * factor, 0.05 * scene_radius, 50 * scene_radius);
   camera = c;
@@ -40,6 +45,14 @@ Eigen::Matrix4f view_matrix(const View& view) {
 }
 
 Eigen::Matrix4f projection_matrix(const View& view, double near, double far) {
+  if (view.orthographic) {
+    Eigen::Matrix4d p = Eigen::Matrix4d::Identity();
+    p(0, 0) = 1.0 / (view.half_height * view.aspect());
+    p(1, 1) = 1.0 / view.half_height;
+    p(2, 2) = 2.0 / (near - far);
+    p(2, 3) = (far + near) / (near - far);
+    return p.cast<float>();
+  }
   const double f = 1.0 / view.tan_half_fov;
   Eigen::Matrix4d p = Eigen::Matrix4d::Zero();
   p(0, 0) = f / view.aspect();
@@ -56,6 +69,7 @@ void depth_range(const View& view, const Vec3& center, double radius, double& ne
   // A near plane too close to the eye wastes depth precision; the 1e-3 ratio keeps 24 bits
   // of depth useful when the eye sits inside the scene.
   near = std::max(depth - radius, 1e-3 * far);
+  if (view.orthographic) near = std::max(depth - radius, 0.0);  // no precision lost near 0
 }
 
 }  // namespace zeroset::viewer

@@ -208,6 +208,23 @@ void run_camera(ViewerState& s, const CommandLine& c) {
   require(s.set_camera(cam));
 }
 
+void run_projection(ViewerState& s, const CommandLine& c) {
+  const Args& a = c.args;
+  Camera cam = s.camera();
+  const std::optional<Projection> p = find_projection(a[0]);
+  if (!p) throw InvalidArgument("projection", a[0], "expected perspective or orthographic");
+  if (a.size() == 2 && *p != Projection::orthographic)
+    throw InvalidArgument("projection", a[1], "only an orthographic camera takes a HEIGHT");
+  cam.projection = *p;
+  if (a.size() == 2) {
+    cam.ortho_height = parse_number(a[1], "orthographic height");
+    if (!(cam.ortho_height > 0))
+      throw InvalidArgument("orthographic height", a[1], "must be positive");
+  }
+  validate_camera(cam);
+  require(s.set_camera(cam));
+}
+
 void run_orbit(ViewerState& s, const CommandLine& c) {
   Camera cam = s.camera();
   const double d_az = parse_number(c.args[0], "azimuth change");
@@ -343,6 +360,10 @@ const std::vector<CommandInfo>& command_table() {
        run_keyframe},
       // camera
       {"camera", 2, 3, "camera AZIMUTH ELEVATION [DISTANCE]", "set the orbit camera (degrees)", run_camera},
+      {"projection", 1, 2, "projection perspective|orthographic [HEIGHT]",
+       "pinhole or parallel rays (HEIGHT > 0: the window's height in world units; omitted: "
+       "the camera's own)",
+       run_projection},
       {"orbit", 2, 2, "orbit D_AZIMUTH D_ELEVATION", "turn the camera (degrees)", run_orbit},
       {"zoom", 1, 1, "zoom FACTOR", "come closer by FACTOR (< 1 moves away)", run_zoom},
       {"pan", 2, 2, "pan DX DY", "move the picture by pixels", run_pan},

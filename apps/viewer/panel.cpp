@@ -383,10 +383,26 @@ void view_section(ViewerState& state) {
   Camera cam = state.camera();
   ImGui::Text("azimuth %.1f, elevation %.1f, distance %.3g", cam.azimuth_deg, cam.elevation_deg,
               cam.distance);
-  float fov = static_cast<float>(cam.fov_deg);
-  if (ImGui::SliderFloat("Field of view", &fov, 5, 90, "%.0f deg")) {
-    cam.fov_deg = fov;
+  bool ortho = cam.is_orthographic();
+  if (ImGui::Checkbox("Orthographic (parallel rays)", &ortho)) {
+    cam.projection = ortho ? Projection::orthographic : Projection::perspective;
     state.set_camera(cam);
+  }
+  if (ortho) {
+    const double radius = state.surface().scene_radius();
+    float height = static_cast<float>(cam.view_height(radius));
+    if (ImGui::SliderFloat("Visible height", &height, static_cast<float>(0.02 * radius),
+                           static_cast<float>(100 * radius), "%.3g",
+                           ImGuiSliderFlags_Logarithmic)) {
+      cam.ortho_height = height;
+      state.set_camera(cam);
+    }
+  } else {
+    float fov = static_cast<float>(cam.fov_deg);
+    if (ImGui::SliderFloat("Field of view", &fov, 5, 90, "%.0f deg")) {
+      cam.fov_deg = fov;
+      state.set_camera(cam);
+    }
   }
   bool follow = state.lights_follow_camera();
   if (ImGui::Checkbox("Lights follow the camera", &follow)) state.set_lights_follow_camera(follow);

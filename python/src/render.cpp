@@ -25,6 +25,7 @@ struct Look {
   std::optional<double> fov;
   std::optional<std::string> background, front, back;
   int threads = 0;
+  std::optional<std::string> projection;  // perspective | ortho[:height]
 };
 
 // Defaults, then the scene file's "render" object, then what was given, validated by the
@@ -55,6 +56,7 @@ RenderOptions options(const PySurface& s, const Look& look) {
     cam.target = Vec3((*look.target)[0], (*look.target)[1], (*look.target)[2]);
   }
   if (look.fov) cam.fov_deg = *look.fov;
+  if (look.projection) cam = with_projection(cam, *look.projection, "projection");
   validate_camera(cam);
   o.camera = cam;
   if (look.background) o.background = parse_display_color(*look.background, "background");
@@ -67,14 +69,15 @@ RenderOptions options(const PySurface& s, const Look& look) {
 Look look_of(std::optional<std::pair<int, int>> size, std::optional<int> aa,
              std::optional<std::vector<double>> camera, std::optional<std::vector<double>> target,
              std::optional<double> fov, std::optional<std::string> background,
-             std::optional<std::string> front, std::optional<std::string> back, int threads) {
-  return Look{size, aa, camera, target, fov, background, front, back, threads};
+             std::optional<std::string> front, std::optional<std::string> back, int threads,
+             std::optional<std::string> projection) {
+  return Look{size, aa, camera, target, fov, background, front, back, threads, projection};
 }
 
 #define ZS_LOOK_ARGS                                                                            \
   "size"_a = py::none(), "aa"_a = py::none(), "camera"_a = py::none(), "target"_a = py::none(), \
   "fov"_a = py::none(), "background"_a = py::none(), "front"_a = py::none(),                    \
-  "back"_a = py::none(), "threads"_a = 0
+  "back"_a = py::none(), "threads"_a = 0, "projection"_a = py::none()
 
 }  // namespace
 

@@ -107,15 +107,24 @@ def _color(value, what):
     return ",".join(repr(v) for v in _numbers(value, what, (3,)))
 
 
+def _projection(value):
+    if value is None:
+        return None
+    if not isinstance(value, str):
+        raise TypeError("projection must be a string: 'perspective', 'ortho' or 'ortho:HEIGHT'")
+    return value
+
+
 def _look(size=None, aa=None, camera=None, target=None, fov=None, background=None, front=None,
-          back=None, threads=0):
+          back=None, threads=0, projection=None):
     return _z._Look(
         size=_size(size), aa=None if aa is None else _count(aa, "aa"),
         camera=None if camera is None else _numbers(camera, "camera", (2, 3)),
         target=None if target is None else _numbers(target, "target", (3,)),
         fov=None if fov is None else _number(fov, "fov"),
         background=_color(background, "background"), front=_color(front, "front"),
-        back=_color(back, "back"), threads=_count(threads, "threads"))
+        back=_color(back, "back"), threads=_count(threads, "threads"),
+        projection=_projection(projection))
 
 
 # ------------------------------------------------------------------------------------ Image
@@ -369,25 +378,28 @@ class Surface:
         return Floaters(f, stats)
 
     def render(self, size=None, aa=None, camera=None, target=None, fov=None, background=None,
-               front=None, back=None, show_singular=False, threads=0):
+               front=None, back=None, show_singular=False, threads=0, projection=None):
         """Ray traces the surface as `zeroset render` does: size (width, height) or "WxH"
         (default 800x800 or the scene file's), aa samples per pixel side (default 2), camera
         (azimuth, elevation[, distance]) in degrees, target (x, y, z), fov in degrees, colours
-        as "#rrggbb" or display (r, g, b) in [0, 1]. Returns an Image; its `stats` hold the
-        renderer's figures."""
-        look = _look(size, aa, camera, target, fov, background, front, back, threads)
+        as "#rrggbb" or display (r, g, b) in [0, 1], projection "perspective", "ortho" (parallel
+        rays, the window fits the clip) or "ortho:HEIGHT" (a window HEIGHT world units high).
+        Returns an Image; its `stats` hold the renderer's figures."""
+        look = _look(size, aa, camera, target, fov, background, front, back, threads, projection)
         rgb, stats = _z._render(self._s, look, bool(show_singular))
         return Image(rgb, stats)
 
     def pov_scene(self, size=None, camera=None, target=None, fov=None, background=None,
-                  front=None, back=None):
+                  front=None, back=None, projection=None):
         """The POV-Ray 3.7 scene text of the view render() would draw (polynomials only)."""
-        return _z._pov_scene(self._s, _look(size, None, camera, target, fov, background, front, back))
+        return _z._pov_scene(self._s, _look(size, None, camera, target, fov, background, front,
+                                            back, projection=projection))
 
     def export_pov(self, path, size=None, camera=None, target=None, fov=None, background=None,
-                   front=None, back=None):
+                   front=None, back=None, projection=None):
         """Writes the POV-Ray scene to `path` (.pov), as `zeroset export`."""
-        _z._export_pov(self._s, _look(size, None, camera, target, fov, background, front, back),
+        _z._export_pov(self._s, _look(size, None, camera, target, fov, background, front, back,
+                                      projection=projection),
                        _os.fspath(path))
 
     def save_scene(self, path):

@@ -124,6 +124,9 @@ Color OverlayScene::shade(const OverlayHit& hit, const Vec3& ray) const {
 std::optional<OverlayScene> make_overlay(const RenderOptions& options, double scene_radius,
                                          const View& view) {
   if (!options.singular_overlay) return std::nullopt;
+  if (view.orthographic)
+    throw InvalidArgument("singular overlay", "orthographic camera",
+                          "the overlay is drawn with a perspective camera only");
   return std::optional<OverlayScene>(std::in_place, *options.singular_overlay, scene_radius, view,
                                      options);
 }

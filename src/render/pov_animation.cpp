@@ -154,6 +154,16 @@ CoefficientFit fit_coefficients(Surface surface, const std::vector<const KeyTrac
       surface.label(), kMaxParamDegree, names));
 }
 
+/// `#declare ZS_ortho = 0 | 1` at each keyframe that switches the projection, from its time on.
+std::string projection_switches(const Keyframes& keys) {
+  std::string out;
+  for (size_t i = 1; i < keys.projections.size(); ++i)
+    out += fmt::format("#if (clock >= {} - 1e-9)\n  #declare ZS_ortho = {};\n#end\n",
+                       num(keys.projections[i].first),
+                       keys.projections[i].second == Projection::orthographic ? 1 : 0);
+  return out;
+}
+
 /// The camera of the frame at clock, as Camera::frame and View make it, then the lights.
 std::string pov_camera_and_lights(const Surface& surface, const RenderOptions& options,
                                   const Keyframes& keys) {
@@ -162,8 +172,16 @@ std::string pov_camera_and_lights(const Surface& surface, const RenderOptions& o
   const std::vector<std::pair<std::string, double>> fields = {
       {"azimuth_deg", base.azimuth_deg}, {"elevation_deg", base.elevation_deg},
       {"distance", base.distance},       {"roll_deg", base.roll_deg},
-      {"fov_deg", base.fov_deg}};
+      {"fov_deg", base.fov_deg}, {"ortho_height", base.view_height(surface.scene_radius())}};
+  // The projection at clock: the surface's, or switched at keyframes (the last switch at or
+  // before clock, the first one's before it; frame times are at least 1/65535 apart).
+  const bool switches = !keys.projections.empty();
+  const bool any_ortho =
+      base.is_orthographic() ||
+      std::any_of(keys.projections.begin(), keys.projections.end(),
+                  [](const auto& p) { return p.second == Projection::orthographic; });
   for (const auto& field : fields) {
+    if (field.first == "ortho_height" && !any_ortho) continue;
     const std::string& name = field.first;  // names of their own: the lambda captures `name`
     const double value = field.second;
     const auto t = std::find_if(keys.camera.begin(), keys.camera.end(),
@@ -180,6 +198,7 @@ std::string pov_camera_and_lights(const Surface& surface, const RenderOptions& o
       "// Distance 0 fits the clip volume's ball into the vertical field of view.\n"
       "#declare ZS_dist = (ZS_distance > 0 ? ZS_distance : "
       "1.08 * {} / sin(radians(ZS_fov_deg) / 2));\n"
+      "{}"
       "#declare ZS_eye = ZS_target + ZS_dist * <cos(ZS_el) * cos(ZS_az), "
       "cos(ZS_el) * sin(ZS_az), sin(ZS_el)>;\n"
       "#declare ZS_forward = vnormalize(ZS_target - ZS_eye);\n"
@@ -193,12 +212,32 @@ std::string pov_camera_and_lights(const Surface& surface, const RenderOptions& o
       "#declare ZS_right = cos(ZS_roll) * ZS_right0 + sin(ZS_roll) * ZS_up0;\n"
       "#declare ZS_up = -sin(ZS_roll) * ZS_right0 + cos(ZS_roll) * ZS_up0;\n"
       "// POV-Ray's camera is left-handed: a negative `right` makes it right-handed, as ours;\n"
-      "// `angle` is the horizontal field of view.\n"
-      "camera {{\n  perspective\n  location ZS_eye\n  sky ZS_up\n  up <0, 1, 0>\n"
-      "  right <{}, 0, 0>\n"
+      "// `angle` is the horizontal field of view.\n",
+      pov_vec(base.target), num(surface.scene_radius()),
+      !any_ortho ? std::string()
+      : switches ? fmt::format("#declare ZS_ortho = {};\n{}"
+                               "// Orthographic: the rays start outside the clip volume.\n"
+                               "#if (ZS_ortho)\n  #declare ZS_dist = max(ZS_dist, {});\n#end\n",
+                               keys.projections.front().second == Projection::orthographic ? 1 : 0,
+                               projection_switches(keys), num(2.5 * surface.scene_radius()))
+                 : fmt::format("// Orthographic: the rays start outside the clip volume.\n"
+                               "#declare ZS_dist = max(ZS_dist, {});\n",
+                               num(2.5 * surface.scene_radius())));
+  const std::string orthographic = fmt::format(
+      "camera {{\n  orthographic\n  location ZS_eye\n  sky ZS_up\n"
+      "  up <0, ZS_ortho_height, 0>\n  right <{} * ZS_ortho_height, 0, 0>\n"
+      "  look_at ZS_target\n}}\n",
+      num(-aspect));
+  const std::string perspective = fmt::format(
+      "camera {{\n  perspective\n  location ZS_eye\n  sky ZS_up\n"
+      "  up <0, 1, 0>\n  right <{}, 0, 0>\n"
       "  angle 2 * degrees(atan(tan(radians(ZS_fov_deg) / 2) * {}))\n"
-      "  look_at ZS_target\n}}\n\n",
-      pov_vec(base.target), num(surface.scene_radius()), num(-aspect), num(aspect));
+      "  look_at ZS_target\n}}\n",
+      num(-aspect), num(aspect));
+  if (switches)
+    out += "#if (ZS_ortho)\n" + orthographic + "#else\n" + perspective + "#end\n\n";
+  else
+    out += (base.is_orthographic() ? orthographic : perspective) + "\n";
   // Lights as world_lights places them: those that follow the camera turn with it.
   const double far = 1000.0 * surface.scene_radius();
   for (const Light& l : options.lights.empty() ? default_lights() : options.lights) {

@@ -126,12 +126,22 @@ std::string pov_scene(const Surface& surface, const RenderOptions& options) {
   // ours. `angle` is the horizontal field of view; `sky` is the image's up direction.
   const double horizontal_deg =
       2.0 * std::atan(view.tan_half_fov * view.aspect()) * 180.0 / std::numbers::pi;
-  out += "camera {\n  perspective\n";
-  out += fmt::format("  location {}\n", pov_vec(view.eye));
-  out += fmt::format("  sky {}\n", pov_vec(view.up));
-  out += "  up <0, 1, 0>\n";
-  out += fmt::format("  right <{}, 0, 0>\n", pov_number(-view.aspect()));
-  out += fmt::format("  angle {}\n", pov_number(horizontal_deg));
+  if (view.orthographic) {
+    // Parallel rays: `up` and `right` are the window's size in world units, and no `angle`.
+    const double h = 2.0 * view.half_height;
+    out += "camera {\n  orthographic\n";
+    out += fmt::format("  location {}\n", pov_vec(view.eye));
+    out += fmt::format("  sky {}\n", pov_vec(view.up));
+    out += fmt::format("  up <0, {}, 0>\n", pov_number(h));
+    out += fmt::format("  right <{}, 0, 0>\n", pov_number(-h * view.aspect()));
+  } else {
+    out += "camera {\n  perspective\n";
+    out += fmt::format("  location {}\n", pov_vec(view.eye));
+    out += fmt::format("  sky {}\n", pov_vec(view.up));
+    out += "  up <0, 1, 0>\n";
+    out += fmt::format("  right <{}, 0, 0>\n", pov_number(-view.aspect()));
+    out += fmt::format("  angle {}\n", pov_number(horizontal_deg));
+  }
   out += fmt::format("  look_at {}\n}}\n\n", pov_vec(view.target));
   const double far = 1000.0 * surface.scene_radius();
   for (const auto& l : shader.lights)

@@ -63,10 +63,10 @@ double cast(RayCaster& rc, double s, const RootGuess& guess, int& side) {
     side = std::abs(v) <= band ? 0 : (v > 0 ? 1 : -1);
     return t;
   }
-  const Vec3 dir = direction(rc, s);
-  const std::optional<double> t = interval_hit(rc, dir, t0, t1);
+  const Vec3 origin = ray_origin(rc, s), dir = direction(rc, s);
+  const std::optional<double> t = interval_hit(rc, origin, dir, t0, t1);
   if (!t) return kNone;
-  const double v = value_on_ray(rc, dir, t0);
+  const double v = value_on_ray(rc, origin, dir, t0);
   side = v > 0 ? 1 : (v < 0 ? -1 : 0);
   return *t;
 }
@@ -128,6 +128,10 @@ bool SurfaceRayCaster::intersect(const Vec3& dir, SurfaceHit& hit) {
 }
 void SurfaceRayCaster::begin_row(const Vec3& base, const Vec3& step) {
   detail::begin_row(*impl_, base, step);
+}
+void SurfaceRayCaster::begin_parallel_row(const Vec3& origin, const Vec3& origin_step,
+                                          const Vec3& dir) {
+  detail::begin_parallel_row(*impl_, origin, origin_step, dir);
 }
 void SurfaceRayCaster::row_extent(double& s_min, double& s_max) const {
   s_min = impl_->s_min;

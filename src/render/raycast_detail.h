@@ -14,6 +14,7 @@
 
 #include "raycast_monomials_detail.h"
 #include "zeroset/expr/interval.h"
+#include "zeroset/expr/polynomial.h"
 #include "zeroset/render/raycast.h"
 
 namespace zeroset::detail {
@@ -79,7 +80,11 @@ struct RayCaster {
   Evaluator evaluator;
   bool exact = false;
   int degree = 0;
-  // Polynomial path. ∂F/∂x, ∂F/∂y, ∂F/∂z from F's own terms (well conditioned near the
+  // Polynomial path. F's own terms and their absolute values (for the rounding band).
+  Polynomial polynomial;
+  std::vector<Monomial> abs_terms;
+  std::vector<int> degree_of;  // [m]: the degree of row_monomials' monomial m
+  // ∂F/∂x, ∂F/∂y, ∂F/∂z from F's own terms (well conditioned near the
   // surface, unlike the translated form), dense over the monomials of degree < degree.
   MonomialTable derivative_monomials{0};
   std::vector<GradientTerm> derivative;  // the monomials of the derivatives, in order
@@ -103,9 +108,12 @@ struct RayCaster {
   std::vector<RowTerm> row_terms;
   std::vector<PartialsTerm> translated_gradient;
 
-  // The current row: directions base + s·step.
+  // The current row: directions base + s·step from the eye; or, in a parallel row (an
+  // orthographic view), rays eye + s·step + t·base.
   Vec3 base = Vec3::UnitX(), step = Vec3::Zero();
-  // Exact path: G_k(base + s·step) = Σ_j row[k(k+1)/2 + j] s^j.
+  bool parallel = false;
+  // Exact path: G_k(base + s·step) = Σ_j row[k(k+1)/2 + j] s^j. By homogeneity G_k(t·base +
+  // s·step) = Σ_j row[k(k+1)/2 + j] s^j t^(k−j), which a parallel row's rays use.
   std::array<double, kN * (kN + 1) / 2> row{};
   // Normals along the row (see row_gradient): the derivative in s of row, ∂G_k/∂s =
   // Σ_j row_ds[k(k−1)/2 + j] s^j (k ≥ 1); the normal of the row's plane, n = base × step; and
@@ -163,13 +171,24 @@ struct RayCaster {
   RayCaster(const Surface& s, const Vec3& e, const RaycastOptions& o);
 };
 
+// raycast_setup.cpp
+/// Moves the eye the rays start from: F's terms translated to it and the rounding band's
+/// coefficients (O(terms · degree³)); a translation that overflows sends the caster to the
+/// interval path. Start a row afterwards.
+void set_eye(RayCaster& rc, const Vec3& e);
+
 // raycast_rows.cpp
 /// Starts the row of rays base + s·step: the clip and, for polynomials, G along the row.
 void begin_row(RayCaster& rc, const Vec3& row_base, const Vec3& row_step);
+/// Starts the row of parallel rays origin + s·origin_step + t·dir (see
+/// SurfaceRayCaster::begin_parallel_row).
+void begin_parallel_row(RayCaster& rc, const Vec3& origin, const Vec3& origin_step,
+                        const Vec3& dir);
 /// The parameter interval [t0, t1] of the row's ray at s inside the clip (t ≥ 0); false
 /// when it misses. The same stable formulas as Clip::ray_interval.
 bool clip(const RayCaster& rc, double s, double& t0, double& t1);
-/// The first root of f(t) = G(t·(base + s·step)) on [t0, t1] (NaN: none); `band`
+/// The first root of f(t) = G(t·(base + s·step)), or G(s·step + t·base) in a parallel row, on
+/// [t0, t1] (NaN: none); `band`
 /// receives the rounding band used.
 double exact_hit(RayCaster& rc, double s, double t0, double t1, const RootGuess& guess,
                  double& band);
@@ -186,14 +205,22 @@ int packet_hits(RayCaster& rc, SurfaceHit (&hits)[4]);
 void complete(RayCaster& rc, double s, double t, int side, SurfaceHit& hit);
 
 // raycast_interval.cpp
-/// The first root of F on the ray eye + t·dir, t ∈ [t0, t1], for fields that are not
+/// The first root of F on the ray origin + t·dir, t ∈ [t0, t1], for fields that are not
 /// polynomials: interval subdivision, then a bracketed refinement.
-std::optional<double> interval_hit(RayCaster& rc, const Vec3& dir, double t0, double t1);
+std::optional<double> interval_hit(RayCaster& rc, const Vec3& origin, const Vec3& dir, double t0,
+                                   double t1);
 
-inline Vec3 direction(const RayCaster& rc, double s) { return rc.base + s * rc.step; }
+/// Where the row's ray at s starts: the eye, or eye + s·step in a parallel row.
+inline Vec3 ray_origin(const RayCaster& rc, double s) {
+  return rc.parallel ? Vec3(rc.eye + s * rc.step) : rc.eye;
+}
+/// The direction of the row's ray at s: base + s·step, or base in a parallel row.
+inline Vec3 direction(const RayCaster& rc, double s) {
+  return rc.parallel ? rc.base : Vec3(rc.base + s * rc.step);
+}
 
-inline double value_on_ray(RayCaster& rc, const Vec3& dir, double t) {
-  return rc.evaluator.value(rc.eye + t * dir);
+inline double value_on_ray(RayCaster& rc, const Vec3& origin, const Vec3& dir, double t) {
+  return rc.evaluator.value(origin + t * dir);
 }
 
 inline void broadcast(const double* v, int n, double (*out)[4]) {

@@ -9,10 +9,11 @@
 
 namespace zeroset::detail {
 
-std::optional<double> interval_hit(RayCaster& rc, const Vec3& dir, double t0, double t1) {
+std::optional<double> interval_hit(RayCaster& rc, const Vec3& origin, const Vec3& dir, double t0,
+                                   double t1) {
   const double leaf = std::max(rc.options.interval_tolerance, 1e-15) * (t1 - t0);
   const double tol = 1e-13 * (t1 - t0);
-  auto f = [&](double t) { return value_on_ray(rc, dir, t); };
+  auto f = [&](double t) { return value_on_ray(rc, origin, dir, t); };
   rc.segments.clear();
   rc.segments.push_back({t0, t1});
   int budget = rc.options.interval_budget;
@@ -25,7 +26,7 @@ std::optional<double> interval_hit(RayCaster& rc, const Vec3& dir, double t0, do
     rc.segments.pop_back();
     Interval box[3];
     for (int k = 0; k < 3; ++k) {
-      const double u = rc.eye[k] + s.a * dir[k], v = rc.eye[k] + s.b * dir[k];
+      const double u = origin[k] + s.a * dir[k], v = origin[k] + s.b * dir[k];
       box[k] = {std::min(u, v), std::max(u, v)};
     }
     Interval e[4];  // F, Fx, Fy, Fz over the segment's box

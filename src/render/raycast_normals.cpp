@@ -121,13 +121,15 @@ Vec3 fallback_normal(RayCaster& rc, const Vec3& p, const Vec3& dir) {
 }  // namespace
 
 void complete(RayCaster& rc, double s, double t, int side, SurfaceHit& hit) {
-  const double dx = std::fma(s, rc.step.x(), rc.base.x()),
-               dy = std::fma(s, rc.step.y(), rc.base.y()),
-               dz = std::fma(s, rc.step.z(), rc.base.z());
-  const Vec3 dir(dx, dy, dz);
+  const Vec3 dir = rc.parallel ? rc.base
+                               : Vec3(std::fma(s, rc.step.x(), rc.base.x()),
+                                      std::fma(s, rc.step.y(), rc.base.y()),
+                                      std::fma(s, rc.step.z(), rc.base.z()));
+  const double dx = dir.x(), dy = dir.y(), dz = dir.z();
+  const Vec3 origin = ray_origin(rc, s);
   hit.t = t;
-  hit.point = Vec3(std::fma(t, dx, rc.eye.x()), std::fma(t, dy, rc.eye.y()),
-                   std::fma(t, dz, rc.eye.z()));
+  hit.point = Vec3(std::fma(t, dx, origin.x()), std::fma(t, dy, origin.y()),
+                   std::fma(t, dz, origin.z()));
   Vec3 g;
   if (rc.exact) {
     // ∇F lost to cancellation (a node, or a squared surface where ∇F = 2g∇g is tiny at the

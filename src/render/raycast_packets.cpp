@@ -318,7 +318,7 @@ int prepare(RayCaster& rc, std::span<const double> s) {
   rc.packet_size = 0;
   rc.packet_ready = false;
   rc.packet_hit_bits = rc.packet_done_bits = 0;
-  if (s.size() != 4) return 0;
+  if (s.size() != 4 || rc.parallel) return 0;
   std::copy(s.begin(), s.end(), rc.packet_s.begin());
   rc.packet_size = 4;
   rc.packet_next = 0;

@@ -29,6 +29,21 @@ double restrict_in_row(const double* row, const double* band_coeffs, int d_, dou
   return band;
 }
 
+/// coeffs[m] = Σ_{k ≥ m} row[k(k+1)/2 + k − m] s^(k−m) for m ≤ d: the polynomial in t of
+/// G(s·step + t·base) on a parallel row's ray, each coefficient by Horner in s. Returns the
+/// rounding band at x, as restrict_in_row.
+double restrict_in_parallel_row(const double* row, const double* band_coeffs, int d, double s,
+                                double x, double* coeffs) {
+  for (int m = 0; m <= d; ++m) {
+    double v = row[d * (d + 1) / 2 + d - m];
+    for (int k = d - 1; k >= m; --k) v = std::fma(v, s, row[k * (k + 1) / 2 + k - m]);
+    coeffs[m] = v;
+  }
+  double band = band_coeffs[d];
+  for (int k = d - 1; k >= 0; --k) band = std::fma(band, x, band_coeffs[k]);
+  return band;
+}
+
 /// [s_min, s_max] ⊇ the s whose rays meet every clip sphere: with the eye outside a
 /// sphere, the discriminant of clip() is a quadratic A s² + 2B s + C that is nonnegative
 /// on an interval when A < 0. Widened well beyond rounding; clip() decides inside it.
@@ -120,6 +135,7 @@ double max_abs_direction(const RayCaster& rc, double s) {
 }  // namespace
 
 void begin_row(RayCaster& rc, const Vec3& row_base, const Vec3& row_step) {
+  rc.parallel = false;
   rc.packet_size = 0;
   rc.packet_ready = false;
   rc.packet_hit_bits = rc.packet_done_bits = 0;
@@ -144,9 +160,25 @@ void begin_row(RayCaster& rc, const Vec3& row_base, const Vec3& row_step) {
   if (rc.exact) expand_row(rc);
 }
 
+void begin_parallel_row(RayCaster& rc, const Vec3& origin, const Vec3& origin_step,
+                        const Vec3& dir) {
+  if (rc.exact)
+    set_eye(rc, origin);
+  else
+    rc.eye = origin;
+  // G along the row's plane, as for the perspective row with directions dir + s·origin_step
+  // (see RayCaster::row); the clip and the normals are the parallel rays' own.
+  begin_row(rc, dir, origin_step);
+  rc.parallel = true;
+  rc.has_row_normals = false;
+  rc.s_min = -std::numeric_limits<double>::infinity();
+  rc.s_max = std::numeric_limits<double>::infinity();
+}
+
 bool clip(const RayCaster& rc, double s, double& t0, double& t1) {
   t0 = 0;
   t1 = std::numeric_limits<double>::infinity();
+  if (rc.parallel) return rc.surface.clip.ray_interval(ray_origin(rc, s), rc.base, 0.0, t0, t1);
   // Fused multiply-adds in the order prepare4 uses, so that both give the same bits.
   for (const SphereRow& r : rc.sphere_rows) {
     const double a = std::fma(s, std::fma(s, r.a2, 2 * r.a1), r.a0);
@@ -180,11 +212,19 @@ double exact_hit(RayCaster& rc, double s, double t0, double t1, const RootGuess&
   // A monomial of degree k in the direction's components is at most max|d_i|^k. The
   // expansion in s rounds relative to (|base_i| + |s||step_i|)^k instead, but its error
   // stays far below the band (under 2% for the catalog's scenes across whole pictures).
-  const double x = t1 * max_abs_direction(rc, s);
   const double* r = rc.row.data();
   const double* b = rc.band_coeffs.data();
   double* c = rc.coeffs.data();
   rc.ray_coeffs = c;
+  if (rc.parallel) {
+    // The point s·step + t·base of the translated G: each coordinate at most
+    // |s||step_i| + t1|base_i|.
+    const double x = (std::abs(s) * rc.step.cwiseAbs() + t1 * rc.base.cwiseAbs()).maxCoeff();
+    band = restrict_in_parallel_row(r, b, rc.degree, s, x, c);
+    return rc.finder.find_first_root(
+        std::span<const double>(c, static_cast<size_t>(rc.degree + 1)), t0, t1, band, guess);
+  }
+  const double x = t1 * max_abs_direction(rc, s);
   switch (rc.degree) {
     case 1: band = restrict_in_row<1>(r, b, rc.degree, s, x, c); break;
     case 2: band = restrict_in_row<2>(r, b, rc.degree, s, x, c); break;

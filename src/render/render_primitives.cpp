@@ -30,8 +30,9 @@ struct SampleHit {
   bool edge = false;
 };
 
-/// Renders binned primitives: `intersect(id, dir, hit)` returns true and fills `hit` when the
-/// ray from the eye along `dir` meets primitive `id` nearer than hit.t. Each tile keeps the
+/// Renders binned primitives: `intersect(id, origin, dir, hit)` returns true and fills `hit`
+/// when the ray from `origin` (the eye, or a point of its plane when orthographic) along `dir`
+/// meets primitive `id` nearer than hit.t. Each tile keeps the
 /// nearest hit of every sample (a z-buffer) and visits, per primitive of its bin, only the
 /// pixels of that primitive's bounding box, so the cost follows the primitives' screen area.
 /// The singular overlay, when given, then replaces the samples it is nearer on.
@@ -54,18 +55,23 @@ Image render_binned(const RenderOptions& options, const View& view, const Bins& 
           return static_cast<size_t>(((y - y0) * w + (x - x0)) * ns + s);
         };
         std::vector<Vec3> dirs(hits.size());  // each sample's ray, shared by the primitives
+        std::vector<Vec3> origins(view.orthographic ? hits.size() : 0);
         for (int y = y0; y < y1; ++y)
           for (int x = x0; x < x1; ++x)
-            for (int s = 0; s < ns; ++s)
-              dirs[sample(x, y, s)] = view.direction(x + offsets[static_cast<size_t>(s)].x(),
-                                                     y + offsets[static_cast<size_t>(s)].y());
+            for (int s = 0; s < ns; ++s) {
+              const double sx = x + offsets[static_cast<size_t>(s)].x(),
+                           sy = y + offsets[static_cast<size_t>(s)].y();
+              dirs[sample(x, y, s)] = view.direction(sx, sy);
+              if (view.orthographic) origins[sample(x, y, s)] = view.origin(sx, sy);
+            }
         for (std::uint32_t id : bins.at(x0, y0)) {
           const Bins::Rect& r = bins.rects[id];
           for (int y = std::max(r.y0, y0); y <= std::min(r.y1, y1 - 1); ++y)
             for (int x = std::max(r.x0, x0); x <= std::min(r.x1, x1 - 1); ++x)
               for (int s = 0; s < ns; ++s) {
                 const size_t k = sample(x, y, s);
-                if (intersect(id, dirs[k], hits[k])) any[k] = 1;
+                if (intersect(id, view.orthographic ? origins[k] : view.eye, dirs[k], hits[k]))
+                  any[k] = 1;
               }
         }
         // The overlay's hits where they are nearer than hits[k] (entries of touched pixels).
@@ -138,14 +144,15 @@ Image render_points(const Surface& surface, std::span<const Vec3> positions,
     bins.add(static_cast<std::uint32_t>(i), corners, 8, view);
   }
   const std::optional<detail::OverlayScene> overlay = detail::make_overlay(options, scene, view);
-  return render_binned(options, view, bins, [&](std::uint32_t id, const Vec3& dir, SampleHit& hit) {
+  return render_binned(options, view, bins, [&](std::uint32_t id, const Vec3& eye,
+                                                 const Vec3& dir, SampleHit& hit) {
     const Vec3 n = normal(id);
     const double nd = n.dot(dir);
     if (std::abs(nd) < 1e-12) return false;
-    const double t = n.dot(positions[id] - view.eye) / nd;
+    const double t = n.dot(positions[id] - eye) / nd;
     if (!(t > 0 && t < hit.t)) return false;
     const double r = radius(id);
-    if ((view.eye + t * dir - positions[id]).squaredNorm() > r * r) return false;
+    if ((eye + t * dir - positions[id]).squaredNorm() > r * r) return false;
     hit.t = t;
     hit.front = nd < 0;
     hit.normal = hit.front ? n : Vec3(-n);
@@ -190,10 +197,12 @@ Image render_mesh(const Surface& surface, const Mesh& mesh, const RenderOptions&
     const Vec3 p[3] = {mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]]};
     bins.add(static_cast<std::uint32_t>(f), p, 3, view);
   }
-  const double pixel = view.pixel_angle();
+  // The size of a pixel at depth 1 (perspective) or at every depth (orthographic).
+  const double pixel = view.orthographic ? view.pixel_size(1) : view.pixel_angle();
   const std::optional<detail::OverlayScene> overlay =
       detail::make_overlay(options, surface.scene_radius(), view);
-  return render_binned(options, view, bins, [&](std::uint32_t id, const Vec3& dir, SampleHit& hit) {
+  return render_binned(options, view, bins, [&](std::uint32_t id, const Vec3& eye,
+                                                 const Vec3& dir, SampleHit& hit) {
     // Möller–Trumbore.
     const auto& tri = mesh.triangles[id];
     const Vec3& a = mesh.positions[tri[0]];
@@ -202,7 +211,7 @@ Image render_mesh(const Surface& surface, const Mesh& mesh, const RenderOptions&
     const double det = e1.dot(pv);
     if (std::abs(det) < 1e-300) return false;
     const double inv = 1.0 / det;
-    const Vec3 tv = view.eye - a;
+    const Vec3 tv = eye - a;
     const double u = tv.dot(pv) * inv;
     if (u < 0 || u > 1) return false;
     const Vec3 qv = tv.cross(e1);
@@ -226,7 +235,7 @@ Image render_mesh(const Surface& surface, const Mesh& mesh, const RenderOptions&
       const Vec3 e3 = mesh.positions[tri[2]] - mesh.positions[tri[1]];
       const double d = std::min({w * area2 / e3.norm(), u * area2 / e2.norm(),
                                  v * area2 / e1.norm()});
-      hit.edge = d < 0.7 * pixel * t;
+      hit.edge = d < 0.7 * pixel * (view.orthographic ? 1.0 : t);
     }
     return true;
   }, overlay ? &*overlay : nullptr);

@@ -109,6 +109,52 @@ void composite_overlay(const detail::OverlayScene& overlay, int x0, int y0, int 
     }
 }
 
+/// The ball that holds the clip volume: parallel rays that miss it need no casting.
+struct ClipBall {
+  Vec3 centre;
+  double radius;
+};
+
+/// One row of an orthographic picture's rays, at image row y: parallel rays, each from its
+/// own point of the eye's plane (SurfaceRayCaster::begin_parallel_row). Hits go into
+/// `current` (after two NaN entries, as the packets' rows) and are shaded at once.
+void cast_parallel_row(const View& view, double y, SurfaceRayCaster& caster, bool no_surface,
+                       const ClipBall& ball, const std::vector<double>& ray_s,
+                       const std::vector<int>& ray_pixel, const std::vector<double>& above,
+                       std::vector<double>& current, const detail::Shader& shader,
+                       int first_pixel, Color* sums, int* hit_samples, long long& hits,
+                       long long& singular) {
+  Vec3 origin_base, origin_step;
+  view.row_origins(y, origin_base, origin_step);
+  // The rays start just before the ball that holds the clip volume rather than at the eye's
+  // plane: F is translated to the row's origin, and a nearer origin loses fewer digits to
+  // that translation at high degrees. Only t changes, not the points hit.
+  const double ahead = (ball.centre - origin_base).dot(view.forward) - 1.01 * ball.radius;
+  if (ahead > 0) origin_base += ahead * view.forward;
+  double* t = current.data() + 2;
+  const double* up = above.data() + 2;
+  const int columns = static_cast<int>(current.size()) - 2;
+  if (!no_surface) caster.begin_parallel_row(origin_base, origin_step, view.forward);
+  for (int c = 0; c < columns; ++c) {
+    t[c] = kNoHit;
+    if (no_surface) continue;
+    const double s = ray_s[static_cast<size_t>(c)];
+    const Vec3 to_centre = ball.centre - (origin_base + s * origin_step);
+    const Vec3 across = to_centre - to_centre.dot(view.forward) * view.forward;
+    if (across.squaredNorm() > ball.radius * ball.radius * (1 + 1e-9)) continue;
+    SurfaceHit h;
+    if (!caster.intersect_in_row(s, h, guess_from_neighbours(t[c - 1], t[c - 2], up[c],
+                                                              up[c - 1])))
+      continue;
+    t[c] = h.t;
+    ++hits;
+    singular += h.singular;
+    const int pixel = first_pixel + ray_pixel[static_cast<size_t>(c)];
+    const Color color = shader.shade_ray(h.normal, view.forward, h.front);
+    sums[pixel] = hit_samples[pixel]++ == 0 ? color : Color(sums[pixel] + color);
+  }
+}
+
 }  // namespace
 
 Image render_surface(const Surface& surface, const RenderOptions& options, RenderStats* stats,
@@ -135,6 +181,7 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
   // would find "roots" on every ray and draw the clip. The survey (docs/architecture.md) is
   // the one test of it, so every picture of such a field is empty alike.
   const bool no_surface = survey_field(surface).vanishes_identically();
+  const ClipBall clip_ball{surface.bounds().center(), surface.scene_radius()};
   struct Worker {
     long long rays = 0, hits = 0, singular = 0;
     // Hit parameters of the band's previous and current row of rays (NaN: no hit), each
@@ -188,7 +235,16 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
         SurfaceHit hits[4];  // of a packet of rays
         for (int r = 0; r < rows; ++r) {
           const int row_of_pixels = r / samples;
-          view.row(y0 + row_of_pixels + offsets[static_cast<size_t>(r % samples)], base, step);
+          const double row_y = y0 + row_of_pixels + offsets[static_cast<size_t>(r % samples)];
+          view.row(row_y, base, step);
+          if (view.orthographic) {
+            cast_parallel_row(view, row_y, caster, no_surface, clip_ball, ray_s, ray_pixel,
+                              w.above, w.current, shader, row_of_pixels * width,
+                              w.sums.data(), w.hit_samples.data(), w.hits, w.singular);
+            w.rays += columns;
+            std::swap(w.above, w.current);
+            continue;
+          }
           caster.begin_row(base, step);
           double s_min, s_max;  // rays outside miss the clip volume
           caster.row_extent(s_min, s_max);

@@ -234,17 +234,28 @@ Scene jsurf_to_scene(std::string_view text, const std::string& origin) {
 
   // The camera: its frame in surface space is the rotation's columns (x right, y up, z towards
   // the viewer); it looks at the point of its axis nearest to the clip sphere's centre.
+  bool orthographic = false;
   if (r.has("camera_type")) {
     const std::string& type = r.find("camera_type")->value;
-    if (type == "ORTHOGRAPHIC_CAMERA")
-      r.fail("camera_type", "zeroset draws with a perspective camera only (PERSPECTIVE_CAMERA)");
-    if (type != "PERSPECTIVE_CAMERA")
+    orthographic = type == "ORTHOGRAPHIC_CAMERA";
+    if (!orthographic && type != "PERSPECTIVE_CAMERA")
       r.fail("camera_type", fmt::format("'{}' is neither PERSPECTIVE_CAMERA nor "
                                         "ORTHOGRAPHIC_CAMERA", type));
   }
   Camera& cam = s.camera;
   cam.fov_deg = r.has("camera_fov_y") ? r.number_in("camera_fov_y", kMinFovDeg, kMaxFovDeg)
                                       : kJsurfFovDeg;
+  cam.projection = orthographic ? Projection::orthographic : Projection::perspective;
+  cam.ortho_height = 0;  // without camera_height zeroset frames the clip sphere
+  if (orthographic && r.has("camera_height")) {
+    // In camera space, whose units the view's scale turns into the surface's.
+    const double h = r.number("camera_height");
+    if (!(h > 0 && h * view->scale <= kMaxCameraLength))
+      r.fail("camera_height",
+             fmt::format("{} must be positive and at most {:g} in the surface's units", h,
+                         kMaxCameraLength));
+    cam.ortho_height = h * view->scale;
+  }
   const Vec3 right = view->rotation.col(0), back = view->rotation.col(2);
   const Vec3 centre = clip->translation;
   cam.target = centre;
@@ -252,10 +263,12 @@ Scene jsurf_to_scene(std::string_view text, const std::string& origin) {
   if (has_camera) {
     const Vec3 eye = view->translation;
     const double d = (centre - eye).dot(-back);
-    if (!(d > 1e-12 * clip->scale))
+    // Parallel rays see the same picture from any point of their axis: an orthographic eye
+    // at or beyond the centre starts its rays where zeroset chooses (outside the clip).
+    if (!(d > 1e-12 * clip->scale) && !orthographic)
       r.fail("camera_transform", "the camera looks away from the clip sphere's centre");
     cam.target = eye - d * back;
-    cam.distance = d;
+    cam.distance = d > 1e-12 * clip->scale ? d : 0;
   }
   cam.elevation_deg = degrees(std::asin(std::clamp(back.z(), -1.0, 1.0)));
   cam.azimuth_deg = std::hypot(back.x(), back.y()) > 1e-12 ? degrees(std::atan2(back.y(), back.x()))

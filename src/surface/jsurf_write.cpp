@@ -168,7 +168,12 @@ std::string scene_to_jsurf(const Scene& scene) {
   put("rotation_matrix",
       numbers({rot(0, 0), rot(0, 1), rot(0, 2), 0, rot(1, 0), rot(1, 1), rot(1, 2), 0, rot(2, 0),
                rot(2, 1), rot(2, 2), 0, 0, 0, 0, 1}));
-  put("camera_type", "PERSPECTIVE_CAMERA");
+  if (s.camera.is_orthographic()) {
+    put("camera_type", "ORTHOGRAPHIC_CAMERA");
+    put("camera_height", finite_number(s.camera.view_height(s.scene_radius()) / radius));
+  } else {
+    put("camera_type", "PERSPECTIVE_CAMERA");
+  }
   put("camera_fov_y", finite_number(s.camera.fov_deg));
   put("camera_transform", numbers({1, 0, 0, t.x(), 0, 1, 0, t.y(), 0, 0, 1, t.z(), 0, 0, 0, 1}));
 

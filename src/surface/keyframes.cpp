@@ -21,6 +21,7 @@ double* camera_field(Camera& c, const std::string& name) {
   if (name == "distance") return &c.distance;
   if (name == "roll_deg") return &c.roll_deg;
   if (name == "fov_deg") return &c.fov_deg;
+  if (name == "ortho_height") return &c.ortho_height;
   return nullptr;
 }
 
@@ -94,6 +95,11 @@ Surface Keyframes::at(Surface surface, double time) const {
   for (const KeyTrack& t : params) surface.field.set_parameter(t.name, t.value(time));
   surface.clip.update(surface.field);  // a clip that follows the parameters
   for (const KeyTrack& t : camera) *camera_field(surface.camera, t.name) = t.value(time);
+  if (!projections.empty()) {
+    surface.camera.projection = projections.front().second;
+    for (const auto& [at, projection] : projections)
+      if (at <= time) surface.camera.projection = projection;
+  }
   return surface;
 }
 
@@ -103,7 +109,7 @@ double frame_time(int frame, int frames) {
 
 const std::vector<std::string>& keyframe_camera_fields() {
   static const std::vector<std::string> fields = {"azimuth_deg", "elevation_deg", "distance",
-                                                  "roll_deg", "fov_deg"};
+                                                  "roll_deg",    "fov_deg",       "ortho_height"};
   return fields;
 }
 
@@ -163,15 +169,25 @@ Keyframes read_keyframes(const json& settings, const Surface& surface, int frame
     if (k.contains("camera")) {
       const json& c = k["camera"];
       if (!c.is_object()) fail(origin, where + "/camera", "expected an object");
-      json_read::known_keys(c, {"azimuth_deg", "elevation_deg", "distance", "roll_deg", "fov_deg"},
+      json_read::known_keys(c,
+                            {"azimuth_deg", "elevation_deg", "distance", "roll_deg", "fov_deg",
+                             "ortho_height", "projection"},
                             origin, where + "/camera");
       for (const auto& [name, v] : c.items()) {
         const std::string at = where + "/camera/" + name;
+        if (name == "projection") {
+          const std::optional<Projection> p = find_projection(json_read::string(v, origin, at));
+          if (!p) fail(origin, at, "expected \"perspective\" or \"orthographic\"");
+          out.projections.emplace_back(time, *p);
+          continue;
+        }
         Camera probe = surface.camera;
         *camera_field(probe, name) = number(v, origin, at);
         // 0 fits the clip in a scene's camera; between two keyframes it would mean nothing.
         if (name == "distance" && !(probe.distance > 0))
           fail(origin, at, "a keyframe's distance must be positive");
+        if (name == "ortho_height" && !(probe.ortho_height > 0))
+          fail(origin, at, "a keyframe's ortho_height must be positive");
         try {
           validate_camera(probe);
         } catch (const SettingError& err) {

@@ -250,6 +250,10 @@ json scene_to_json(const Scene& scene) {
                  {"fov_deg", c.fov_deg},
                  {"target", {c.target.x(), c.target.y(), c.target.z()}}};
   if (c.roll_deg != 0) j["camera"]["roll_deg"] = c.roll_deg;  // older files have none
+  if (c.is_orthographic()) {
+    j["camera"]["projection"] = projection_name(c.projection);
+    j["camera"]["ortho_height"] = c.ortho_height;
+  }
   return j;
 }
 
@@ -358,7 +362,8 @@ Scene scene_from_json(json j, const std::string& origin) {
   if (j.contains("camera")) {
     const json& c = j["camera"];
     if (!c.is_object()) fail(origin, "/camera", "expected an object");
-    known_keys(c, {"azimuth_deg", "elevation_deg", "distance", "fov_deg", "target", "roll_deg"},
+    known_keys(c, {"azimuth_deg", "elevation_deg", "distance", "fov_deg", "target", "roll_deg",
+                   "projection", "ortho_height"},
                origin, "/camera");
     auto num = [&](const char* key, double& out) {
       if (c.contains(key)) out = number(c[key], origin, std::string("/camera/") + key);
@@ -368,6 +373,13 @@ Scene scene_from_json(json j, const std::string& origin) {
     num("distance", s.camera.distance);
     num("fov_deg", s.camera.fov_deg);
     num("roll_deg", s.camera.roll_deg);
+    num("ortho_height", s.camera.ortho_height);
+    if (c.contains("projection")) {
+      const std::optional<Projection> p =
+          find_projection(json_read::string(c["projection"], origin, "/camera/projection"));
+      if (!p) fail(origin, "/camera/projection", "expected \"perspective\" or \"orthographic\"");
+      s.camera.projection = *p;
+    }
     if (c.contains("target")) s.camera.target = vec3(c["target"], origin, "/camera/target");
     try {
       validate_camera(s.camera);

@@ -3,6 +3,7 @@
 #include <fmt/core.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <string>
 
 #include "zeroset/error.h"
@@ -25,8 +26,43 @@ void validate_camera(const Camera& c) {
   check(c.fov_deg >= kMinFovDeg && c.fov_deg <= kMaxFovDeg, "fov_deg", c.fov_deg,
         fmt::format("must lie in [{}, {}] degrees", kMinFovDeg, kMaxFovDeg));
   check(std::abs(c.roll_deg) <= kMaxCameraAngleDeg, "roll_deg", c.roll_deg, angle);
+  check(c.ortho_height >= 0 && c.ortho_height <= kMaxCameraLength, "ortho_height",
+        c.ortho_height,
+        fmt::format("must lie in [0, {:g}] (0: fit the clip volume)", kMaxCameraLength));
   for (int a = 0; a < 3; ++a)
     check(std::abs(c.target[a]) <= kMaxCameraLength, "target", c.target[a], length);
+}
+
+const char* projection_name(Projection p) {
+  return p == Projection::orthographic ? "orthographic" : "perspective";
+}
+
+std::optional<Projection> find_projection(std::string_view name) {
+  if (name == "perspective" || name == "persp") return Projection::perspective;
+  if (name == "orthographic" || name == "ortho") return Projection::orthographic;
+  return std::nullopt;
+}
+
+Camera with_projection(Camera camera, std::string_view spec, const std::string& what) {
+  const size_t colon = spec.find(':');
+  const std::optional<Projection> p = find_projection(spec.substr(0, colon));
+  const std::string text(spec);
+  const char* expected = "expected perspective, ortho or ortho:HEIGHT (HEIGHT > 0, world units)";
+  if (!p) throw InvalidArgument(what, text, expected);
+  camera.projection = *p;
+  camera.ortho_height = 0;  // fit the clip volume
+  if (colon == std::string_view::npos) return camera;
+  if (*p != Projection::orthographic)
+    throw InvalidArgument(what, text, "only an orthographic camera takes a HEIGHT");
+  const std::string height(spec.substr(colon + 1));
+  char* end = nullptr;
+  const double h = std::strtod(height.c_str(), &end);
+  if (height.empty() || end != height.c_str() + height.size() || !(h > 0) ||
+      !(h <= kMaxCameraLength))
+    throw InvalidArgument(what, text,
+                          fmt::format("{}; HEIGHT at most {:g}", expected, kMaxCameraLength));
+  camera.ortho_height = h;
+  return camera;
 }
 
 }  // namespace zeroset

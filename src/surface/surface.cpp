@@ -17,11 +17,16 @@ Vec3 Camera::eye(double scene_radius) const {
     const double half = 0.5 * fov_deg * M_PI / 180;
     dist = 1.08 * scene_radius / std::sin(half);
   }
+  if (is_orthographic()) dist = std::max(dist, 2.5 * scene_radius);
   return target + dist * dir;
 }
 
+double Camera::view_height(double scene_radius) const {
+  return ortho_height > 0 ? ortho_height : 2.16 * scene_radius;
+}
+
 Camera Camera::aimed_at(std::span<const Vec3> points, double min_radius) const {
-  if (points.empty() || distance > 0) return *this;
+  if (points.empty() || (is_orthographic() ? ortho_height > 0 : distance > 0)) return *this;
   Vec3 lo = points[0], hi = points[0];
   for (const Vec3& p : points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
   const Vec3 centre = 0.5 * (lo + hi);
@@ -29,6 +34,10 @@ Camera Camera::aimed_at(std::span<const Vec3> points, double min_radius) const {
   for (const Vec3& p : points) radius = std::max(radius, (p - centre).norm());
   Camera c = *this;
   c.target = centre;
+  if (is_orthographic()) {
+    c.ortho_height = 2.16 * radius;
+    return c;
+  }
   c.distance = 1.08 * radius / std::sin(0.5 * fov_deg * M_PI / 180);
   return c;
 }

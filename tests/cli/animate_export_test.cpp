@@ -262,6 +262,44 @@ TEST(CliKeyframes, PovRayRendersTheSameFramesFromTheExportedAnimation) {
   EXPECT_LT(test::intersection_over_union(masks[0], masks[2]), 0.9);
 }
 
+// The projection switches at frame 4 (orthographic, a window 4 high that shrinks to 3 by the
+// last frame): the frames before it are the perspective picture, frame 4 the orthographic one;
+// POV-Ray's frames of the exported animation switch there too.
+TEST(CliKeyframes, KeyframesSwitchTheProjection) {
+  const std::string dir = fresh_dir("keyframes-projection");
+  const std::string scene = keyframed_scene(dir, R"([
+    {"time": 0, "camera": {"projection": "perspective"}},
+    {"frame": 4, "camera": {"projection": "orthographic", "ortho_height": 4}},
+    {"time": 1, "camera": {"ortho_height": 3}, "ease": "linear"}])");
+  auto r = run_command(zs("animate " + scene + " --frames 9 --size 48x48 --aa 1 --no-video -o " +
+                          dir + "/frames"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string still = " --size 48x48 --aa 1 -o " + dir;
+  r = run_command(zs("render " + scene + still + "/persp.png"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run_command(zs("render " + scene + " --projection ortho:4" + still + "/ortho.png"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(bytes_of(dir + "/persp.png") == bytes_of(dir + "/frames/frame_0003.png"));
+  EXPECT_TRUE(bytes_of(dir + "/ortho.png") == bytes_of(dir + "/frames/frame_0004.png"));
+  EXPECT_FALSE(bytes_of(dir + "/frames/frame_0004.png") ==
+               bytes_of(dir + "/frames/frame_0008.png"));
+  if (!have_povray()) GTEST_SKIP() << "povray is not installed";
+  fs::create_directories(dir + "/pov");
+  r = run_command(zs("export " + scene + " --animate --frames 9 --frame-range 3-4 --size 48x48 "
+                     "-o " + dir + "/pov/torus.pov"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run_command("cd " + dir + "/pov && povray -D -V torus.ini -A");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Color white(1, 1, 1);
+  for (int f = 3; f <= 4; ++f) {
+    const auto theirs = test::surface_mask(
+        read_image(dir + "/pov/torus_" + std::to_string(f) + ".png"), white);
+    const auto ours = test::surface_mask(
+        read_image(dir + "/frames/frame_000" + std::to_string(f) + ".png"), white);
+    EXPECT_GE(test::intersection_over_union(theirs, ours), 0.97) << "frame " << f;
+  }
+}
+
 TEST(CliKeyframes, BadKeyframesAndFlagsTheyMakeMeaninglessExitTwo) {
   const std::string dir = fresh_dir("keyframes-bad");
   const std::vector<std::pair<std::string, std::string>> cases = {
@@ -275,6 +313,10 @@ TEST(CliKeyframes, BadKeyframesAndFlagsTheyMakeMeaninglessExitTwo) {
       {R"([{"time": 0, "camera": {"elevation_deg": 95}}])",
        "/animation/keyframes/0/camera/elevation_deg"},
       {R"([{"time": 0, "camera": {"azimuth": 5}}])", "/animation/keyframes/0/camera/azimuth"},
+      {R"([{"time": 0, "camera": {"projection": "fisheye"}}])",
+       "/animation/keyframes/0/camera/projection"},
+      {R"([{"time": 0, "camera": {"ortho_height": 0}}])",
+       "/animation/keyframes/0/camera/ortho_height"},
       {R"({"time": 0})", "/animation/keyframes: expected a list"}};
   for (const auto& [keys, expected] : cases) {
     const std::string scene = keyframed_scene(dir, keys);

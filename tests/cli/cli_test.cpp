@@ -331,7 +331,8 @@ TEST(CliJsurf, BadFilesExitWithCodeTwoNamingFileAndLine) {
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"scale_factor=zero\n", ":2: scale_factor"},
       {"rotation_matrix=2 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1\n", ":2: rotation_matrix"},
-      {"camera_type=ORTHOGRAPHIC_CAMERA\n", ":2: camera_type"},
+      {"camera_type=FISHEYE_CAMERA\n", ":2: camera_type"},
+      {"camera_type=ORTHOGRAPHIC_CAMERA\ncamera_height=-2\n", ":3: camera_height"},
       {"front_material_color=0.5 0.5\n", ":2: front_material_color"},
   };
   for (const auto& [line, expected] : cases) {
@@ -366,6 +367,39 @@ TEST(CliJsurf, EveryCommandTakesAJsurfSurface) {
     const auto r = run_command(zs(cmd));
     EXPECT_EQ(r.exit_code, 0) << cmd << "\n" << r.output;
   }
+}
+
+TEST(CliRender, OrthographicProjectionFlag) {
+  const std::string dir = temp_dir();
+  auto r = run_command(zs("render sphere --projection ortho:3 --size 64x64 --aa 1 -o " + dir +
+                          "/o.png"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  r = run_command(zs("render sphere --projection ortho --size 64x64 --aa 1 -o " + dir + "/f.png"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  for (const char* bad : {"fisheye", "ortho:-1", "ortho:nan", "ortho:1e300",
+                          "perspective:2", "ortho:"}) {
+    r = run_command(zs(std::string("render sphere --projection ") + bad + " -o " + dir + "/b.png"));
+    EXPECT_EQ(r.exit_code, 2) << bad << ": " << r.output;
+    EXPECT_NE(r.output.find("--projection"), std::string::npos) << bad << ": " << r.output;
+  }
+  // A SURFER file's orthographic camera, exported back as one.
+  const std::string file = write_text(
+      "ortho.jsurf",
+      "#jSurfer\nsurface_equation=x^2+y^2+z^2-a^2\nsurface_parameter_a=0.5\n"
+      "camera_type=ORTHOGRAPHIC_CAMERA\ncamera_height=2.0\n");
+  r = run_command(zs("render " + file + " --size 64x64 --aa 1 -o " + dir + "/j.png"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  r = run_command(zs("export " + file + " -o " + dir + "/j.pov"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(dir + "/j.pov");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("orthographic"), std::string::npos);
+  r = run_command(zs("export " + file + " -o " + dir + "/j2.jsurf"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in2(dir + "/j2.jsurf");
+  const std::string back((std::istreambuf_iterator<char>(in2)), std::istreambuf_iterator<char>());
+  EXPECT_NE(back.find("camera_type=ORTHOGRAPHIC_CAMERA"), std::string::npos) << back;
+  EXPECT_NE(back.find("camera_height=2\n"), std::string::npos) << back;
 }
 
 }  // namespace

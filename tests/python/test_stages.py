@@ -179,6 +179,27 @@ def test_pov_export_equals_the_cli(cli, tmp_path):
     assert s.pov_scene(size=(300, 200)) == (tmp_path / "cli.pov").read_text()
 
 
+def test_orthographic_render_and_export_equal_the_cli(cli, tmp_path):
+    args = ["--param", "mu=1.5", "--size", "120x90", "--camera", "30,20", "--projection",
+            "ortho:4.5"]
+    cli("render", "kummer", *args, "-o", tmp_path / "cli.ppm")
+    s = zeroset.Surface("kummer", mu=1.5)
+    img = s.render(size=(120, 90), camera=(30, 20), projection="ortho:4.5")
+    np.testing.assert_array_equal(img, read_ppm(tmp_path / "cli.ppm"))
+    assert not np.array_equal(img, s.render(size=(120, 90), camera=(30, 20)))
+    cli("export", "kummer", "--param", "mu=1.5", "--size", "120x90", "--projection", "ortho",
+        "-o", tmp_path / "cli.pov")
+    pov = s.pov_scene(size=(120, 90), projection="ortho")
+    assert pov == (tmp_path / "cli.pov").read_text() and "orthographic" in pov
+    with pytest.raises(ValueError, match="projection"):
+        s.render(size=(8, 8), projection="fisheye")
+    with pytest.raises(ValueError, match="HEIGHT"):
+        s.render(size=(8, 8), projection="ortho:-1")
+    with pytest.raises(TypeError, match="projection"):
+        s.render(size=(8, 8), projection=3)
+    assert s.camera["projection"] == "perspective"
+
+
 def test_render_options_are_checked():
     s = zeroset.Surface("kummer", mu=1.5)
     with pytest.raises(ValueError, match="size"):

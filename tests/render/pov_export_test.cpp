@@ -92,6 +92,26 @@ TEST(PovExport, WritesPolynomialWithSturmAndClip) {
   EXPECT_NE(text.find("camera"), std::string::npos);
 }
 
+TEST(PovExport, WritesAnOrthographicCameraSizedToTheHeight) {
+  Surface s = surface_from_equation("x^2 + y^2 + z^2 - 1");
+  s.clip = Clip::sphere(1.5);
+  s.camera.projection = Projection::orthographic;
+  s.camera.ortho_height = 2.5;
+  RenderOptions o;
+  o.width = 300;
+  o.height = 150;
+  const std::string pov = pov_scene(s, o);
+  EXPECT_NE(pov.find("  orthographic\n"), std::string::npos) << pov;
+  EXPECT_EQ(pov.find("  perspective\n"), std::string::npos) << pov;
+  EXPECT_NE(pov.find("  up <0, 2.5, 0>\n"), std::string::npos) << pov;
+  EXPECT_NE(pov.find("  right <-5, 0, 0>\n"), std::string::npos) << pov;
+  EXPECT_EQ(pov.find("angle"), std::string::npos) << pov;
+  if (have_povray()) {
+    o.height = 300;
+    EXPECT_GE(pov_agreement(s, o), 0.97);
+  }
+}
+
 TEST(PovExport, RejectsNonPolynomialSurface) {
   Surface s = surface_from_equation("sqrt(x^2 + y^2) - z");
   s.clip = Clip::sphere(1);

@@ -301,6 +301,71 @@ TEST_P(CatalogRays, RowRaysAgreeWithDenseReferenceWhateverTheGuess) {
   EXPECT_GT(guided_roots, hits / 4) << "the neighbours' guesses should mostly be good";
 }
 
+/// Orthographic rows: parallel rays origin + s·origin_step + t·forward from a random view,
+/// F translated to the row's origin once (begin_parallel_row). Every hit agrees with the
+/// reference restricted to the same ray, whatever the neighbours' guesses.
+TEST_P(CatalogRays, ParallelRowRaysAgreeWithDenseReference) {
+  const Surface surface = make_surface(*find_catalog_entry(GetParam()));
+  ReferenceCaster reference(surface.field.polynomial());
+  const Box3 box = surface.bounds();
+  const double radius = surface.scene_radius();
+  std::mt19937 rng(20261207);
+  std::uniform_real_distribution<double> unit(0, 1);
+  int hits = 0, ambiguous = 0, cast = 0;
+  constexpr int kViews = 10, kRowsPerView = 5, kRaysPerRow = 120;
+  for (int e = 0; e < kViews; ++e) {
+    View view = random_view(box.center(), radius, kRaysPerRow, rng);
+    view.orthographic = true;
+    view.half_height = radius * (0.4 + 0.8 * unit(rng));
+    SurfaceRayCaster caster(surface, view.eye);
+    for (int r = 0; r < kRowsPerView; ++r) {
+      Vec3 origin, origin_step;
+      view.row_origins(kRaysPerRow * unit(rng), origin, origin_step);
+      caster.begin_parallel_row(origin, origin_step, view.forward);
+      double last = NAN, before_last = NAN;
+      for (int i = 0; i < kRaysPerRow; ++i) {
+        const double s = i + 0.5;
+        const Vec3 o = origin + s * origin_step;
+        RootGuess guess;
+        if (!std::isnan(last)) {
+          guess.t = std::isnan(before_last) ? last : 2 * last - before_last;
+          guess.spread = 2 * (std::isnan(before_last) ? 0 : std::abs(last - before_last)) +
+                         1e-4 * last;
+        }
+        SurfaceHit hit;
+        const bool got = caster.intersect_in_row(s, hit, guess);
+        before_last = last;
+        last = got ? hit.t : NAN;
+        double t0 = 0, t1 = 0;
+        if (!surface.clip.ray_interval(o, view.forward, 0, t0, t1)) {
+          EXPECT_FALSE(got);
+          continue;
+        }
+        ++cast;
+        const Reference ref = reference.first_hit(o, view.forward, t0, t1);
+        if (ref.kind == Reference::Kind::kAmbiguous) {
+          ++ambiguous;
+          continue;
+        }
+        if (ref.kind == Reference::Kind::kMiss) {
+          EXPECT_FALSE(got) << "spurious hit at t = " << hit.t << ", origin " << o.transpose()
+                            << ", dir " << view.forward.transpose();
+          continue;
+        }
+        ++hits;
+        ASSERT_TRUE(got) << "missed hit at t = " << ref.t << ", origin " << o.transpose()
+                         << ", dir " << view.forward.transpose();
+        EXPECT_NEAR(hit.t, ref.t, 1e-7 * radius)
+            << "origin " << o.transpose() << ", dir " << view.forward.transpose();
+        EXPECT_LT((hit.point - (o + ref.t * view.forward)).norm(), 1e-6 * radius);
+        EXPECT_NEAR(hit.normal.norm(), 1.0, 1e-9);
+      }
+    }
+  }
+  EXPECT_LT(ambiguous, cast / 50 + 1);
+  EXPECT_GT(hits, kViews * kRowsPerView * kRaysPerRow / 20);
+}
+
 /// Rows of rays take their normals from the row's expansions (G translated to the eye) where
 /// ∇F is far from vanishing: they must agree with ∇F evaluated from the field at the hit.
 TEST_P(CatalogRays, RowNormalsAgreeWithTheFieldsGradient) {

@@ -17,6 +17,7 @@
 #include "zeroset/render/raycast.h"
 #include "zeroset/render/view.h"
 #include "zeroset/surface/catalog.h"
+#include "zeroset/surface/jsurf.h"
 #include "zeroset/surface/scene.h"
 #include "support/equation.h"
 
@@ -106,6 +107,78 @@ TEST(RenderSurface, DrawsSphereAsDiskOfTheExpectedSize) {
   const double expected = std::numbers::pi * r_px * r_px;
   EXPECT_NEAR(static_cast<double>(stats.hits), expected, 0.02 * expected);
   EXPECT_EQ(stats.singular_normals, 0);
+}
+
+// The half width, in pixels, of the widest row of the surface's pixels.
+double widest_half_row(const Image& img) {
+  const auto mask = surface_mask(img, Color(1, 1, 1));
+  int widest = 0;
+  for (int y = 0; y < img.height; ++y) {
+    int n = 0;
+    for (int x = 0; x < img.width; ++x) n += mask[static_cast<size_t>(y) * img.width + x];
+    widest = std::max(widest, n);
+  }
+  return 0.5 * widest;
+}
+
+TEST(RenderSurface, OrthographicSphereIsADiscOfRadiusOverHeight) {
+  for (const double height : {3.0, 5.0}) {
+    Surface s = surface_from_equation("x^2 + y^2 + z^2 - 1");
+    s.clip = Clip::sphere(1.5);
+    s.camera.projection = Projection::orthographic;
+    s.camera.ortho_height = height;
+    s.camera.distance = 0.5;  // inside the clip: the rays still start outside it
+    RenderOptions o = small(200);
+    o.samples = 1;
+    RenderStats stats;
+    const Image img = render_surface(s, o, &stats);
+    const double r_px = 1.0 / height * 200;
+    EXPECT_NEAR(widest_half_row(img), r_px, 1.0) << height;
+    EXPECT_NEAR(std::sqrt(stats.hits / std::numbers::pi), r_px, 1.0) << height;
+    EXPECT_TRUE(stats.exact);
+    // The view's projection puts the sphere's rim on that circle, at any depth.
+    const View v = View::from_camera(s.camera, s.scene_radius(), 200, 200);
+    EXPECT_TRUE(v.orthographic);
+    double x, y, depth;
+    ASSERT_TRUE(v.project(v.target + v.right, x, y, depth));
+    EXPECT_NEAR(x, 100 + r_px, 1e-9);
+    EXPECT_NEAR(y, 100, 1e-9);
+    ASSERT_TRUE(v.project(v.target + v.right + 0.7 * v.forward, x, y, depth));
+    EXPECT_NEAR(x, 100 + r_px, 1e-9);
+    // Rays are parallel and start in the eye's plane, outside the clip.
+    EXPECT_EQ(v.direction(3, 7), v.forward);
+    EXPECT_GT((v.origin(100, 100) - v.target).norm(), 1.5);
+  }
+}
+
+TEST(RenderSurface, OrthographicPictureMatchesPointsOfTheSameView) {
+  Surface s = surface_from_equation("x^2 + y^2 + z^2 - 1");
+  s.clip = Clip::sphere(1.5);
+  s.camera.projection = Projection::orthographic;
+  RenderOptions o = small(120);
+  o.samples = 1;
+  const auto ray = surface_mask(render_surface(s, o), Color(1, 1, 1));
+  const auto mesh = surface_mask(render_mesh(s, uv_sphere(48, 96), o, false), Color(1, 1, 1));
+  EXPECT_GT(intersection_over_union(ray, mesh), 0.97);
+  // A default height fits the clip sphere (radius 1.5): the unit sphere spans 1/(2.16·1.5).
+  const double r_px = 1.0 / (2.16 * 1.5) * 120;
+  EXPECT_NEAR(widest_half_row(render_surface(s, o)), r_px, 1.0);
+}
+
+TEST(RenderSurface, OpensAndDrawsSurferOrthographicFiles) {
+  const Scene scene = jsurf_to_scene(
+      "#jSurfer\n#Mon Sep 14 13:17:06 CEST 2015\nsurface_parameter_d=0.0\n"
+      "surface_parameter_c=0.0\nsurface_parameter_b=0.0\nsurface_parameter_a=0.5\n"
+      "camera_height=2.0\ncamera_type=ORTHOGRAPHIC_CAMERA\n"
+      "camera_transform=1.0 0.0 0.0 0.0 0.0 1.0 0.0 0.0 0.0 0.0 1.0 -1.0 0.0 0.0 0.0 1.0\n"
+      "rotation_matrix=1.0 0.0 0.0 0.0 0.0 1.0 0.0 0.0 0.0 0.0 1.0 0.0 0.0 0.0 0.0 1.0\n"
+      "scale_factor=0.0\nsurface_equation=x^2+y^2+z^2-(a+b+c+d)^2\n"
+      "surface_name=Kugel\\: r \\= a\n",
+      "kugel.jsurf");
+  RenderOptions o = small(160);
+  o.samples = 1;
+  const Image img = render_surface(scene.surface, o);
+  EXPECT_NEAR(widest_half_row(img), 0.5 / 2.0 * 160, 1.0);  // radius 0.5 in a window 2 high
 }
 
 TEST(RenderSurface, ShowsSmoothSurfacesWithoutPinHoles) {

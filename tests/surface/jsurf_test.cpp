@@ -180,7 +180,8 @@ TEST(Jsurf, ErrorsNameTheFileAndLine) {
   EXPECT_NE(error_of("surface_equation=x\nrotation_matrix=-1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1\n")
                 .find("bad.jsurf:2: rotation_matrix"),
             std::string::npos);
-  EXPECT_NE(error_of("surface_equation=x\ncamera_type=ORTHOGRAPHIC_CAMERA\n").find("bad.jsurf:2"),
+  EXPECT_NE(error_of("surface_equation=x\ncamera_type=FISHEYE_CAMERA\n")
+                .find("bad.jsurf:2: camera_type: 'FISHEYE_CAMERA' is neither"),
             std::string::npos);
   EXPECT_NE(error_of("surface_equation=x\nbackground_color=1 2 0\n").find("bad.jsurf:2"),
             std::string::npos);
@@ -259,6 +260,70 @@ TEST(Jsurf, WritingRefusesWhatSurferCannotShow) {
   refuses("x^2 + y^2 - z^2", {"sphere:2@1,0,0"}, "centred elsewhere");
   refuses("x^2 + y^2 - z^2", {"box:2"}, "one sphere");
   refuses("sin(x) + y^2 + z^2 - 1", {"sphere:2"}, "not a polynomial");
+}
+
+// A file as SURFER saves it (java.util.Properties.store): the header comment and date, keys
+// in hash order, escaped ':' and '=' and \u escapes in values, an orthographic camera.
+const std::string kSurferOrtho =
+    "#jSurfer\n"
+    "#Mon Sep 14 13:17:06 CEST 2015\n"
+    "surface_parameter_d=0.0\n"
+    "surface_parameter_c=0.0\n"
+    "surface_parameter_b=0.0\n"
+    "surface_parameter_a=0.5\n"
+    "camera_height=2.0\n"
+    "camera_type=ORTHOGRAPHIC_CAMERA\n"
+    "camera_transform=1.0 0.0 0.0 0.0 0.0 1.0 0.0 0.0 0.0 0.0 1.0 -1.0 0.0 0.0 0.0 1.0\n"
+    "rotation_matrix=1.0 0.0 0.0 0.0 0.0 1.0 0.0 0.0 0.0 0.0 1.0 0.0 0.0 0.0 0.0 1.0\n"
+    "scale_factor=0.0\n"
+    "surface_equation=x^2+y^2+z^2-(a+b+c+d)^2\n"
+    "surface_name=Kugel\\: r \\= a \\u00e4\n"
+    "background_color=1.0 1.0 1.0\n";
+
+TEST(Jsurf, OpensSurferOrthographicFiles) {
+  const Scene scene = jsurf_to_scene(kSurferOrtho, "kugel.jsurf");
+  const Camera& c = scene.surface.camera;
+  EXPECT_EQ(c.projection, Projection::orthographic);
+  EXPECT_NEAR(c.ortho_height, 2.0, 1e-12);  // camera units are the clip radius, 1 here
+  EXPECT_EQ(scene.surface.title, "Kugel: r = a \u00e4");
+  EXPECT_DOUBLE_EQ(scene.surface.field.parameter_values()[scene.surface.field.parameter_index("a")],
+                   0.5);
+  // Looking down -z (rotation_matrix is the identity): the camera's back direction is +z.
+  EXPECT_NEAR(c.elevation_deg, 90, 1e-9);
+  // A zoomed view (scale_factor 0.5: a clip radius of 10^0.5) scales the height alike.
+  std::string zoomed = kSurferOrtho;
+  zoomed.replace(zoomed.find("scale_factor=0.0"), 16, "scale_factor=0.5");
+  EXPECT_NEAR(jsurf_to_scene(zoomed, "z.jsurf").surface.camera.ortho_height,
+              2.0 * std::pow(10.0, 0.5), 1e-9);
+  // Without camera_height the picture fits the clip sphere.
+  std::string fit = kSurferOrtho;
+  fit.erase(fit.find("camera_height=2.0\n"), 18);
+  EXPECT_EQ(jsurf_to_scene(fit, "f.jsurf").surface.camera.ortho_height, 0);
+}
+
+TEST(Jsurf, OrthographicCameraRoundTrips) {
+  Scene scene = jsurf_to_scene(kSurferOrtho, "kugel.jsurf");
+  const std::string text = scene_to_jsurf(scene);
+  EXPECT_NE(text.find("camera_type=ORTHOGRAPHIC_CAMERA\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("camera_height=2\n"), std::string::npos) << text;
+  const Scene back = jsurf_to_scene(text, "back.jsurf");
+  EXPECT_EQ(back.surface.camera.projection, Projection::orthographic);
+  EXPECT_NEAR(back.surface.camera.ortho_height, 2.0, 1e-12);
+  // A perspective scene stays one.
+  scene.surface.camera.projection = Projection::perspective;
+  const std::string persp = scene_to_jsurf(scene);
+  EXPECT_NE(persp.find("camera_type=PERSPECTIVE_CAMERA\n"), std::string::npos);
+  EXPECT_EQ(persp.find("camera_height"), std::string::npos);
+  EXPECT_EQ(jsurf_to_scene(persp, "p.jsurf").surface.camera.projection, Projection::perspective);
+}
+
+TEST(Jsurf, RefusesBadOrthographicHeights) {
+  for (const char* bad : {"-1", "0", "NaN", "1e300", "two"}) {
+    std::string text = kSurferOrtho;
+    text.replace(text.find("camera_height=2.0"), 17, std::string("camera_height=") + bad);
+    const std::string e = error_of(text);
+    EXPECT_NE(e.find("bad.jsurf:7: camera_height"), std::string::npos) << bad << ": " << e;
+  }
 }
 
 }  // namespace

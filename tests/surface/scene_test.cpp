@@ -80,6 +80,23 @@ TEST(Scene, RoundTripsThroughAFile) {
   std::filesystem::remove(path);
 }
 
+TEST(Scene, RoundTripsAnOrthographicCamera) {
+  Scene scene = resolve_scene("sphere");
+  scene.surface.camera.projection = Projection::orthographic;
+  scene.surface.camera.ortho_height = 3.25;
+  const std::string path = temp_path("ortho.json");
+  write_scene(scene, path);
+  const Scene back = resolve_scene(path);
+  EXPECT_EQ(back.surface.camera.projection, Projection::orthographic);
+  EXPECT_DOUBLE_EQ(back.surface.camera.ortho_height, 3.25);
+  write_scene(back, path);  // and once more: the file's own output reads the same
+  EXPECT_DOUBLE_EQ(resolve_scene(path).surface.camera.ortho_height, 3.25);
+  // Perspective files say nothing of it, and read back as perspective.
+  write_scene(resolve_scene("sphere"), path);
+  EXPECT_EQ(resolve_scene(path).surface.camera.projection, Projection::perspective);
+  std::filesystem::remove(path);
+}
+
 TEST(Scene, CatalogSceneKeepsItsSingularPoints) {
   const std::string path = temp_path("kummer.json");
   write_scene(resolve_scene("kummer"), path);
@@ -110,6 +127,12 @@ TEST(Scene, BadFilesSayWhatAndWhere) {
                "/parameters/a/val: unknown key");
   expect_error(R"({"equation": "x - a", "parameters": {"a": 1e999}})", "not valid JSON");
   expect_error(R"([1, 2])", "JSON object");
+  expect_error(R"({"equation": "x", "camera": {"projection": "fisheye"}})",
+               "/camera/projection: expected \"perspective\" or \"orthographic\"");
+  expect_error(R"({"equation": "x", "camera": {"projection": 3}})", "/camera/projection");
+  expect_error(R"({"equation": "x", "camera": {"ortho_height": -1}})", "/camera/ortho_height");
+  expect_error(R"({"equation": "x", "camera": {"ortho_height": 1e300}})", "/camera/ortho_height");
+  expect_error(R"({"equation": "x", "camera": {"ortho_height": "big"}})", "/camera/ortho_height");
   std::filesystem::remove(path);
   try {
     resolve_surface(temp_path("missing.json"));

@@ -37,6 +37,46 @@ TEST(CameraControl, GlMatricesProjectPointsWhereTheViewDoes) {
   }
 }
 
+TEST(CameraControl, OrthographicGlMatricesProjectPointsWhereTheViewDoes) {
+  Camera c;
+  c.azimuth_deg = -50;
+  c.elevation_deg = 30;
+  c.projection = Projection::orthographic;
+  c.ortho_height = 2.5;
+  c.target = Vec3(0.1, 0.2, -0.3);
+  const View v = View::from_camera(c, 3, 500, 300);
+  ASSERT_TRUE(v.orthographic);
+  double near = 0, far = 0;
+  depth_range(v, c.target, 3, near, far);
+  const Eigen::Matrix4f m = projection_matrix(v, near, far) * view_matrix(v);
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<double> u(-2, 2);
+  for (int i = 0; i < 100; ++i) {
+    const Vec3 p = c.target + Vec3(u(rng), u(rng), u(rng));
+    double x = 0, y = 0, depth = 0;
+    ASSERT_TRUE(v.project(p, x, y, depth));
+    const Eigen::Vector4f clip = m * Eigen::Vector4f(p.x(), p.y(), p.z(), 1);
+    EXPECT_NEAR(clip.w(), 1, 1e-6);  // parallel: no perspective division
+    EXPECT_NEAR((clip.x() + 1) * 0.5 * 500, x, 1e-3);
+    EXPECT_NEAR((1 - clip.y()) * 0.5 * 300, y, 1e-3);
+    EXPECT_GT(clip.z(), -1);
+    EXPECT_LT(clip.z(), 1);
+  }
+}
+
+TEST(CameraControl, OrthographicZoomChangesTheWindowNotTheDistance) {
+  Camera c;
+  c.projection = Projection::orthographic;
+  c.distance = 7;
+  zoom(c, 0.5, 2.0);  // from the fitted window, 2.16 scene radii high
+  EXPECT_NEAR(c.ortho_height, 0.5 * 2.16 * 2.0, 1e-12);
+  EXPECT_EQ(c.distance, 7);
+  zoom(c, 1e-9, 2.0);
+  EXPECT_NEAR(c.ortho_height, 0.04, 1e-12);
+  zoom(c, 1e9, 2.0);
+  EXPECT_NEAR(c.ortho_height, 200, 1e-9);
+}
+
 TEST(CameraControl, OrbitNeverPassesOverThePole) {
   Camera c;
   orbit(c, 0, 10000);

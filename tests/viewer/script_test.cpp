@@ -88,6 +88,24 @@ TEST(Script, ExpectErrorAcceptsAFailureAndUnexpectedOnesAreCounted) {
   EXPECT_EQ(state.surface().field.source(), "x^2 + y^2 - z^2");
 }
 
+TEST(Script, ProjectionSwitchesTheCameraAndRefusesBadHeights) {
+  Script script = Script::parse(
+      "projection orthographic 3.5\nframes 2\nprojection ortho\n"
+      "projection perspective 2\nexpect-error only an orthographic camera\n"
+      "projection orthographic -1\nexpect-error must be positive\n"
+      "projection fisheye\nexpect-error expected perspective or orthographic\n",
+      "s");
+  ViewerState state(kummer(), Mode::kRaytrace);
+  FakeHost host;
+  run(script, state, host);
+  EXPECT_EQ(script.failures(), 0) << host.log;
+  EXPECT_TRUE(state.camera().is_orthographic());
+  EXPECT_EQ(state.camera().ortho_height, 3.5);  // "projection ortho" keeps the height
+  Script back = Script::parse("projection perspective\n", "s");
+  run(back, state, host);
+  EXPECT_FALSE(state.camera().is_orthographic());
+}
+
 TEST(Script, WaitTimesOutAsAFailure) {
   // Floaters never settle while the parameter keeps moving.
   Script script = Script::parse("play mu\nwait 0.2\n", "s");

@@ -1,5 +1,6 @@
 #pragma once
-/// Exact ray casting of one surface from one eye point (docs/algorithms.md E). Polynomials
+/// Exact ray casting of one surface from an eye point, or along parallel rays for an
+/// orthographic view (docs/algorithms.md E). Polynomials
 /// (up to Field::kMaxExpansionDegree, 24) are restricted exactly to each ray, one row of rays
 /// at a time, and the first root inside the clip is isolated by `RootFinder`, even roots
 /// included; other expressions go through interval arithmetic along the ray.
@@ -62,6 +63,14 @@ class SurfaceRayCaster {
   /// the s used): expands the restriction of F and of its gradient to the row, once, at
   /// O(degree) per monomial of degree ≤ degree and per term of F and ∇F.
   void begin_row(const Vec3& base, const Vec3& step);
+  /// Starts a row of parallel rays (an orthographic view): the ray at s starts at
+  /// origin + s·origin_step and runs along `dir`, t ≥ 0 in units of |dir|. F is translated to
+  /// `origin` (O(terms · degree³), so the eye of later perspective rows moves there too) and
+  /// restricted to the row's plane once; each ray then costs what a perspective one does.
+  /// Packets are not used (prepare_in_row returns 0); intersect_in_row and first_hit_in_row
+  /// cast the row's rays. A translation that overflows sends the caster to interval
+  /// arithmetic.
+  void begin_parallel_row(const Vec3& origin, const Vec3& origin_step, const Vec3& dir);
   /// The rays of the current row with s outside [s_min, s_max] miss the clip volume (a
   /// conservative range from its spheres; infinite without them, empty when no ray meets it).
   void row_extent(double& s_min, double& s_max) const;

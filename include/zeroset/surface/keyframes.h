@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json_fwd.hpp>
@@ -32,7 +33,7 @@ const char* ease_name(Ease e);
 std::optional<Ease> find_ease(std::string_view name);
 
 /// One animated value: a parameter's, or a camera field's (`azimuth_deg`, `elevation_deg`,
-/// `distance`, `roll_deg`, `fov_deg`). Held at the first key's value before it and at the last
+/// `distance`, `roll_deg`, `fov_deg`, `ortho_height`). Held at the first key's value before it and at the last
 /// key's after it; between two keys it follows the first one's ease.
 struct KeyTrack {
   std::string name;
@@ -48,8 +49,12 @@ struct KeyTrack {
 struct Keyframes {
   std::vector<KeyTrack> params;  ///< one per animated parameter
   std::vector<KeyTrack> camera;  ///< one per animated camera field
+  /// The camera's projection switched at keyframes: (time, projection) in increasing time. A
+  /// frame has the projection of the last switch at or before its time (the first one's
+  /// before it); empty: the surface's own throughout.
+  std::vector<std::pair<double, Projection>> projections;
 
-  bool empty() const { return params.empty() && camera.empty(); }
+  bool empty() const { return params.empty() && camera.empty() && projections.empty(); }
   const KeyTrack* param(const std::string& name) const;
   /// `surface` at `time`: its parameters and camera with every track's value there.
   Surface at(Surface surface, double time) const;
@@ -63,8 +68,8 @@ const std::vector<std::string>& keyframe_camera_fields();
 
 /// Reads `settings`' "animation"/"keyframes" (none: empty Keyframes) for `surface`: a list of
 /// {"time": T in [0, 1] | "frame": F in [0, frames − 1], "params": {NAME: value, ...},
-/// "camera": {FIELD: value, ...}, "ease": "linear" | "in" | "out" | "in-out"}, in increasing
-/// time. Throws BadInput "ORIGIN: /animation/keyframes/i/...: what is wrong" for an unknown
+/// "camera": {FIELD: value, ..., "projection": "perspective" | "orthographic"}, "ease":
+/// "linear" | "in" | "out" | "in-out"}, in increasing time. Throws BadInput "ORIGIN: /animation/keyframes/i/...: what is wrong" for an unknown
 /// key, parameter or ease, a time out of order, or a camera validate_camera refuses (a
 /// keyframe's distance must be positive).
 Keyframes read_keyframes(const nlohmann::json& settings, const Surface& surface, int frames,

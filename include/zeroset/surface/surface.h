@@ -31,9 +31,15 @@ struct CameraFrame {
   Vec3 up;
 };
 
+/// How a camera maps the world to its picture: a pinhole (rays from the eye, sizes shrink with
+/// depth) or parallel rays along the view direction (sizes independent of depth).
+enum class Projection { perspective, orthographic };
+
 /// An orbit camera: looks at `target` from `distance` along the direction given by azimuth
 /// (around +z, from +x) and elevation (above the xy plane). z is up, unless `roll_deg` turns
-/// the camera about its view direction.
+/// the camera about its view direction. An orthographic camera shows a window `ortho_height`
+/// world units high; its rays start on the plane through the eye (placed outside the clip
+/// volume, see eye()) and all run along the view direction.
 struct Camera {
   double azimuth_deg = 30;
   double elevation_deg = 20;
@@ -44,9 +50,19 @@ struct Camera {
   /// picture turns clockwise; 0 keeps z up. With it every orientation can be given, such as a
   /// SURFER file's rotation (docs/scenes.md).
   double roll_deg = 0;
+  Projection projection = Projection::perspective;
+  /// Orthographic only: the height of the visible window in world units; 0: chosen from the
+  /// clip's size so the whole volume is in view (view_height).
+  double ortho_height = 0;
 
-  /// The eye position; `scene_radius` is used when distance == 0.
+  bool is_orthographic() const { return projection == Projection::orthographic; }
+  /// The eye position; `scene_radius` is used when distance == 0. An orthographic camera's
+  /// eye (where its rays start) is at least 2.5 scene radii from the target, so that the
+  /// rays start outside the clip volume whatever the distance.
   Vec3 eye(double scene_radius) const;
+  /// Orthographic: the visible window's height in world units, ortho_height or, when it is
+  /// 0, 2.16 · scene_radius (the clip's ball with the perspective fit's margin).
+  double view_height(double scene_radius) const;
   /// The eye and the view's directions (the one home of the orbit camera's orientation: the
   /// renderers, the viewer and the exports all go through it). Looking straight up or down,
   /// the unrolled image's up is the azimuth's direction. Meaningful only when the eye differs
@@ -56,7 +72,8 @@ struct Camera {
   /// the distance at which the ball around it holding them all (radius at least
   /// `min_radius`) fills the field of view. The clip volume can be much larger than what lies
   /// on the surface inside it (the cone fills a third of its clip sphere). With a distance, or
-  /// no points, the camera as it is.
+  /// no points, the camera as it is. Orthographic without a height: the height fits that
+  /// ball in the same way.
   Camera aimed_at(std::span<const Vec3> points, double min_radius) const;
 };
 
