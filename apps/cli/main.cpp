@@ -1,9 +1,12 @@
 // zeroset: make implicit surfaces F(x, y, z; q) = 0 visible.
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <exception>
+#include <iostream>
 #include <string>
 #include <string_view>
 #include <fmt/core.h>
@@ -47,6 +50,24 @@ void choose_openmp_waiting(int argc, char** argv) {
 #endif
 }
 
+/// Prints an error on stderr. fmt::print would throw when stderr itself cannot be written (a
+/// full disk behind it too); the message is then lost, but the exit code still tells.
+void print_error(const std::string& message) {
+  std::fputs(("zeroset: error: " + message + "\n").c_str(), stderr);
+}
+
+/// 0 when everything printed on standard output reached it; else 1 with a message: a full
+/// disk or device behind it (`zeroset list > /dev/full`) is a failure, not a success.
+int standard_output_status() {
+  errno = 0;
+  const bool flushed = std::fflush(stdout) == 0;
+  const int err = errno;
+  if (flushed && !std::ferror(stdout) && std::cout.good()) return 0;
+  print_error("writing standard output failed" +
+              (err != 0 ? ": " + std::string(std::strerror(err)) : std::string()));
+  return 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -75,7 +96,7 @@ int main(int argc, char** argv) {
   auto& g = cli::global_flags();
   app.add_flag("-q,--quiet", g.quiet, "Print nothing but errors")->configurable(false);
   app.add_option("--threads", g.threads, "Worker threads (0: all cores)")
-      ->check(CLI::Range(0, 1024));
+      ->check(CLI::Range(0, zeroset::kMaxThreads));
 
   cli::register_catalog_commands(app);
   cli::register_render_commands(app);
@@ -97,17 +118,17 @@ int main(int argc, char** argv) {
     const auto commands = app.get_subcommands();
     const std::string help =
         commands.empty() ? "zeroset --help" : fmt::format("zeroset {} --help", commands.front()->get_name());
-    fmt::print(stderr, "zeroset: error: {}\nSee `{}` for the usage.\n", e.what(), help);
+    print_error(fmt::format("{}\nSee `{}` for the usage.", e.what(), help));
     return 2;
   } catch (const BadInput& e) {
-    fmt::print(stderr, "zeroset: error: {}\n", e.what());
+    print_error(e.what());
     return 2;
   } catch (const std::bad_alloc&) {
-    fmt::print(stderr, "zeroset: error: out of memory\n");
+    print_error("out of memory");
     return 1;
   } catch (const std::exception& e) {
-    fmt::print(stderr, "zeroset: error: {}\n", e.what());
+    print_error(e.what());
     return 1;
   }
-  return 0;
+  return standard_output_status();
 }

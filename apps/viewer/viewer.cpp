@@ -27,6 +27,7 @@
 #include "zeroset/error.h"
 #include "zeroset/io/atomic_file.h"
 #include "zeroset/io/image.h"
+#include "zeroset/io/output_transaction.h"
 
 namespace zeroset::viewer {
 namespace {
@@ -265,12 +266,18 @@ int run_viewer(const ViewerOptions& options) {
     throw InvalidArgument("--size", fmt::format("{}x{}", options.width, options.height),
                           "each side must lie in [64, 16384]");
   if (options.frames < 0) throw InvalidArgument("--frames", std::to_string(options.frames), "must be ≥ 0");
-  if (!options.screenshot.empty()) {
-    if (file_extension(options.screenshot) != "png")
-      throw InvalidArgument("--screenshot", options.screenshot, "the file name must end in .png");
-    check_writable(options.screenshot);
+  if (!options.screenshot.empty() && file_extension(options.screenshot) != "png")
+    throw InvalidArgument("--screenshot", options.screenshot, "the file name must end in .png");
+  {
+    // Outputs that cannot be written, or that name one file by any spelling, are refused
+    // before a window opens; the probe is not committed, so it leaves nothing behind.
+    OutputTransaction probe;
+    if (!options.screenshot.empty()) probe.declare(options.screenshot, "--screenshot");
+    if (!options.stats_out.empty()) probe.declare(options.stats_out, "--stats-out");
   }
-  if (!options.stats_out.empty()) check_writable(options.stats_out);
+  // The last screenshot and the statistics are written as one transaction: both or neither.
+  std::optional<OutputTransaction> outputs;
+  bool outputs_written = true;
   std::optional<Script> script;
   if (!options.script.empty()) script = Script::load(options.script);
   ViewerState state(options.scene, options.mode, options.threads, options.scene_origin);
@@ -375,9 +382,13 @@ int run_viewer(const ViewerOptions& options) {
       }
     } else if (is_batch) {
       if (--frames_left <= 0) {
-        if (!options.screenshot.empty() &&
-            !state.guard("screenshot", [&] { host.save_screenshot(options.screenshot); }))
-          ++failures;
+        if (!options.screenshot.empty()) {
+          outputs.emplace();
+          if (!state.guard("screenshot", [&] { host.save_screenshot(options.screenshot); })) {
+            ++failures;
+            outputs_written = false;
+          }
+        }
         is_done = true;
       }
     } else if (script) {
@@ -398,7 +409,8 @@ int run_viewer(const ViewerOptions& options) {
   }
 
   if (script) failures += script->failures();
-  if (!options.stats_out.empty()) {
+  if (!options.stats_out.empty() && outputs_written) {
+    if (!outputs) outputs.emplace();
     nlohmann::json j = state.stats().to_json();
     j["frames"] = frames_drawn;
     j["seconds"] = now_seconds() - start_s;
@@ -406,9 +418,13 @@ int run_viewer(const ViewerOptions& options) {
     if (!state.guard("stats", [&] {
           const std::string text = j.dump(2) + "\n";
           write_file_atomically(options.stats_out, [&](std::ostream& out) { out << text; });
-        }))
+        })) {
       ++failures;
+      outputs_written = false;
+    }
   }
+  if (outputs && outputs_written && !state.guard("outputs", [&] { outputs->commit(); }))
+    ++failures;
   return failures > 0 ? 1 : 0;
 }
 

@@ -27,6 +27,10 @@ struct Box3 {
   }
 };
 
+/// The most worker threads a caller may ask for (`--threads`, `threads=`, options' `threads`;
+/// 0 means one per core).
+inline constexpr int kMaxThreads = 1024;
+
 /// Linear RGB colour with components in [0, 1].
 using Color = Eigen::Vector3d;
 

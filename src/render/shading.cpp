@@ -137,6 +137,9 @@ void validate(const RenderOptions& options) {
 }
 
 int thread_count(int requested) {
+  if (requested < 0 || requested > kMaxThreads)
+    throw InvalidArgument("threads", std::to_string(requested),
+                          "must lie in [0, " + std::to_string(kMaxThreads) + "] (0: all cores)");
   if (requested > 0) return requested;
   return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }

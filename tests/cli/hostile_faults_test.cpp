@@ -53,6 +53,25 @@ TEST(HostileFaults, MeshBeyondTheProcessLimitIsRefusedWithTheLimitNamed) {
   EXPECT_EQ(other_files(dir), 0) << r.output;
 }
 
+// Threads whose stacks do not fit under the limit (1000 × 8 MiB in 1 GiB): the OpenMP stages
+// (mesh, sample) end with a message and exit code 1 instead of libgomp's abort. Fewer threads
+// under the same limit work. (The renderer starts at most one thread per tile of the picture,
+// std::threads whose failure is an ordinary error.)
+TEST(HostileFaults, ThreadsThatCannotStartAreAFailureWithAMessage) {
+  ZS_SKIP_UNDER_ASAN();
+  const std::string dir = fresh_dir("faults_threads");
+  for (const char* args : {"--threads 1000 mesh sphere -r 8 -o m.obj",
+                           "--threads 1000 sample sphere --max-count 50 -o f.ply"}) {
+    const auto r = under_limit(1'000'000, dir, args);
+    EXPECT_EQ(r.exit_code, 1) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find("zeroset: error:"), std::string::npos) << args << "\n" << r.output;
+    EXPECT_EQ(r.output.find("libgomp"), std::string::npos) << args << "\n" << r.output;
+    EXPECT_EQ(other_files(dir), 0) << args << "\n" << r.output;
+  }
+  const auto ok = under_limit(1'000'000, dir, "--threads 2 mesh sphere -r 8 -o m.obj");
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+}
+
 // The resolution the refusal offers does fit under the same limit.
 TEST(HostileFaults, TheOfferedResolutionFits) {
   ZS_SKIP_UNDER_ASAN();

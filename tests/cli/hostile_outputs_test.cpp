@@ -257,6 +257,33 @@ TEST(HostileOutputs, AFullDiskIsAFailureAndTheEarlierOutputsAreNotWritten) {
   EXPECT_TRUE(fs::is_character_file("/dev/null"));
 }
 
+TEST(HostileOutputs, StandardOutputOnAFullDiskIsAFailure) {
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  for (const char* args : {"list", "eval sphere --at 1,0,0", "completion bash", "info sphere",
+                           "info kummer --json"}) {
+    // Standard output to the full device, its errors to the test (the group's 2>&1).
+    const auto r = run_command("{ " + zs(args) + " > /dev/full; }");
+    EXPECT_EQ(r.exit_code, 1) << args << "\n" << r.output;
+    // The reason is known when the last write failed (an earlier failed flush of a long
+    // output, as the completion script's, leaves only the stream's error flag).
+    EXPECT_TRUE(r.output.find("writing standard output failed") != std::string::npos ||
+                r.output.find("No space left on device") != std::string::npos)
+        << args << "\n" << r.output;
+    EXPECT_EQ(run_command(zs(args) + " > /dev/null").exit_code, 0) << args;
+  }
+}
+
+TEST(HostileOutputs, TheViewersScreenshotAndStatsNamingOneFileAreRefused) {
+  const std::string d = fresh_dir("hostile-view-same");
+  for (const std::string& stats : {d + "/same.png", d + "/./same.png"}) {
+    const auto r = run_command(zs("view kummer --frames 2 --screenshot " + d +
+                                  "/same.png --stats-out " + stats));
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("--stats-out"), std::string::npos) << r.output;
+    EXPECT_TRUE(contents(d).empty()) << r.output;
+  }
+}
+
 TEST(HostileOutputs, AnOutputPathWrongBeforeAnyWorkIsBadInput) {
   const std::string d = fresh_dir("hostile-bad-path");
   for (const std::string& args :

@@ -200,6 +200,17 @@ def test_orthographic_render_and_export_equal_the_cli(cli, tmp_path):
     assert s.camera["projection"] == "perspective"
 
 
+def test_thread_counts_are_bounded():
+    s = zeroset.Surface("sphere")
+    with pytest.raises(ValueError, match="threads"):
+        s.mesh(resolution=8, threads=40000)
+    with pytest.raises(ValueError, match="threads"):
+        s.floaters(max_count=10, threads=5000)
+    with pytest.raises(ValueError, match="threads"):
+        s.render(size=(8, 8), threads=1025)
+    assert s.mesh(resolution=8, threads=2).faces.shape[0] > 0
+
+
 def test_render_options_are_checked():
     s = zeroset.Surface("kummer", mu=1.5)
     with pytest.raises(ValueError, match="size"):

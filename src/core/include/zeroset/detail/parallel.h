@@ -2,7 +2,12 @@
 // OpenMP helpers with a serial fallback, and one field evaluator per worker thread: the one
 // place where the modules ask OpenMP how many workers there are and which one is running.
 #include <algorithm>
+#include <atomic>
+#include <latch>
 #include <span>
+#include <string>
+#include <system_error>
+#include <thread>
 #include <vector>
 
 #ifdef _OPENMP
@@ -10,16 +15,50 @@
 #endif
 
 #include "zeroset/detail/exception_trap.h"
+#include "zeroset/error.h"
 #include "zeroset/expr/field.h"
 #include "zeroset/types.h"
 
 namespace zeroset::detail {
 
+/// Throws Error when `n` threads cannot run at once (a process limit such as `ulimit -u`, or
+/// no memory for their stacks). libgomp ends the whole process when it cannot create a worker
+/// ("Thread creation failed"), which no caller could catch, so a count is first tried with
+/// std::threads that all wait until the last one started; the largest count that ran is
+/// remembered and not tried again.
+inline void ensure_threads_can_start(int n) {
+  static std::atomic<int> proven{1};
+  if (n <= proven.load(std::memory_order_relaxed)) return;
+  std::latch all_started(1);
+  std::string failure;
+  {
+    std::vector<std::jthread> probe;
+    probe.reserve(static_cast<size_t>(n - 1));
+    try {
+      for (int i = 1; i < n; ++i) probe.emplace_back([&all_started] { all_started.wait(); });
+    } catch (const std::system_error& e) {
+      failure = e.what();
+    }
+    all_started.count_down();
+  }  // joined
+  if (!failure.empty())
+    throw Error("cannot start " + std::to_string(n) + " worker threads (" + failure +
+                "): ask for fewer (--threads, threads=)");
+  for (int p = proven.load(); p < n && !proven.compare_exchange_weak(p, n);) {
+  }
+}
+
+/// The workers for `requested` threads (0: OpenMP's default, one per core). Throws
+/// InvalidArgument above kMaxThreads and Error when that many threads cannot start.
 inline int worker_count(int requested) {
+  if (requested < 0 || requested > kMaxThreads)
+    throw InvalidArgument("threads", std::to_string(requested),
+                          "must lie in [0, " + std::to_string(kMaxThreads) + "] (0: all cores)");
 #ifdef _OPENMP
-  return requested > 0 ? requested : omp_get_max_threads();
+  const int n = requested > 0 ? requested : omp_get_max_threads();
+  ensure_threads_can_start(n);
+  return n;
 #else
-  (void)requested;
   return 1;
 #endif
 }
