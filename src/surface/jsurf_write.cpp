@@ -10,6 +10,7 @@
 #include "properties_detail.h"
 #include "zeroset/error.h"
 #include "zeroset/expr/parse.h"
+#include "zeroset/expr/polynomial.h"
 #include "zeroset/io/atomic_file.h"
 #include "zeroset/surface/jsurf.h"
 
@@ -129,6 +130,16 @@ std::string scene_to_jsurf(const Scene& scene) {
   const auto names = surfer_names(field.parameter_names());
   if (!field.is_polynomial())
     throw BadInput("SURFER draws algebraic surfaces only, and F is not a polynomial in x, y, z");
+  // A coefficient that is not finite at the scene's parameter values (x/0) is no surface SURFER
+  // can draw, as POV-Ray's export refuses it too.
+  if (field.is_expandable()) {
+    const Polynomial expanded = field.polynomial();
+    for (const Monomial& m : expanded.terms())
+      if (!std::isfinite(m.c))
+        throw BadInput(fmt::format("SURFER export: a coefficient of '{}' is not finite ({}) at "
+                                   "the scene's parameter values",
+                                   field.source(), m.c));
+  }
   const std::string equation = surfer_equation(field, names);
   const ParseResult check = parse_field(equation);  // the text must mean the same surface
   if (!check.ok() || check.field->parameter_names().size() != names.size())

@@ -260,6 +260,7 @@ TEST(Jsurf, WritingRefusesWhatSurferCannotShow) {
   refuses("x^2 + y^2 - z^2", {"sphere:2@1,0,0"}, "centred elsewhere");
   refuses("x^2 + y^2 - z^2", {"box:2"}, "one sphere");
   refuses("sin(x) + y^2 + z^2 - 1", {"sphere:2"}, "not a polynomial");
+  refuses("x/0 + y", {"sphere:2"}, "is not finite");
 }
 
 // A file as SURFER saves it (java.util.Properties.store): the header comment and date, keys
