@@ -115,7 +115,27 @@ std::string stl_bytes(const Mesh& m) {
   return b.str();
 }
 
+/// A glTF binary file with an empty scene and no BIN chunk: glTF allows no accessor with a
+/// count of 0 nor an empty buffer, so a mesh without triangles has no mesh at all.
+std::string empty_glb_bytes() {
+  const nlohmann::json doc = {{"asset", {{"version", "2.0"}, {"generator", "zeroset"}}},
+                              {"scene", 0},
+                              {"scenes", nlohmann::json::array({{{"nodes", nlohmann::json::array()}}})}};
+  Bytes js;
+  js.text(doc.dump());
+  js.pad(4, ' ');
+  Bytes out;
+  out.u32(0x46546C67u);  // "glTF"
+  out.u32(2);
+  out.u32(static_cast<std::uint32_t>(12 + 8 + js.size()));
+  out.u32(static_cast<std::uint32_t>(js.size()));
+  out.u32(0x4E4F534Au);  // "JSON"
+  out.text(js.str());
+  return out.str();
+}
+
 std::string glb_bytes(const Mesh& m) {
+  if (m.triangles.empty()) return empty_glb_bytes();
   const bool normals = has_normals(m);
   const size_t nv = m.positions.size(), nt = m.triangles.size();
   Bytes bin;
@@ -318,6 +338,9 @@ Mesh read_glb(const Reader& r) {
     r.fail(e.what());
   }
   const size_t bin_at = 20 + json_len;
+  // A file with no mesh (as an empty mesh is written) needs no BIN chunk.
+  if (!doc.contains("meshes") || (doc["meshes"].is_array() && doc["meshes"].empty()))
+    return Mesh{};
   const std::uint32_t bin_len = r.u32(bin_at);
   if (r.u32(bin_at + 4) != 0x004E4942u) r.fail("the second chunk is not BIN");
   r.need(bin_at + 8, bin_len);

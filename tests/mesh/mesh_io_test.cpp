@@ -1,5 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -44,6 +48,30 @@ TEST_F(MeshIo, RoundTripsEveryFormat) {
     }
   }
   EXPECT_EQ(read_mesh(path("torus.ply")).is_boundary, m.is_boundary);
+}
+
+// A mesh without triangles (a surface that misses the clip) is a valid glTF file of an empty
+// scene: no accessor with a count of 0, no empty buffer, no BIN chunk; it reads back empty.
+TEST_F(MeshIo, AnEmptyMeshIsAValidGlbOfAnEmptyScene) {
+  const std::string p = path("empty.glb");
+  write_mesh(Mesh{}, p);
+  std::ifstream in(p, std::ios::binary);
+  const std::string bytes{std::istreambuf_iterator<char>(in), {}};
+  ASSERT_GE(bytes.size(), 20u);
+  EXPECT_EQ(bytes.substr(0, 4), "glTF");
+  std::uint32_t total = 0, json_len = 0;
+  std::memcpy(&total, bytes.data() + 8, 4);
+  std::memcpy(&json_len, bytes.data() + 12, 4);
+  EXPECT_EQ(total, bytes.size());
+  EXPECT_EQ(20 + json_len, bytes.size()) << "a JSON chunk and nothing else";
+  const auto doc = nlohmann::json::parse(bytes.substr(20, json_len));
+  EXPECT_EQ(doc["asset"]["version"], "2.0");
+  EXPECT_FALSE(doc.contains("accessors"));
+  EXPECT_FALSE(doc.contains("buffers"));
+  EXPECT_TRUE(doc["scenes"][0]["nodes"].empty());
+  const Mesh r = read_mesh(p);
+  EXPECT_TRUE(r.positions.empty());
+  EXPECT_TRUE(r.triangles.empty());
 }
 
 TEST_F(MeshIo, RejectsUnknownExtensionListingKnownOnes) {
