@@ -115,23 +115,35 @@ std::string stl_bytes(const Mesh& m) {
   return b.str();
 }
 
+/// The glTF binary container: the JSON chunk (padded with spaces), then the BIN chunk unless
+/// `bin` is empty (glTF allows no empty buffer).
+std::string glb_container(const nlohmann::json& doc, const Bytes& bin) {
+  Bytes js;
+  js.text(doc.dump());
+  js.pad(4, ' ');
+  const size_t bin_chunk = bin.size() > 0 ? 8 + bin.size() : 0;
+  Bytes out;
+  out.u32(0x46546C67u);  // "glTF"
+  out.u32(2);
+  out.u32(static_cast<std::uint32_t>(12 + 8 + js.size() + bin_chunk));
+  out.u32(static_cast<std::uint32_t>(js.size()));
+  out.u32(0x4E4F534Au);  // "JSON"
+  out.text(js.str());
+  if (bin_chunk > 0) {
+    out.u32(static_cast<std::uint32_t>(bin.size()));
+    out.u32(0x004E4942u);  // "BIN\0"
+    out.text(bin.str());
+  }
+  return out.str();
+}
+
 /// A glTF binary file with an empty scene and no BIN chunk: glTF allows no accessor with a
 /// count of 0 nor an empty buffer, so a mesh without triangles has no mesh at all.
 std::string empty_glb_bytes() {
   const nlohmann::json doc = {{"asset", {{"version", "2.0"}, {"generator", "zeroset"}}},
                               {"scene", 0},
                               {"scenes", nlohmann::json::array({{{"nodes", nlohmann::json::array()}}})}};
-  Bytes js;
-  js.text(doc.dump());
-  js.pad(4, ' ');
-  Bytes out;
-  out.u32(0x46546C67u);  // "glTF"
-  out.u32(2);
-  out.u32(static_cast<std::uint32_t>(12 + 8 + js.size()));
-  out.u32(static_cast<std::uint32_t>(js.size()));
-  out.u32(0x4E4F534Au);  // "JSON"
-  out.text(js.str());
-  return out.str();
+  return glb_container(doc, Bytes{});
 }
 
 std::string glb_bytes(const Mesh& m) {
@@ -183,20 +195,7 @@ std::string glb_bytes(const Mesh& m) {
       {"bufferViews", views},
       {"accessors", accessors},
   };
-  Bytes js;
-  js.text(doc.dump());
-  js.pad(4, ' ');
-  Bytes out;
-  out.u32(0x46546C67u);  // "glTF"
-  out.u32(2);
-  out.u32(static_cast<std::uint32_t>(12 + 8 + js.size() + 8 + bin.size()));
-  out.u32(static_cast<std::uint32_t>(js.size()));
-  out.u32(0x4E4F534Au);  // "JSON"
-  out.text(js.str());
-  out.u32(static_cast<std::uint32_t>(bin.size()));
-  out.u32(0x004E4942u);  // "BIN\0"
-  out.text(bin.str());
-  return out.str();
+  return glb_container(doc, bin);
 }
 
 std::string known_list() {

@@ -9,6 +9,33 @@
 namespace zeroset::viewer {
 namespace {
 
+// The GL matrices of `c`'s view put 100 random points near the target where View::project
+// does, inside the depth range; an orthographic view needs no perspective division.
+void expect_gl_projects_like_the_view(const Camera& c, int width, int height, unsigned seed) {
+  const View v = View::from_camera(c, 3, width, height);
+  double near = 0, far = 0;
+  depth_range(v, c.target, 3, near, far);
+  const Eigen::Matrix4f m = projection_matrix(v, near, far) * view_matrix(v);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-2, 2);
+  for (int i = 0; i < 100; ++i) {
+    const Vec3 p = c.target + Vec3(u(rng), u(rng), u(rng));
+    double x = 0, y = 0, depth = 0;
+    ASSERT_TRUE(v.project(p, x, y, depth));
+    const Eigen::Vector4f clip = m * Eigen::Vector4f(p.x(), p.y(), p.z(), 1);
+    if (v.orthographic) {
+      EXPECT_NEAR(clip.w(), 1, 1e-6);
+    }
+    const double gx = (clip.x() / clip.w() + 1) * 0.5 * width;
+    const double gy = (1 - clip.y() / clip.w()) * 0.5 * height;  // GL's y goes up, the image's down
+    EXPECT_NEAR(gx, x, 1e-3);
+    EXPECT_NEAR(gy, y, 1e-3);
+    const double ndc_z = clip.z() / clip.w();
+    EXPECT_GT(ndc_z, -1);
+    EXPECT_LT(ndc_z, 1);
+  }
+}
+
 TEST(CameraControl, GlMatricesProjectPointsWhereTheViewDoes) {
   Camera c;
   c.azimuth_deg = 37;
@@ -16,25 +43,7 @@ TEST(CameraControl, GlMatricesProjectPointsWhereTheViewDoes) {
   c.distance = 8;
   c.fov_deg = 35;
   c.target = Vec3(0.3, -0.2, 0.5);
-  const View v = View::from_camera(c, 3, 640, 480);
-  double near = 0, far = 0;
-  depth_range(v, c.target, 3, near, far);
-  const Eigen::Matrix4f m = projection_matrix(v, near, far) * view_matrix(v);
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<double> u(-2, 2);
-  for (int i = 0; i < 100; ++i) {
-    const Vec3 p = c.target + Vec3(u(rng), u(rng), u(rng));
-    double x = 0, y = 0, depth = 0;
-    ASSERT_TRUE(v.project(p, x, y, depth));
-    const Eigen::Vector4f clip = m * Eigen::Vector4f(p.x(), p.y(), p.z(), 1);
-    const double gx = (clip.x() / clip.w() + 1) * 0.5 * 640;
-    const double gy = (1 - clip.y() / clip.w()) * 0.5 * 480;  // GL's y goes up, the image's down
-    EXPECT_NEAR(gx, x, 1e-3);
-    EXPECT_NEAR(gy, y, 1e-3);
-    const double ndc_z = clip.z() / clip.w();
-    EXPECT_GT(ndc_z, -1);
-    EXPECT_LT(ndc_z, 1);
-  }
+  expect_gl_projects_like_the_view(c, 640, 480, 5);
 }
 
 TEST(CameraControl, OrthographicGlMatricesProjectPointsWhereTheViewDoes) {
@@ -44,24 +53,8 @@ TEST(CameraControl, OrthographicGlMatricesProjectPointsWhereTheViewDoes) {
   c.projection = Projection::orthographic;
   c.ortho_height = 2.5;
   c.target = Vec3(0.1, 0.2, -0.3);
-  const View v = View::from_camera(c, 3, 500, 300);
-  ASSERT_TRUE(v.orthographic);
-  double near = 0, far = 0;
-  depth_range(v, c.target, 3, near, far);
-  const Eigen::Matrix4f m = projection_matrix(v, near, far) * view_matrix(v);
-  std::mt19937 rng(6);
-  std::uniform_real_distribution<double> u(-2, 2);
-  for (int i = 0; i < 100; ++i) {
-    const Vec3 p = c.target + Vec3(u(rng), u(rng), u(rng));
-    double x = 0, y = 0, depth = 0;
-    ASSERT_TRUE(v.project(p, x, y, depth));
-    const Eigen::Vector4f clip = m * Eigen::Vector4f(p.x(), p.y(), p.z(), 1);
-    EXPECT_NEAR(clip.w(), 1, 1e-6);  // parallel: no perspective division
-    EXPECT_NEAR((clip.x() + 1) * 0.5 * 500, x, 1e-3);
-    EXPECT_NEAR((1 - clip.y()) * 0.5 * 300, y, 1e-3);
-    EXPECT_GT(clip.z(), -1);
-    EXPECT_LT(clip.z(), 1);
-  }
+  ASSERT_TRUE(View::from_camera(c, 3, 500, 300).orthographic);
+  expect_gl_projects_like_the_view(c, 500, 300, 6);
 }
 
 TEST(CameraControl, OrthographicZoomChangesTheWindowNotTheDistance) {
