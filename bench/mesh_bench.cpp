@@ -6,6 +6,7 @@
 
 #include "zeroset/mesh/crossings.h"
 #include "zeroset/mesh/improve.h"
+#include "zeroset/mesh/mesh_surface.h"
 #include "zeroset/mesh/polygonize.h"
 #include "zeroset/mesh/quality.h"
 #include "zeroset/mesh/remesh.h"
@@ -84,39 +85,25 @@ void BM_Improve(benchmark::State& state) {
 }
 BENCHMARK(BM_Improve)->Arg(128)->Unit(benchmark::kMillisecond)->Iterations(1)->UseRealTime();
 
-// The whole mesh command's work (marching cubes, crossings, improver to rest or its limit) on
+// The whole mesh command's work (mesh_surface: marching cubes, crossings, improver to rest or
+// its limit) on
 // Kummer's surface with 16 nodes (mu = 1.5) and as four planes crossing in six lines and four
 // triple points (mu = 3): what a surface with singular curves costs next to one with nodes.
 // bench/crossings_report.py runs both side by side. args: 10 × mu; 1 for the remesher (the
 // default improver), 0 for the paper's improver.
 void BM_MeshPipeline(benchmark::State& state) {
   const zeroset::Surface s = kummer(static_cast<double>(state.range(0)) / 10);
-  const bool remeshing = state.range(1) != 0;
-  zeroset::PolygonizeOptions o;
-  o.cells = 128;
-  int steps = 0;
-  bool converged = false;
-  zeroset::CrossingStats cs;
-  size_t vertices = 0;
-  for (auto _ : state) {
-    zeroset::PolygonizeStats ps;
-    zeroset::Mesh m = zeroset::polygonize(s, o, &ps);
-    zeroset::SingularSet set;  // found by the crossings step, used again as `zeroset mesh` does
-    cs = zeroset::mesh_crossings(m, s, ps.cell_size, {}, &set);
-    if (remeshing) {
-      const zeroset::RemeshStats st = zeroset::remesh(m, s, {.singular_set = &set});
-      steps = st.iterations, converged = st.converged;
-    } else {
-      const zeroset::ImproveStats st = zeroset::improve_mesh(m, s);
-      steps = st.steps, converged = st.converged;
-    }
-    vertices = m.vertex_count();
-  }
-  state.counters["steps"] = steps;
-  state.counters["converged"] = converged;
-  state.counters["vertices"] = static_cast<double>(vertices);
-  state.counters["crossing_curves"] = cs.crossing_curves;
-  state.counters["crossings_ms"] = 1e3 * cs.seconds;
+  zeroset::MeshSettings settings;
+  settings.cells = 128;
+  settings.improver = state.range(1) != 0 ? zeroset::Improver::kRemesh : zeroset::Improver::kPaper;
+  zeroset::MeshResult r;
+  for (auto _ : state) r = zeroset::mesh_surface(s, settings);
+  const zeroset::ImproveStats st = r.improvement ? r.improvement->summary() : zeroset::ImproveStats{};
+  state.counters["steps"] = st.steps;
+  state.counters["converged"] = st.converged;
+  state.counters["vertices"] = static_cast<double>(r.mesh.vertex_count());
+  state.counters["crossing_curves"] = r.crossings ? r.crossings->crossing_curves : 0;
+  state.counters["crossings_ms"] = r.crossings ? 1e3 * r.crossings->seconds : 0;
 }
 BENCHMARK(BM_MeshPipeline)
     ->ArgNames({"mu10", "remesh"})

@@ -4,10 +4,8 @@
 #include <exception>
 #include <string>
 
-#include "zeroset/mesh/improve.h"
 #include "zeroset/mesh/mesh_io.h"
-#include "zeroset/mesh/polygonize.h"
-#include "zeroset/mesh/quality.h"
+#include "zeroset/mesh/mesh_surface.h"
 #include "zeroset/surface/scene.h"
 
 int main(int argc, char** argv) {
@@ -19,13 +17,16 @@ int main(int argc, char** argv) {
     const zeroset::Surface surface = zeroset::resolve_surface(name);
     zeroset::check_mesh_path(out);  // fail before the work, not after it
 
-    zeroset::Mesh mesh = zeroset::polygonize(surface, {.cells = cells});
-    const zeroset::ImproveStats st = zeroset::improve_mesh(mesh, surface);
-    zeroset::write_mesh(mesh, out);
+    // The recipe of `zeroset mesh`: marching cubes, crossings, the remesher, checks.
+    zeroset::MeshSettings settings;
+    settings.cells = cells;
+    const zeroset::MeshResult r = zeroset::mesh_surface(surface, settings, {.quality = true});
+    for (const std::string& warning : r.warnings) std::fprintf(stderr, "%s\n", warning.c_str());
+    zeroset::write_mesh(r.mesh, out);
 
-    const zeroset::MeshQuality q = zeroset::measure_quality(mesh, surface);
-    std::printf("%s: %zu vertices, %zu triangles after %d improver steps\n", out.c_str(),
-                q.vertices, q.triangles, st.steps);
+    const zeroset::MeshQuality& q = *r.quality_after;
+    std::printf("%s: %zu vertices, %zu triangles after %d remesher iterations\n", out.c_str(),
+                q.vertices, q.triangles, r.improvement ? r.improvement->summary().steps : 0);
     std::printf("triangles below 30 degrees: %.1f%%, max |F|/|grad F|: %.2g\n", q.percent_below_30,
                 q.max_residual);
   } catch (const std::exception& e) {

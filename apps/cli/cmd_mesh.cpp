@@ -2,8 +2,6 @@
 // of Rösch, Ruhl & Saupe (§4), mesh files, a picture and quality figures.
 #include <fmt/core.h>
 
-#include <chrono>
-#include <cmath>
 #include <optional>
 
 #include "common.h"
@@ -11,16 +9,10 @@
 #include "zeroset/io/atomic_file.h"
 #include "zeroset/io/image.h"
 #include "zeroset/io/output_transaction.h"
-#include "zeroset/mesh/adjacency.h"
-#include "zeroset/mesh/crossings.h"
-#include "zeroset/mesh/improve.h"
 #include "zeroset/mesh/mesh_io.h"
-#include "zeroset/mesh/polygonize.h"
-#include "zeroset/mesh/quality.h"
-#include "zeroset/mesh/remesh.h"
+#include "zeroset/mesh/mesh_surface.h"
 #include "zeroset/mesh/settings.h"
 #include "zeroset/render/render.h"
-#include "zeroset/surface/json_read.h"
 
 namespace zeroset::cli {
 namespace {
@@ -111,50 +103,6 @@ MeshSettings settings_from(const MeshArgs& a, const Scene& scene) {
   return m;
 }
 
-nlohmann::json quality_json(const MeshQuality& q) {
-  nlohmann::json j;
-  j["vertices"] = q.vertices;
-  j["triangles"] = q.triangles;
-  j["mean_edge_length"] = q.mean_edge_length;
-  j["min_angle_histogram"] = {{"bin_width_deg", 5}, {"counts", q.min_angle_histogram}};
-  j["percent_min_angle_below_10"] = q.percent_below_10;
-  j["percent_min_angle_below_20"] = q.percent_below_20;
-  j["percent_min_angle_below_30"] = q.percent_below_30;
-  j["mean_min_angle_deg"] = q.mean_min_angle_deg;
-  j["smallest_angle_deg"] = q.smallest_angle_deg;
-  j["zero_area_triangles"] = q.zero_area_triangles;
-  j["coincident_vertices"] = q.coincident_vertices;
-  j["radius_ratio"] = {{"mean", q.mean_radius_ratio}, {"min", q.min_radius_ratio}};
-  j["residual"] = {{"max", q.max_residual},
-                   {"rms", q.rms_residual},
-                   {"vertices", q.residual_vertices},
-                   {"undefined_vertices", q.undefined_vertices},
-                   {"excluded_radius_around_singular_points", q.singular_radius}};
-  j["normal_deviation_deg"] = {{"mean", q.mean_normal_deviation_deg},
-                               {"max", q.max_normal_deviation_deg},
-                               {"flipped_triangles", q.flipped_triangles}};
-  j["boundary"] = {{"vertices", q.boundary_vertices}, {"max_abs_clip_value", q.max_boundary_clip_value}};
-  nlohmann::json sing = nlohmann::json::array();
-  for (size_t k = 0; k < q.singular_points.size(); ++k)
-    sing.push_back({{"point", json_read::from_vec3(q.singular_points[k])},
-                    {"nearest_vertex_distance", q.singular_point_distance[k]},
-                    {"in_mean_edge_lengths", q.mean_edge_length > 0 ? q.singular_point_distance[k] / q.mean_edge_length : 0.0}});
-  j["singular_points"] = sing;
-  return j;
-}
-
-nlohmann::json topology_json(const Mesh& m) {
-  const MeshTopology t = mesh_topology(m);
-  return {{"vertices", t.vertices},
-          {"edges", t.edges},
-          {"triangles", t.triangles},
-          {"boundary_edges", t.boundary_edges},
-          {"non_manifold_edges", t.non_manifold_edges},
-          {"misoriented_edges", t.misoriented_edges},
-          {"euler_characteristic", t.euler_characteristic},
-          {"watertight", t.is_watertight()}};
-}
-
 void write_picture(const Surface& surface, const Mesh& mesh, const std::string& path, int width,
                    int height, bool wireframe, const SingularSet* singular) {
   RenderOptions ro;
@@ -183,197 +131,45 @@ void run_mesh(const MeshArgs& a) {
 
   Scene scene = a.surface.resolve();
   const Surface& surface = scene.surface;
-
   const MeshSettings settings = settings_from(a, scene);
-  const int resolution = settings.cells;
 
-  PolygonizeOptions po = polygonize_options(settings);
-  po.threads = global_flags().threads;
-  ImproveOptions io = improve_options(settings, ImproveOptions{}.max_steps);
-  io.threads = global_flags().threads;
-  const int max_steps = io.max_steps;
-  check_grid_memory(surface, po, "--resolution");
-
-  const FieldSurvey survey = survey_and_warn(surface);
-  const auto t0 = std::chrono::steady_clock::now();
-  PolygonizeStats ps;
-  Mesh mesh = polygonize(surface, po, &ps);
-  nlohmann::json stats;
-  stats["surface"] = surface.label();
-  nlohmann::json params = nlohmann::json::object();
-  const auto& names = surface.field.parameter_names();
-  for (size_t k = 0; k < names.size(); ++k) params[names[k]] = surface.field.parameter_values()[k];
-  stats["parameters"] = params;
-  stats["clip"] = surface.clip.to_specs();
-  stats["field"] = survey_json(survey);
-  stats["polygonize"] = {
-      {"resolution", resolution},
-      {"cells", ps.cells},
-      {"cell_size", ps.cell_size},
-      {"grid", ps.sparse ? "sparse" : "dense"},
-      {"bricks", ps.bricks},
-      {"bricks_kept", ps.bricks_kept},
-      {"grid_samples", ps.grid_samples},
-      {"refine_evaluations", ps.refine_evaluations},
-      {"nan_samples", ps.nan_samples},
-      {"undefined_edges", ps.undefined_edges},
-      {"pole_edges", ps.pole_edges},
-      {"undefined_triangles", ps.undefined_triangles},
-      {"active_cells", ps.active_cells},
-      {"ambiguous_faces", ps.ambiguous_faces},
-      {"edge_vertices", ps.edge_vertices},
-      {"welded_vertices", ps.welded_vertices},
-      {"collapsed_edges", ps.collapsed_edges},
-      {"clip_cut_edges", ps.clip_cut_edges},
-      {"clip_snapped_vertices", ps.clip_snapped},
-      {"seconds", {{"sampling", ps.seconds_sampling},
-                   {"extraction", ps.seconds_extraction},
-                   {"refinement", ps.seconds_refinement},
-                   {"cleanup", ps.seconds_cleanup},
-                   {"total", ps.seconds_total}}},
-      {"vertices", mesh.vertex_count()},
-      {"triangles", mesh.triangle_count()}};
-  if (mesh.empty() && !survey.vanishes_identically())  // that was said
-    say(fmt::format("{}: the grid of {} cells found no surface inside the clip", surface.label(), resolution));
-  // One search of the singular set serves the crossings, the warning about a singular sheet,
-  // --stats and --show-singular: the crossings' (traced at the mesh's edge length) when they
-  // run, else one of its own for --stats and --show-singular (milliseconds, next to the
-  // mesh's seconds).
-  std::optional<SingularSet> singular;
-  std::optional<CrossingStats> crossings;
-  if (settings.crossings && !mesh.empty() && ps.cell_size > 0) {
-    SingularSet found;
-    crossings = mesh_crossings(mesh, surface, ps.cell_size, {}, &found);
-    singular = std::move(found);
-  } else if (a.show_singular || !a.stats.empty()) {
-    singular = singular_set_if_bounded(surface);
-  }
-  const SingularSet* overlay = a.show_singular && singular ? &*singular : nullptr;
-  stats["singular_set"] = singular_stats(singular);
-  // F ≡ 0 was warned about; its "sheet" of vanishing ∇F is the whole clip, nothing to add.
-  if (!survey.vanishes_identically()) warn_if_singular_sheet(surface, singular);
-  if (crossings) {
-    const CrossingStats& cs = *crossings;
-    stats["crossings"] = {{"crossing_curves", cs.crossing_curves},
-                          {"isolated_curves", cs.isolated_curves},
-                          {"curve_vertices", cs.curve_vertices},
-                          {"removed_triangles", cs.removed_triangles},
-                          {"added_triangles", cs.added_triangles},
-                          {"strip_vertices", cs.strip_vertices},
-                          {"failure", cs.failure},
-                          {"seconds", cs.seconds}};
-    if (!cs.failure.empty())
-      warn(fmt::format("{}: the crossings along its singular curves are left as marching cubes "
-                       "made them (rounded off): {}", surface.label(), cs.failure));
-  }
-  const bool want_quality = !a.stats.empty();
-  QualityOptions qo;
-  qo.threads = po.threads;
-  std::optional<MeshQuality> before;
-  if (want_quality) {
-    before = measure_quality(mesh, surface, qo);
-    stats["quality_before"] = quality_json(*before);
-    stats["topology_before"] = topology_json(mesh);
-  }
-  if (!a.png_raw.empty())
-    write_picture(surface, mesh, a.png_raw, width, height, a.wireframe, overlay);
-
-  ImproveStats is;
-  RemeshStats rs;
-  const bool remeshing = settings.improver == Improver::kRemesh;
-  if (max_steps > 0 && !mesh.empty() && remeshing) {
-    RemeshOptions ro = remesh_options(settings);
-    ro.threads = global_flags().threads;
-    if (singular) ro.singular_set = &*singular;  // found once, for the crossings or --stats
-    rs = remesh(mesh, surface, ro);
-    is.steps = rs.iterations, is.converged = rs.converged, is.seconds = rs.seconds;
-    is.undefined_vertices = rs.undefined_vertices;
-    nlohmann::json held = nlohmann::json::array();
-    for (const Vec3& p : rs.singular_points) held.push_back(json_read::from_vec3(p));
-    stats["improve"] = {{"improver", "remesh"},
-                        {"iterations", rs.iterations},
-                        {"max_iterations", ro.max_iterations},
-                        {"converged", rs.converged},
-                        {"target_edge", rs.target_edge},
-                        {"splits", rs.splits},
-                        {"collapses", rs.collapses},
-                        {"flips", rs.flips},
-                        {"refused_collapses", rs.refused_collapses},
-                        {"relax_steps", rs.relax_steps},
-                        {"reverted_moves", rs.reverted_moves},
-                        {"last_max_move_in_target_edges", rs.last_max_move},
-                        {"singular_points_held", held},
-                        {"missed_singular_points", rs.missed_singular_points},
-                        {"pinch_held_vertices", rs.pinch_held_vertices},
-                        {"pinch_improver_steps", rs.pinch_improver_steps},
-                        {"max_residual", rs.max_residual},
-                        {"undefined_vertices", rs.undefined_vertices},
-                        {"boundary", std::string(to_string(settings.boundary))},
-                        {"find_singular_points", ro.find_singular_points},
-                        {"seconds", rs.seconds}};
-  } else if (max_steps > 0 && !mesh.empty()) {
-    Progress progress("improving", global_flags().quiet);
-    MeshImprover improver(std::move(mesh), surface, io);
-    for (int k = 0; k < max_steps && !improver.converged(); ++k) {
-      improver.step();
-      progress.update(static_cast<double>(k + 1) / max_steps);
-    }
-    improver.finish();
-    progress.finish();
-    is = improver.stats();
-    mesh = improver.take_mesh();
-    nlohmann::json found = nlohmann::json::array();
-    for (const Vec3& p : is.singular_points) found.push_back(json_read::from_vec3(p));
-    stats["improve"] = {{"improver", "paper"},
-                        {"steps", is.steps},
-                        {"max_steps", max_steps},
-                        {"converged", is.converged},
-                        {"last_max_move_in_mean_edges", is.max_move},
-                        {"edge_flips", is.flips},
-                        {"shortened_moves", is.shortened_moves},
-                        {"cancelled_moves", is.cancelled_moves},
-                        {"flipped_triangles", is.flipped_triangles},
-                        {"singular_points_found", found},
-                        {"max_residual", is.max_residual},
-                        {"refused_moves", is.refused_moves},
-                        {"undefined_vertices", is.undefined_vertices},
-                        {"boundary", std::string(to_string(settings.boundary))},
-                        {"curvature", io.use_curvature},
-                        {"curvature_weight", io.curvature_weight},
-                        {"singularity", io.use_singularity},
-                        {"flips", io.flip_edges},
-                        {"find_singular_points", io.find_singular_points},
-                        {"seconds", is.seconds}};
-  }
-  std::optional<MeshQuality> after;
-  if (want_quality) {
-    after = measure_quality(mesh, surface, qo);
-    stats["quality_after"] = quality_json(*after);
-    stats["topology_after"] = topology_json(mesh);
-  }
-  if (!settings.curves) mesh.curves.clear();
-  // The mesher never makes degenerate output (a test sweeps for it); if it ever did, say so.
-  if (const DegenerateCount d = count_degenerate(mesh); d.zero_area_triangles + d.coincident_vertices > 0)
-    warn(fmt::format("{}: the mesh has {} triangles of zero area and {} vertices on top of "
-                     "others; please report this surface and these options",
-                     surface.label(), d.zero_area_triangles, d.coincident_vertices));
-  // The polygonizer and the improver keep vertices where F is finite; if one ever is not, say so.
-  if (const long long undefined = after ? static_cast<long long>(after->undefined_vertices)
-                                        : is.undefined_vertices;
-      undefined > 0)
-    warn(fmt::format("{}: {} vertices lie where F is undefined (NaN or infinite); please "
-                     "report this surface and these options",
-                     surface.label(), undefined));
+  MeshRun run;
+  run.threads = global_flags().threads;
+  run.quality = !a.stats.empty();
+  run.singular_set = a.show_singular || !a.stats.empty();
+  run.cells_option = "--resolution";
+  run.on_warning = warn;
+  run.on_polygonized = [&](const MeshResult& r) {
+    if (r.mesh.empty() && !r.survey->vanishes_identically())  // that was said
+      say(fmt::format("{}: the grid of {} cells found no surface inside the clip",
+                      surface.label(), settings.cells));
+    if (!a.png_raw.empty())
+      write_picture(surface, r.mesh, a.png_raw, width, height, a.wireframe,
+                    a.show_singular && r.singular ? &*r.singular : nullptr);
+  };
+  const int max_steps = improve_options(settings, run.auto_steps).max_steps;
+  Progress progress("improving", global_flags().quiet);
+  run.on_improver_step = [&](const MeshImprover&, int steps, bool done) {
+    progress.update(static_cast<double>(steps) / max_steps);
+    if (done) progress.finish();
+  };
+  const MeshResult result = mesh_surface(surface, settings, run);
+  const Mesh& mesh = result.mesh;
   if (!a.output.empty()) write_mesh(mesh, a.output);
   if (!a.png.empty())
-    write_picture(surface, mesh, a.png, width, height, a.wireframe, overlay);
-  stats["seconds_total"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (!a.stats.empty()) write_json(stats, a.stats);
+    write_picture(surface, mesh, a.png, width, height, a.wireframe,
+                  a.show_singular && result.singular ? &*result.singular : nullptr);
+  if (!a.stats.empty()) write_json(result.to_json(), a.stats);
   outputs.commit();
 
+  const PolygonizeStats& ps = result.polygonize;
+  const ImproveStats is = result.improvement ? result.improvement->summary() : ImproveStats{};
+  const bool remeshing = settings.improver == Improver::kRemesh;
+  const auto& before = result.quality_before;
+  const auto& after = result.quality_after;
   std::string line = fmt::format("{}: {} vertices, {} triangles ({} grid, {} cells, {:.2f} s)",
                                  surface.label(), mesh.vertex_count(), mesh.triangle_count(),
-                                 ps.sparse ? "sparse" : "dense", resolution, ps.seconds_total);
+                                 ps.sparse ? "sparse" : "dense", settings.cells, ps.seconds_total);
   if (max_steps > 0)
     line += fmt::format("; {} in {} {} ({:.2f} s{})", remeshing ? "remeshed" : "improved",
                         is.steps, remeshing ? "iterations" : "steps", is.seconds,

@@ -141,7 +141,7 @@ void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string
   RenderOptions o = look.options(scene, args.spec);
   // Searched for --stats as well: the search costs milliseconds, the render far more.
   std::optional<SingularSet> singular;
-  if (show_singular || !stats_path.empty()) singular = singular_set_if_bounded(surface);
+  if (show_singular || !stats_path.empty()) singular = find_singular_set_if_bounded(surface);
   if (show_singular && singular) o.singular_overlay = SingularOverlay{.set = *singular};
   const FieldSurvey survey = survey_and_warn(surface);
   Progress progress("render", global_flags().quiet);

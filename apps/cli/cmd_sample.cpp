@@ -290,7 +290,7 @@ void run_sample(const SampleArgs& a) {
   const Surface& final_surface = sys.surface();
   // The set of the final parameters, for --show-singular and --stats (milliseconds).
   std::optional<SingularSet> singular;
-  if (a.show_singular || !a.stats.empty()) singular = singular_set_if_bounded(final_surface);
+  if (a.show_singular || !a.stats.empty()) singular = find_singular_set_if_bounded(final_surface);
   if (!a.output.empty())
     write_points_ply(a.output, sys.positions(), sys.normals(), sys.radii(),
                      a.ascii ? PlyFormat::kAscii : PlyFormat::kBinaryLittleEndian);

@@ -38,33 +38,14 @@ void add_show_singular_flag(CLI::App* cmd, bool& flag, const std::string& pictur
                 "point. Whatever is in front hides them");
 }
 
-std::optional<SingularSet> singular_set_if_bounded(const Surface& surface) {
-  if (!surface.clip.is_bounded()) return std::nullopt;
-  return find_singular_set(surface);
-}
-
 void warn_if_singular_sheet(const Surface& surface, const std::optional<SingularSet>& known) {
-  if (!known && !surface.clip.is_bounded()) return;
-  const SingularSet set = known ? *known : find_singular_set(surface, {.cells = 24});
-  if (!set.has_singular_sheet) return;
-  const Vec3& p = set.singular_sheet_example;
-  warn(fmt::format("{}: grad F vanishes on a whole sheet of F = 0 (e.g. at ({:.6g}, {:.6g}, "
-                   "{:.6g})): F is a square or worse there and never changes sign; mesh or "
-                   "sample G where F = G^2",
-                   surface.label(), p.x(), p.y(), p.z()));
+  if (auto line = singular_sheet_warning(surface, known ? &*known : nullptr)) warn(*line);
 }
 
 FieldSurvey survey_and_warn(const Surface& surface) {
   const FieldSurvey survey = survey_field(surface);
   if (const auto line = survey_warning(surface, survey)) warn(*line);
   return survey;
-}
-
-nlohmann::json survey_json(const FieldSurvey& survey) {
-  return {{"samples", survey.samples},
-          {"undefined_samples", survey.undefined},
-          {"undefined_fraction", survey.undefined_fraction()},
-          {"vanishes_identically", survey.vanishes_identically()}};
 }
 
 nlohmann::json singular_stats(const std::optional<SingularSet>& set) {

@@ -100,9 +100,6 @@ void write_json(const nlohmann::json& j, const std::string& path);
 /// Adds --show-singular (draw the singular set over the pictures) to `cmd`, setting `flag`;
 /// `pictures` names what it draws on ("the picture", "the --png picture").
 void add_show_singular_flag(CLI::App* cmd, bool& flag, const std::string& pictures);
-/// The singular set of `surface` (find_singular_set) when its clip is bounded, else none:
-/// what --show-singular draws and --stats reports.
-std::optional<SingularSet> singular_set_if_bounded(const Surface& surface);
 /// The "singular_set" entry of a --stats file: the set without its polylines, or null when it
 /// was not searched.
 nlohmann::json singular_stats(const std::optional<SingularSet>& set);
@@ -128,8 +125,6 @@ void warn_if_singular_sheet(const Surface& surface, const std::optional<Singular
 /// undefined (NaN or infinite) on part of the clip (survey_warning). Every stage command
 /// calls it once, so they all say the same.
 FieldSurvey survey_and_warn(const Surface& surface);
-/// The "field" entry of a --stats file: the survey's counts and fraction.
-nlohmann::json survey_json(const FieldSurvey& survey);
 
 void register_catalog_commands(CLI::App& app);  // list, info, eval
 void register_render_commands(CLI::App& app);   // render, animate, export

@@ -11,8 +11,7 @@
 #include "viewer_state.h"
 #include "viewer_state_detail.h"
 #include "zeroset/mesh/carry.h"
-#include "zeroset/mesh/improve.h"
-#include "zeroset/mesh/remesh.h"
+#include "zeroset/mesh/mesh_surface.h"
 #include "zeroset/mesh/mesh_ops.h"
 #include "zeroset/surface/singular_set.h"
 
@@ -326,18 +325,15 @@ void ViewerState::start_floater_job() {
 }
 
 void ViewerState::start_mesh_job() {
-  // The same options as `zeroset mesh` makes from the same settings.
-  PolygonizeOptions options = polygonize_options(mesh_settings_);
-  options.threads = threads_;
-  options.compute_normals = true;
-  ImproveOptions improve = improve_options(mesh_settings_, kLiveImproveSteps);
-  improve.threads = threads_;
-  const bool is_improving = improve.max_steps > 0;
-  RemeshOptions remesh_opts = remesh_options(mesh_settings_);
-  remesh_opts.threads = threads_;
-  const bool remeshing = mesh_settings_.improver == Improver::kRemesh;
-  const bool with_crossings = mesh_settings_.crossings;
-  const bool with_curves = mesh_settings_.curves;
+  // The recipe of `zeroset mesh` (mesh_surface) with the viewer's step limit, shown as it goes.
+  MeshSettings settings = mesh_settings_;
+  const bool with_curves = settings.curves;
+  settings.curves = true;  // the frames hide them (set_mesh below); carrying needs them
+  MeshRun run;
+  run.threads = threads_;
+  run.auto_steps = kLiveImproveSteps;
+  run.survey = false;  // surveyed on the viewer's own schedule (survey_if_due)
+  const bool is_improving = improve_options(settings, run.auto_steps).max_steps > 0;
   const Surface surface = surface_;
   const std::uint64_t generation = generation_;
   const std::uint64_t structure = mesh_structure_;
@@ -366,58 +362,32 @@ void ViewerState::start_mesh_job() {
       frame.mesh = std::move(mesh);
       if (!with_curves) frame.hidden_curves = std::move(frame.mesh.curves), frame.mesh.curves = {};
     };
-    // The singular set the crossings step found, for the remesher (which would search again).
-    std::optional<SingularSet> found;
-    // Step by step so the user watches the vertices move; a copy goes to the UI whenever it
-    // has taken the previous one. `frame` is the first frame (already filled in).
-    auto improve_on = [&](Mesh mesh, std::shared_ptr<MeshFrame> frame) {
-      const int steps_before = frame->improver_steps;
-      frame->is_final = !is_improving || (frame->carried && frame->improve.converged);
-      const bool is_final = frame->is_final;
-      box->post(frame);
-      if (is_final) return;
-      if (frame->carried) {
-        // While a parameter moves the next value comes within a frame or two and cancels
-        // this job: improving meanwhile would only take the core that draws.
-        const auto until = std::chrono::steady_clock::now() + kCarriedRestDelay;
-        while (!stop.stop_requested() && std::chrono::steady_clock::now() < until)
-          std::this_thread::sleep_for(std::chrono::milliseconds(5));
-        if (stop.stop_requested()) return;
-      }
-      if (remeshing) {
-        // The remesher changes the connectivity as it goes: one frame when it is done.
-        RemeshOptions ro = remesh_opts;
-        if (found) ro.singular_set = &*found;
-        const RemeshStats rs = remesh(mesh, surface, ro, stop);
-        if (stop.stop_requested()) return;
-        auto next = std::make_shared<MeshFrame>(*frame);
-        set_mesh(*next, std::move(mesh));
-        compute_field_normals(next->mesh, surface, threads);
-        next->improve.steps = rs.iterations;
-        next->improve.converged = rs.converged;
-        next->improve.max_residual = rs.max_residual;
-        next->improve.seconds = rs.seconds;
-        next->improve.singular_points = rs.singular_points;
-        next->improver_steps = steps_before + rs.iterations;
-        next->is_final = true;
-        box->post(std::move(next));
-        return;
-      }
-      MeshImprover improver(std::move(mesh), surface, improve);
-      for (int step = 1; !stop.stop_requested(); ++step) {
-        const ImproveStats& stats = improver.step();
-        const bool is_done = improver.converged() || steps_before + step >= improve.max_steps;
-        if (is_done) improver.finish();
-        if (is_done || wants_frame->exchange(false)) {
-          auto next = std::make_shared<MeshFrame>(*frame);
-          set_mesh(*next, improver.mesh());
-          compute_field_normals(next->mesh, surface, threads);
-          next->improve = stats;
-          next->improver_steps = steps_before + step;
-          next->is_final = is_done;
-          box->post(std::move(next));
-        }
-        if (is_done) return;
+    // The first frame of the job (already posted): later frames copy it with the improved mesh.
+    std::shared_ptr<MeshFrame> first;
+    auto post_improved = [&](Mesh mesh, const ImproveStats& stats, int steps, bool is_final) {
+      auto next = std::make_shared<MeshFrame>(*first);
+      set_mesh(*next, std::move(mesh));
+      compute_field_normals(next->mesh, surface, threads);
+      next->improve = stats;
+      next->improver_steps = steps;
+      next->is_final = is_final;
+      box->post(std::move(next));
+    };
+    // Step by step so the user watches the vertices move: a copy goes to the UI whenever it
+    // has taken the previous one. The remesher changes the connectivity as it goes: one frame
+    // when it is done.
+    MeshRun steps = run;
+    steps.on_improver_step = [&](const MeshImprover& improver, int count, bool done) {
+      if (done || wants_frame->exchange(false))
+        post_improved(improver.mesh(), improver.stats(), count, done);
+    };
+    auto post_remeshed = [&](Mesh mesh, const std::optional<MeshImprovement>& improved) {
+      if (stop.stop_requested()) return;
+      if (!improved) {
+        post_improved(std::move(mesh), first->improve, first->improver_steps, true);
+      } else if (improved->improver == Improver::kRemesh) {
+        post_improved(std::move(mesh), improved->summary(),
+                      first->improver_steps + improved->remesh.iterations, true);
       }
     };
     std::string reason;
@@ -425,6 +395,7 @@ void ViewerState::start_mesh_job() {
     if (previous) {
       Mesh from = previous->mesh;
       if (!previous->hidden_curves.empty()) from.curves = previous->hidden_curves;
+      const ImproveOptions improve = improve_options(settings, run.auto_steps);
       const CarryOptions carry{.improve_steps = std::min(kCarryImproveSteps, improve.max_steps),
                                .improve = improve,
                                .threads = threads,
@@ -433,40 +404,43 @@ void ViewerState::start_mesh_job() {
       if (stop.stop_requested()) return;
       if (r.carried()) {
         // Shown at once; while the parameters stay, the improver goes on to rest from here.
-        auto frame = new_frame();
-        set_mesh(*frame, r.mesh);
-        frame->polygonize = previous->polygonize;
-        frame->crossings = previous->crossings;
-        frame->improve = r.improve;
-        frame->improver_steps = r.improve.steps;
-        frame->carried = true;
-        frame->carry_seconds = r.seconds;
-        frame->singular = r.singular;
-        improve_on(std::move(r.mesh), std::move(frame));
+        first = new_frame();
+        set_mesh(*first, r.mesh);
+        first->polygonize = previous->polygonize;
+        first->crossings = previous->crossings;
+        first->improve = r.improve;
+        first->improver_steps = r.improve.steps;
+        first->carried = true;
+        first->carry_seconds = r.seconds;
+        first->singular = r.singular;
+        first->is_final = r.improve.converged;
+        box->post(first);
+        if (first->is_final) return;
+        // While a parameter moves the next value comes within a frame or two and cancels
+        // this job: improving meanwhile would only take the core that draws.
+        const auto until = std::chrono::steady_clock::now() + kCarriedRestDelay;
+        while (!stop.stop_requested() && std::chrono::steady_clock::now() < until)
+          std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        const auto improved = improve_surface_mesh(r.mesh, surface, settings, steps, nullptr,
+                                                   first->improver_steps, stop);
+        post_remeshed(std::move(r.mesh), improved);
         return;
       }
       reason = std::move(r.reason);
       singular = std::move(r.singular);
     }
-    // A resolution whose grid would not fit in memory is refused (the message goes to the
-    // panel) instead of taking the viewer down.
-    check_grid_memory(surface, options, "cells");
-    PolygonizeStats polygonize_stats;
-    Mesh mesh = polygonize(surface, options, &polygonize_stats, stop);
-    if (stop.stop_requested()) return;
-    CrossingStats crossings;
-    if (!mesh.empty() && with_crossings) {
-      found.emplace();
-      crossings = mesh_crossings(mesh, surface, polygonize_stats.cell_size, {}, &*found, stop);
-    }
-    if (stop.stop_requested()) return;
-    auto frame = new_frame();
-    set_mesh(*frame, mesh);
-    frame->polygonize = polygonize_stats;
-    frame->crossings = crossings;
-    frame->rebuild_reason = reason;
-    frame->singular = std::move(singular);
-    improve_on(std::move(mesh), std::move(frame));
+    steps.on_polygonized = [&](const MeshResult& made) {
+      first = new_frame();
+      set_mesh(*first, made.mesh);
+      first->polygonize = made.polygonize;
+      if (made.crossings) first->crossings = *made.crossings;
+      first->rebuild_reason = reason;
+      first->singular = std::move(singular);
+      first->is_final = !is_improving || made.mesh.empty();
+      box->post(first);
+    };
+    MeshResult made = mesh_surface(surface, settings, steps, stop);
+    if (first && !first->is_final) post_remeshed(std::move(made.mesh), made.improvement);
   });
 }
 

@@ -1,18 +1,13 @@
-// Surface.mesh: the steps of `zeroset mesh` (apps/cli/cmd_mesh.cpp) in the same order with the
-// same options: polygonize, crossings, the improver until at rest or its step limit, finish.
-#include <chrono>
+// Surface.mesh and the Mesh class: `zeroset mesh` (mesh_surface) from Python, mesh files,
+// pictures and carrying.
+#include <nlohmann/json.hpp>
 #include <optional>
 
 #include "bindings.h"
 #include "zeroset/error.h"
-#include "zeroset/mesh/adjacency.h"
-#include "zeroset/mesh/crossings.h"
 #include "zeroset/mesh/carry.h"
-#include "zeroset/mesh/improve.h"
-#include "zeroset/mesh/remesh.h"
 #include "zeroset/mesh/mesh_io.h"
-#include "zeroset/mesh/polygonize.h"
-#include "zeroset/mesh/quality.h"
+#include "zeroset/mesh/mesh_surface.h"
 #include "zeroset/mesh/settings.h"
 #include "zeroset/render/render.h"
 
@@ -72,131 +67,22 @@ MeshSettings settings_from(const MeshArgs& a, const PySurface& s) {
   return m;
 }
 
-py::dict polygonize_dict(const PolygonizeStats& ps, int resolution, const Mesh& mesh) {
-  return py::dict("resolution"_a = resolution, "cells"_a = ps.cells, "cell_size"_a = ps.cell_size,
-                  "grid"_a = ps.sparse ? "sparse" : "dense", "bricks"_a = ps.bricks,
-                  "bricks_kept"_a = ps.bricks_kept, "grid_samples"_a = ps.grid_samples,
-                  "refine_evaluations"_a = ps.refine_evaluations, "nan_samples"_a = ps.nan_samples,
-                  "active_cells"_a = ps.active_cells, "ambiguous_faces"_a = ps.ambiguous_faces,
-                  "edge_vertices"_a = ps.edge_vertices, "collapsed_edges"_a = ps.collapsed_edges,
-                  "clip_cut_edges"_a = ps.clip_cut_edges,
-                  "clip_snapped_vertices"_a = ps.clip_snapped, "seconds"_a = ps.seconds_total,
-                  "vertices"_a = mesh.vertex_count(), "triangles"_a = mesh.triangle_count());
-}
-
-py::dict crossings_dict(const CrossingStats& cs) {
-  return py::dict("crossing_curves"_a = cs.crossing_curves,
-                  "isolated_curves"_a = cs.isolated_curves, "curve_vertices"_a = cs.curve_vertices,
-                  "removed_triangles"_a = cs.removed_triangles,
-                  "added_triangles"_a = cs.added_triangles, "strip_vertices"_a = cs.strip_vertices,
-                  "failure"_a = cs.failure, "seconds"_a = cs.seconds);
-}
-
-py::dict improve_dict(const ImproveStats& is, int max_steps) {
-  std::vector<Vec3> found = is.singular_points;
-  return py::dict(
-      "steps"_a = is.steps, "max_steps"_a = max_steps, "converged"_a = is.converged,
-      "last_max_move_in_mean_edges"_a = is.max_move, "edge_flips"_a = is.flips,
-      "shortened_moves"_a = is.shortened_moves, "cancelled_moves"_a = is.cancelled_moves,
-      "flipped_triangles"_a = is.flipped_triangles, "singular_points_found"_a = to_array(found),
-      "max_residual"_a = is.max_residual, "seconds"_a = is.seconds);
-}
-
-py::dict quality_dict(const MeshQuality& q, const MeshTopology& t) {
-  return py::dict(
-      "vertices"_a = q.vertices, "triangles"_a = q.triangles,
-      "mean_edge_length"_a = q.mean_edge_length, "min_angle_histogram"_a = q.min_angle_histogram,
-      "percent_min_angle_below_10"_a = q.percent_below_10,
-      "percent_min_angle_below_20"_a = q.percent_below_20,
-      "percent_min_angle_below_30"_a = q.percent_below_30,
-      "mean_min_angle_deg"_a = q.mean_min_angle_deg, "smallest_angle_deg"_a = q.smallest_angle_deg,
-      "mean_radius_ratio"_a = q.mean_radius_ratio, "max_residual"_a = q.max_residual,
-      "rms_residual"_a = q.rms_residual, "max_normal_deviation_deg"_a = q.max_normal_deviation_deg,
-      "flipped_triangles"_a = q.flipped_triangles, "boundary_vertices"_a = q.boundary_vertices,
-      "edges"_a = t.edges, "boundary_edges"_a = t.boundary_edges,
-      "non_manifold_edges"_a = t.non_manifold_edges,
-      "euler_characteristic"_a = t.euler_characteristic, "watertight"_a = t.is_watertight());
-}
-
+// The recipe of `zeroset mesh` (mesh_surface); the stats are its --stats file, as JSON text
+// the module turns into dictionaries, and its warnings go to Python's warnings.
 py::tuple make_mesh(const PySurface& s, const MeshArgs& a) {
   // Its own copy: another Python thread may change the surface while the GIL is released.
   const Surface surface = s.surface();
   const MeshSettings settings = settings_from(a, s);
-  PolygonizeOptions po = polygonize_options(settings);
-  po.threads = a.threads;
-  ImproveOptions io = improve_options(settings, ImproveOptions{}.max_steps);
-  io.threads = a.threads;
-  const int max_steps = io.max_steps;
-  check_grid_memory(surface, po, "resolution");
-
-  Mesh mesh;
-  PolygonizeStats ps;
-  std::optional<CrossingStats> cs;
-  std::optional<SingularSet> singular;  // the crossings', for the remesher too
-  ImproveStats is;
-  RemeshStats rs;
-  std::optional<MeshQuality> before, after;
-  std::optional<MeshTopology> topology_before, topology_after;
-  double seconds = 0;
-  QualityOptions qo;
-  qo.threads = a.threads;
-  run_interruptible([&](std::stop_token stop) {
-    const auto t0 = std::chrono::steady_clock::now();
-    mesh = polygonize(surface, po, &ps, stop);
-    if (settings.crossings && !mesh.empty() && !stop.stop_requested())
-      cs = mesh_crossings(mesh, surface, ps.cell_size, {}, &singular.emplace(), stop);
-    if (a.quality) {
-      before = measure_quality(mesh, surface, qo);
-      topology_before = mesh_topology(mesh);
-    }
-    if (max_steps > 0 && !mesh.empty() && !stop.stop_requested() &&
-        settings.improver == Improver::kRemesh) {
-      RemeshOptions ro = remesh_options(settings);
-      ro.threads = a.threads;
-      if (singular) ro.singular_set = &*singular;
-      rs = remesh(mesh, surface, ro, stop);
-      if (stop.stop_requested()) return;
-    } else if (max_steps > 0 && !mesh.empty() && !stop.stop_requested()) {
-      MeshImprover improver(std::move(mesh), surface, io);
-      for (int k = 0; k < max_steps && !improver.converged(); ++k) {
-        if (stop.stop_requested()) return;
-        improver.step();
-      }
-      improver.finish();
-      is = improver.stats();
-      mesh = improver.take_mesh();
-    }
-    if (a.quality) {
-      after = measure_quality(mesh, surface, qo);
-      topology_after = mesh_topology(mesh);
-    }
-    if (!settings.curves) mesh.curves.clear();
-    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  });
-
-  py::dict stats;
-  stats["surface"] = surface.label();
-  stats["polygonize"] = polygonize_dict(ps, settings.cells, mesh);
-  if (cs) stats["crossings"] = crossings_dict(*cs);
-  if (max_steps > 0 && settings.improver == Improver::kRemesh) {
-    stats["improve"] = py::dict(
-        "improver"_a = "remesh", "iterations"_a = rs.iterations, "converged"_a = rs.converged,
-        "target_edge"_a = rs.target_edge, "splits"_a = rs.splits, "collapses"_a = rs.collapses,
-        "flips"_a = rs.flips, "relax_steps"_a = rs.relax_steps,
-        "pinch_held_vertices"_a = rs.pinch_held_vertices,
-        "pinch_improver_steps"_a = rs.pinch_improver_steps,
-        "max_residual"_a = rs.max_residual, "seconds"_a = rs.seconds,
-        "boundary"_a = std::string(to_string(settings.boundary)));
-  } else if (max_steps > 0) {
-    py::dict d = improve_dict(is, max_steps);
-    d["improver"] = "paper";
-    d["boundary"] = std::string(to_string(settings.boundary));
-    stats["improve"] = d;
-  }
-  if (before) stats["quality_before"] = quality_dict(*before, *topology_before);
-  if (after) stats["quality_after"] = quality_dict(*after, *topology_after);
-  stats["seconds_total"] = seconds;
-  return py::make_tuple(PyMesh{std::move(mesh), surface}, stats);
+  MeshRun run;
+  run.threads = a.threads;
+  run.quality = a.quality;
+  run.singular_set = true;  // as `zeroset mesh --stats`
+  run.cells_option = "resolution";
+  std::optional<MeshResult> result;
+  run_interruptible([&](std::stop_token stop) { result = mesh_surface(surface, settings, run, stop); });
+  Mesh mesh = std::move(result->mesh);
+  return py::make_tuple(PyMesh{std::move(mesh), surface}, result->to_json().dump(),
+                        result->warnings);
 }
 
 py::array_t<std::uint32_t> faces(const Mesh& m) {

@@ -14,6 +14,7 @@ calls release the GIL and stop on Ctrl-C (KeyboardInterrupt), leaving nothing ha
 import json as _json
 import math as _math
 import os as _os
+import warnings as _warnings
 from collections.abc import MutableMapping as _MutableMapping
 
 import numpy as _np
@@ -33,6 +34,13 @@ def catalog():
     """The named surfaces: a list of dicts with name, title, equation, description, params
     ({name: {value, min, max}}) and clip."""
     return _z.catalog()
+
+
+def _warn(lines):
+    """The library's warnings about a run (as the zeroset command prints them), as Python
+    warnings."""
+    for line in lines:
+        _warnings.warn(line, RuntimeWarning, stacklevel=3)
 
 
 # --------------------------------------------------------------------------- argument checks
@@ -315,13 +323,14 @@ class Surface:
             curvature_weight = float(curvature_weight)
             if not _math.isfinite(curvature_weight):
                 raise ValueError(f"curvature_weight = {curvature_weight}: the value must be finite")
-        m, stats = _z._mesh(
+        m, stats, warnings = _z._mesh(
             self._s, None if resolution is None else _count(resolution, "resolution", 1), improve,
             boundary, grid, None if refine_steps is None else _count(refine_steps, "refine_steps"),
             switch(curvature), curvature_weight, switch(singularity), switch(flips),
             switch(find_singular), switch(crossings), switch(curves), improver, bool(quality),
             _count(threads, "threads"))
-        return Mesh(m, stats)
+        _warn(warnings)
+        return Mesh(m, _json.loads(stats))
 
     def _floater_options(self, **options):
         given = {k: v for k, v in options.items() if v is not None}

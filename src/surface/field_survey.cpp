@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <vector>
 
 #include "zeroset/error.h"
@@ -57,6 +58,13 @@ std::optional<std::string> survey_warning(const Surface& surface, const FieldSur
   return fmt::format("{}: F is undefined (NaN or infinite) on {} of the clip; those parts are "
                      "left out", surface.label(),
                      percent >= 0.1 ? fmt::format("{:.1f}%", percent) : std::string("less than 0.1%"));
+}
+
+nlohmann::json survey_json(const FieldSurvey& survey) {
+  return {{"samples", survey.samples},
+          {"undefined_samples", survey.undefined},
+          {"undefined_fraction", survey.undefined_fraction()},
+          {"vanishes_identically", survey.vanishes_identically()}};
 }
 
 }  // namespace zeroset

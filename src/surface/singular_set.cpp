@@ -490,6 +490,24 @@ SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& 
 namespace {
 }  // namespace
 
+std::optional<SingularSet> find_singular_set_if_bounded(const Surface& surface,
+                                                        std::stop_token stop) {
+  if (!surface.clip.is_bounded()) return std::nullopt;
+  return find_singular_set(surface, {}, stop);
+}
+
+std::optional<std::string> singular_sheet_warning(const Surface& surface,
+                                                  const SingularSet* known) {
+  if (!known && !surface.clip.is_bounded()) return std::nullopt;
+  const SingularSet set = known ? *known : find_singular_set(surface, {.cells = 24});
+  if (!set.has_singular_sheet) return std::nullopt;
+  const Vec3& p = set.singular_sheet_example;
+  return fmt::format("{}: grad F vanishes on a whole sheet of F = 0 (e.g. at ({:.6g}, {:.6g}, "
+                     "{:.6g})): F is a square or worse there and never changes sign; mesh or "
+                     "sample G where F = G^2",
+                     surface.label(), p.x(), p.y(), p.z());
+}
+
 nlohmann::json singular_set_json(const SingularSet& set, bool with_polylines) {
   nlohmann::json j;
   j["points"] = nlohmann::json::array();

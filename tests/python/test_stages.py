@@ -65,6 +65,36 @@ def test_mesh_equals_the_cli(cli, tmp_path, spec, args, kwargs):
     assert stats["improve"]["improver"] == kwargs.get("improver", "remesh")
 
 
+def _untimed(stats):
+    """The stats without their timings (which differ from run to run)."""
+    if isinstance(stats, dict):
+        return {k: _untimed(v) for k, v in stats.items() if "seconds" not in k}
+    if isinstance(stats, list):
+        return [_untimed(v) for v in stats]
+    return stats
+
+
+@pytest.mark.parametrize("spec,args,kwargs", [
+    ("kummer", ["--param", "mu=3", "-r", "24"], dict(params={"mu": 3}, resolution=24)),
+    ("roman", ["-r", "20", "--improver", "paper", "--improve", "10"],
+     dict(resolution=20, improver="paper", improve=10)),
+    ("x^2 + y^2 - z^2", ["--clip", "sphere:1", "-r", "16", "--no-crossings"],
+     dict(clip="sphere:1", resolution=16, crossings=False)),
+])
+def test_mesh_stats_are_the_clis_stats_file(cli, tmp_path, spec, args, kwargs):
+    # One recipe, one statistics builder: Python's dictionary is `zeroset mesh --stats`.
+    cli("mesh", spec, *args, "--stats", tmp_path / "cli.json")
+    params = kwargs.pop("params", {})
+    clip = kwargs.pop("clip", None)
+    _, _, stats = zeroset.Surface(spec, clip=clip, **params).mesh(quality=True, **kwargs)
+    assert _untimed(stats) == _untimed(json.loads((tmp_path / "cli.json").read_text()))
+
+
+def test_mesh_warnings_are_python_warnings():
+    with pytest.warns(RuntimeWarning, match="F is undefined .* of the clip"):
+        zeroset.Surface("log(x) + y", clip="sphere:1").mesh(resolution=12)
+
+
 def test_the_paper_improvers_own_settings_are_refused_with_the_remesher():
     kummer = zeroset.Surface("kummer", mu=1.5)
     for given in (dict(flips=False), dict(curvature=True), dict(curvature_weight=3),

@@ -4,6 +4,7 @@
 /// square root of one, a pole, an overflow) on part of the clip? Those parts hold no surface,
 /// and each stage leaves them out. Does F vanish identically (F ≡ 0, e.g. `0` or `x - x`)?
 /// Then every point is on F = 0 and there is no surface to find.
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
 
@@ -37,5 +38,9 @@ FieldSurvey survey_field(const Surface& surface, int nodes = kSurveyNodes);
 /// The warning a command gives for a survey, or none: that F vanishes identically ("there is
 /// no surface"), or on which fraction of the clip F is undefined ("those parts are left out").
 std::optional<std::string> survey_warning(const Surface& surface, const FieldSurvey& survey);
+
+/// The survey in a stats file: {"samples", "undefined_samples", "undefined_fraction",
+/// "vanishes_identically"}.
+nlohmann::json survey_json(const FieldSurvey& survey);
 
 }  // namespace zeroset

@@ -5,6 +5,7 @@
 /// triple points, ends on the clip). See docs/singular.md for the method and its limits.
 #include <cstdint>
 #include <nlohmann/json_fwd.hpp>
+#include <optional>
 #include <stop_token>
 #include <string>
 #include <string_view>
@@ -62,6 +63,16 @@ struct SingularSetOptions {
 /// has, when `stop` is requested.
 SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& options = {},
                               std::stop_token stop = {});
+
+/// The set when the clip is bounded (find_singular_set with its defaults), none otherwise.
+std::optional<SingularSet> find_singular_set_if_bounded(const Surface& surface,
+                                                        std::stop_token stop = {});
+
+/// The warning every command gives when ∇F vanishes on a whole sheet of F = 0 (F is a square
+/// or worse there and never changes sign), or none. `known`: the set already found; without
+/// it a coarse one is searched (24 cells) when the clip is bounded.
+std::optional<std::string> singular_sheet_warning(const Surface& surface,
+                                                  const SingularSet* known);
 
 /// The set as JSON: {"points": [{"kind", "position"}], "curves": [{"kind", "closed", "length",
 /// "points"}], "singular_sheet": bool[, "singular_sheet_example"]}, for --json and --stats.
