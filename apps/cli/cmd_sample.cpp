@@ -8,15 +8,13 @@
 
 #include "common.h"
 #include "zeroset/error.h"
-#include "zeroset/floaters/floaters.h"
-#include "zeroset/floaters/metrics.h"
+#include "zeroset/floaters/sample_surface.h"
 #include "zeroset/floaters/ply.h"
 #include "zeroset/floaters/settings.h"
 #include "zeroset/io/atomic_file.h"
 #include "zeroset/io/image.h"
 #include "zeroset/io/output_transaction.h"
 #include "zeroset/render/render.h"
-#include "zeroset/surface/json_read.h"
 
 namespace zeroset::cli {
 namespace {
@@ -109,57 +107,10 @@ FloaterOptions options_from(const SampleArgs& a, const Scene& scene) {
   return o;
 }
 
-nlohmann::json metrics_json(const SampleMetrics& m, double band) {
-  nlohmann::json j;
-  j["count"] = m.count;
-  j["residual"] = {{"median", m.residual_median},
-                   {"max", m.residual_max},
-                   {"excluded_near_singular_points", m.residual_excluded}};
-  j["spacing"] = {{"mean", m.spacing_mean}, {"cv", m.spacing_cv}};
-  j["covering"] = {{"radius", m.covering_radius},
-                   {"relative_to_spacing", m.covering_relative},
-                   {"reference_points", m.reference_count}};
-  nlohmann::json sing = nlohmann::json::array();
-  for (const auto& c : m.singular)
-    sing.push_back({{"point", json_read::from_vec3(c.point)},
-                    {"distance", c.distance},
-                    {"local_spacing", c.local_spacing},
-                    {"ratio", c.ratio}});
-  j["singular_points"] = sing;
-  j["singular_ratio_max"] = m.singular_ratio_max;
-  j["band"] = {{"halfwidth", band},
-               {"density_ratio", m.band_density_ratio},
-               {"samples", m.band_samples},
-               {"reference_points", m.band_reference}};
-  return j;
-}
-
-nlohmann::json options_json(const FloaterOptions& o, double sigma_hat) {
-  return {{"radius", sigma_hat},
-          {"radius_given", o.radius},
-          {"max_count", o.max_count},
-          {"seed_count", o.seed_count},
-          {"seed", o.seed},
-          {"cos_weight", o.cos_weight},
-          {"clip_projection", o.clip_projection},
-          {"snap_to_nodes", o.snap_to_nodes},
-          {"scaled_repulsion", o.scaled_repulsion},
-          {"radius_grading", o.radius_grading},
-          {"feedback", o.feedback},
-          {"equilibrium_speed", o.equilibrium_speed},
-          {"estimator_interval", o.estimator_interval},
-          {"clip_newton", o.clip_newton},
-          {"average_radius_factor", o.average_radius_factor},
-          {"local_nominal_radius", o.local_nominal_radius},
-          {"energy_taper", o.energy_taper},
-          {"fission_offset", o.fission_offset},
-          {"radius_adapt", std::string(to_string(o.radius_adapt))}};
-}
-
 // The outputs of a run that has no surface to sample (F vanishes identically): a point set
-// without points, its (empty) picture and the survey in --stats.
+// without points and its (empty) picture.
 void write_empty_sample(const SampleArgs& a, const Surface& surface, const Camera& camera,
-                        const FieldSurvey& survey, int width, int height) {
+                        int width, int height) {
   if (!a.output.empty())
     write_points_ply(a.output, {}, {}, {}, a.ascii ? PlyFormat::kAscii : PlyFormat::kBinaryLittleEndian);
   if (!a.png.empty()) {
@@ -170,9 +121,6 @@ void write_empty_sample(const SampleArgs& a, const Surface& surface, const Camer
     ro.camera = camera;
     write_png(render_points(surface, {}, {}, {}, ro), a.png);
   }
-  if (!a.stats.empty())
-    write_json({{"surface", surface.label()}, {"floaters", 0}, {"field", survey_json(survey)}},
-               a.stats);
 }
 
 void run_sample(const SampleArgs& a) {
@@ -206,91 +154,42 @@ void run_sample(const SampleArgs& a) {
     if (!path.empty()) outputs.declare(path, flag);
 
   Scene scene = a.surface.resolve();
-  Surface& surface = scene.surface;
-  int anim_index = -1;
-  if (anim) {
-    anim_index = surface.field.parameter_index(anim->name);
-    if (anim_index < 0)
-      throw InvalidArgument("--animate", a.animate,
-                            fmt::format("{} has no parameter '{}'", surface.label(), anim->name));
-    surface.field.set_parameter(anim_index, anim->from);
-    surface.clip.update(surface.field);
-  }
+  const Surface& surface = scene.surface;
+  if (anim && surface.field.parameter_index(anim->name) < 0)
+    throw InvalidArgument("--animate", a.animate,
+                          fmt::format("{} has no parameter '{}'", surface.label(), anim->name));
   const FloaterOptions options = options_from(a, scene);
   const Camera camera = with_camera_flag(surface.camera, a.camera);
-  const FieldSurvey survey = survey_and_warn(surface);
-  if (survey.vanishes_identically()) {
-    // Every point is on F = 0 (warned): no floaters, as `mesh` gives no triangles.
-    write_empty_sample(a, surface, camera, survey, width, height);
+
+  SampleRun run;
+  if (a.steps_opt->count() && !anim) run.steps = a.steps;
+  run.max_steps = a.max_steps;
+  if (anim)
+    run.animation = SampleAnimation{.parameter = anim->name,
+                                    .from = anim->from,
+                                    .to = anim->to,
+                                    .steps = a.steps,
+                                    .settle_steps = a.settle_steps};
+  if (!a.stats.empty()) {
+    MetricsOptions mo;
+    mo.band_halfwidth = a.band;  // 0: half the nominal radius
+    mo.reference.count = a.reference;
+    run.metrics = mo;
+  }
+  run.singular_set = a.show_singular;
+  run.on_warning = warn;
+  Progress progress("sampling", global_flags().quiet);
+  run.on_progress = [&](double done) { progress.update(done); };
+  const SampleResult result = sample_surface(surface, options, run);
+  progress.finish();
+  if (!result.system) {
+    write_empty_sample(a, result.surface, camera, width, height);
+    if (!a.stats.empty()) write_json(result.to_json(), a.stats);
     outputs.commit();
-    say(fmt::format("{}: 0 floaters (no surface)", surface.label()));
+    say(fmt::format("{}: 0 floaters (no surface)", result.surface.label()));
     return;
   }
-  FloaterSystem sys(surface, options);
-  if (options.radius > 0 && sys.nominal_radius() != options.radius)
-    warn(fmt::format("radius {:g} is outside [1e-9, 1] times the scene radius ({:g}); using "
-                     "{:.4g}",
-                     options.radius, surface.scene_radius(), sys.nominal_radius()));
-
-  Progress progress("sampling", global_flags().quiet);
-  nlohmann::json stats;
-  double seconds = 0;
-  std::size_t updates = 0, undefined_removed = 0;
-  std::optional<std::size_t> converged_at;
-  StepStats last;
-  auto run = [&](const StepStats& st) {
-    last = st;
-    seconds += st.seconds;
-    updates += st.count;
-    undefined_removed += st.undefined_removed;
-    if (st.converged && !converged_at) converged_at = st.step;
-    return st;
-  };
-
-  if (!anim) {
-    const bool fixed = a.steps_opt->count() > 0;
-    const std::size_t limit = fixed ? a.steps : a.max_steps;
-    for (std::size_t k = 0; k < limit; ++k) {
-      const StepStats st = run(sys.step());
-      progress.update(static_cast<double>(k + 1) / static_cast<double>(limit));
-      if (!fixed && st.converged) break;
-    }
-  } else {
-    // Settle at the start value first (random seeding is far from the surface), then move the
-    // parameter linearly over --steps steps, q̇ known to the F_q·q̇ term.
-    for (std::size_t k = 0; k < a.settle_steps; ++k)
-      if (run(sys.step()).converged) break;
-    const std::size_t settled = sys.steps_taken();
-    std::vector<double> q(sys.parameters().begin(), sys.parameters().end());
-    double worst_median = 0, worst_max = 0;
-    std::size_t min_count = sys.size(), max_count = sys.size();
-    for (std::size_t k = 1; k <= a.steps; ++k) {
-      q[static_cast<std::size_t>(anim_index)] = anim->from + (anim->to - anim->from) *
-                                                                 static_cast<double>(k) /
-                                                                 static_cast<double>(a.steps);
-      const StepStats st = run(sys.step(q));
-      worst_median = std::max(worst_median, st.median_residual);
-      worst_max = std::max(worst_max, st.max_residual);
-      min_count = std::min(min_count, st.count);
-      max_count = std::max(max_count, st.count);
-      progress.update(static_cast<double>(k) / static_cast<double>(a.steps));
-    }
-    stats["animation"] = {{"parameter", anim->name},
-                          {"from", anim->from},
-                          {"to", anim->to},
-                          {"steps", a.steps},
-                          {"settle_steps", settled},
-                          {"median_residual_worst", worst_median},
-                          {"max_residual_worst", worst_max},
-                          {"count_min", min_count},
-                          {"count_max", max_count}};
-  }
-  progress.finish();
-
-  const Surface& final_surface = sys.surface();
-  // The set of the final parameters, for --show-singular and --stats (milliseconds).
-  std::optional<SingularSet> singular;
-  if (a.show_singular || !a.stats.empty()) singular = find_singular_set_if_bounded(final_surface);
+  const FloaterSystem& sys = *result.system;
   if (!a.output.empty())
     write_points_ply(a.output, sys.positions(), sys.normals(), sys.radii(),
                      a.ascii ? PlyFormat::kAscii : PlyFormat::kBinaryLittleEndian);
@@ -301,58 +200,18 @@ void run_sample(const SampleArgs& a) {
     ro.threads = global_flags().threads;
     std::vector<double> disks(sys.radii().begin(), sys.radii().end());
     for (double& r : disks) r *= a.disk_scale;
-    ro.camera = camera.aimed_at(sys.positions(), 1e-9 * final_surface.scene_radius());
-    if (a.show_singular && singular) ro.singular_overlay = SingularOverlay{.set = *singular};
-    write_png(render_points(final_surface, sys.positions(), sys.normals(), disks, ro), a.png);
+    ro.camera = camera.aimed_at(sys.positions(), 1e-9 * result.surface.scene_radius());
+    if (a.show_singular && result.singular)
+      ro.singular_overlay = SingularOverlay{.set = *result.singular};
+    write_png(render_points(result.surface, sys.positions(), sys.normals(), disks, ro), a.png);
   }
-
-  const double band = a.band > 0 ? a.band : sys.nominal_radius() / 2;
-  if (!a.stats.empty()) {
-    MetricsOptions mo;
-    mo.band_halfwidth = band;
-    mo.reference.count = a.reference;
-    const SampleMetrics m = measure_samples(final_surface, sys.positions(), mo);
-    stats["surface"] = final_surface.label();
-    nlohmann::json params = nlohmann::json::object();
-    for (std::size_t k = 0; k < final_surface.field.parameter_names().size(); ++k)
-      params[final_surface.field.parameter_names()[k]] = final_surface.field.parameter_values()[k];
-    stats["parameters"] = params;
-    stats["options"] = options_json(sys.options(), sys.nominal_radius());
-    stats["steps"] = sys.steps_taken();
-    stats["converged_at_step"] = converged_at ? nlohmann::json(*converged_at) : nlohmann::json();
-    stats["seconds"] = seconds;
-    stats["steps_per_second"] = seconds > 0 ? static_cast<double>(sys.steps_taken()) / seconds : 0;
-    stats["updates_per_second"] = seconds > 0 ? static_cast<double>(updates) / seconds : 0;
-    stats["metrics"] = metrics_json(m, band);
-    stats["singular_set"] = singular_stats(singular);
-    stats["field"] = survey_json(survey);
-    // Floaters removed where F or ∇F was not finite or outside the clip, over the run.
-    stats["undefined_removed"] = undefined_removed;
-    if (singular) {
-      // Each special point's and curve's coverage in local spacings (docs/algorithms.md B.7).
-      const SingularSetCoverage c = measure_singular_coverage(*singular, sys.positions());
-      stats["singular_coverage"] = {{"point_ratio", c.point_ratio},
-                                    {"point_ratio_max", c.point_ratio_max},
-                                    {"curve_gap", c.curve_gap},
-                                    {"curve_gap_max", c.curve_gap_max}};
-    }
-    write_json(stats, a.stats);
-  }
+  if (!a.stats.empty()) write_json(result.to_json(), a.stats);
   outputs.commit();
-  // Floaters that find no surface are reseeded, wander, and are removed as strays.
-  if (sys.size() == 0)
-    warn(fmt::format("{}: no floater stayed on the surface; F = 0 may have no point inside the "
-                     "clip, or F may be undefined there (try zeroset eval)",
-                     final_surface.label()));
-  else if (!(last.median_residual <= sys.nominal_radius()))
-    warn(fmt::format("{}: the floaters are not on F = 0 (median |F|/|grad F| {:.3g}, sigma^ "
-                     "{:.3g}); the run may be too short (--steps), or F = 0 may have no point "
-                     "inside the clip",
-                     final_surface.label(), last.median_residual, sys.nominal_radius()));
-  warn_if_singular_sheet(final_surface, singular);
+  const double seconds = result.seconds;
   say(fmt::format("{} floaters after {} steps ({}), sigma^ = {:.4g}, {:.0f} steps/s", sys.size(),
                   sys.steps_taken(),
-                  converged_at ? fmt::format("settled at step {}", *converged_at) : "not settled",
+                  result.converged_at ? fmt::format("settled at step {}", *result.converged_at)
+                                      : "not settled",
                   sys.nominal_radius(),
                   seconds > 0 ? static_cast<double>(sys.steps_taken()) / seconds : 0.0));
 }

@@ -3,12 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <nlohmann/json.hpp>
 #include <tuple>
 
 #include "bindings.h"
 #include "zeroset/error.h"
 #include "zeroset/floaters/floaters.h"
 #include "zeroset/floaters/ply.h"
+#include "zeroset/floaters/sample_surface.h"
 #include "zeroset/floaters/settings.h"
 #include "zeroset/io/atomic_file.h"
 #include "zeroset/render/render.h"
@@ -80,57 +82,33 @@ std::vector<double> parameters_with(const FloaterSystem& sys,
   return q;
 }
 
+// The recipe of `zeroset sample` (sample_surface); the stats are its --stats file, as JSON
+// text the module turns into dictionaries, and its warnings go to Python's warnings.
 py::tuple sample(const PySurface& s, const std::string& given, std::optional<size_t> steps,
                  size_t max_steps, std::optional<std::tuple<std::string, double, double>> animate,
-                 size_t settle_steps, int threads) {
-  Surface surface = s.surface();
-  int anim_index = -1;
+                 size_t settle_steps, bool quality, int threads) {
+  const Surface surface = s.surface();
+  SampleRun run;
+  run.max_steps = max_steps;
   if (animate) {
     const auto& [name, from, to] = *animate;
-    anim_index = surface.field.parameter_index(name);
-    if (anim_index < 0)
-      throw InvalidArgument("animate", name, surface.label() + " has no parameter of that name");
     if (!steps || *steps == 0)
       throw InvalidArgument("animate", name, "give the number of animated steps with steps=N");
-    surface.field.set_parameter(anim_index, from);
+    run.animation = SampleAnimation{
+        .parameter = name, .from = from, .to = to, .steps = *steps, .settle_steps = settle_steps};
+  } else {
+    run.steps = steps;
   }
+  if (quality) run.metrics = MetricsOptions{};
   const FloaterOptions options = options_from(s, given, threads);
-  std::optional<PyFloaters> result;
-  py::dict stats;
-  double seconds = 0;
-  std::optional<size_t> converged_at;
-  run_interruptible([&](std::stop_token stop) {
-    PyFloaters f{FloaterSystem(surface, options), {}, false};
-    auto run = [&](const StepStats& st) {
-      f.last = st;
-      seconds += st.seconds;
-      if (st.converged && !converged_at) converged_at = st.step;
-      return st;
-    };
-    if (!animate) {
-      const size_t limit = steps ? *steps : max_steps;
-      for (size_t k = 0; k < limit && !stop.stop_requested(); ++k)
-        if (run(f.sys.step()).converged && !steps) break;
-    } else {
-      // Settle at the start value, then move the parameter linearly over `steps` steps.
-      for (size_t k = 0; k < settle_steps && !stop.stop_requested(); ++k)
-        if (run(f.sys.step()).converged) break;
-      std::vector<double> q(f.sys.parameters().begin(), f.sys.parameters().end());
-      const auto& [name, from, to] = *animate;
-      for (size_t k = 1; k <= *steps && !stop.stop_requested(); ++k) {
-        q[static_cast<size_t>(anim_index)] =
-            from + (to - from) * static_cast<double>(k) / static_cast<double>(*steps);
-        run(f.sys.step(q));
-      }
-    }
-    result.emplace(std::move(f));
-  });
-  stats["steps"] = result->sys.steps_taken();
-  stats["converged_at_step"] = converged_at ? py::object(py::int_(*converged_at)) : py::none();
-  stats["seconds"] = seconds;
-  stats["radius"] = result->sys.nominal_radius();
-  stats["last_step"] = step_dict(result->last);
-  return py::make_tuple(std::move(*result), stats);
+  std::optional<SampleResult> result;
+  run_interruptible([&](std::stop_token stop) { result = sample_surface(surface, options, run, stop); });
+  if (!result->system)  // F vanishes identically
+    throw InvalidArgument(result->warnings.empty() ? surface.label() + ": there is no surface"
+                                                   : result->warnings.front());
+  const std::string stats = result->to_json().dump();  // before the floaters move out
+  PyFloaters f{std::move(*result->system), result->last, false};
+  return py::make_tuple(std::move(f), stats, result->warnings);
 }
 
 // Steps `n` times, the parameters moving linearly to `target` when given; each step is whole,
@@ -289,7 +267,7 @@ void bind_floaters(py::module_& m) {
           "width"_a, "height"_a, "camera"_a, "disk_scale"_a, "show_singular"_a, "threads"_a);
 
   m.def("_sample", &sample, "surface"_a, "options"_a, "steps"_a, "max_steps"_a, "animate"_a,
-        "settle_steps"_a, "threads"_a);
+        "settle_steps"_a, "quality"_a, "threads"_a);
   m.def("_floaters", [](const PySurface& s, const std::string& given, int threads) {
     return PyFloaters{FloaterSystem(s.surface(), options_from(s, given, threads)), {}, false};
   });

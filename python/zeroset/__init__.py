@@ -361,11 +361,13 @@ class Surface:
                scaled_repulsion=None, radius_grading=None, radius_adapt=None, feedback=None,
                equilibrium_speed=None, estimator_interval=None, clip_newton=None,
                average_radius_factor=None, local_nominal_radius=None, energy_taper=None,
-               fission_offset=None, animate=None, settle_steps=1000, threads=0):
+               fission_offset=None, animate=None, settle_steps=1000, quality=False, threads=0):
         """Samples the surface with floaters as `zeroset sample` does: exactly `steps` steps, or
         until settled (at most max_steps). animate=("mu", 1.02, 2.44) settles at the first
         value, then moves the parameter over `steps` steps. Returns the Floaters, which unpack
-        as positions, normals, radii; their `stats` say how the run went."""
+        as positions, normals, radii; their `stats` say how the run went: the file
+        `zeroset sample --stats` writes, with its quality figures (metrics, the coverage of the
+        singular set) when quality=True. The run's warnings are RuntimeWarnings."""
         opts = self._floater_options(
             radius=radius, max_count=max_count, seed_count=seed_count, seed=seed,
             cos_weight=cos_weight, clip_projection=clip_projection, snap_to_nodes=snap_to_nodes,
@@ -381,10 +383,12 @@ class Surface:
             except (TypeError, ValueError):
                 raise TypeError("animate must be (name, from, to)") from None
             animate = (str(name), _number(start, "animate from"), _number(end, "animate to"))
-        f, stats = _z._sample(self._s, opts, None if steps is None else _count(steps, "steps"),
-                              _count(max_steps, "max_steps"), animate,
-                              _count(settle_steps, "settle_steps"), _count(threads, "threads"))
-        return Floaters(f, stats)
+        f, stats, warnings = _z._sample(
+            self._s, opts, None if steps is None else _count(steps, "steps"),
+            _count(max_steps, "max_steps"), animate, _count(settle_steps, "settle_steps"),
+            bool(quality), _count(threads, "threads"))
+        _warn(warnings)
+        return Floaters(f, _json.loads(stats))
 
     def render(self, size=None, aa=None, camera=None, target=None, fov=None, background=None,
                front=None, back=None, show_singular=False, threads=0, projection=None):

@@ -68,7 +68,7 @@ def test_mesh_equals_the_cli(cli, tmp_path, spec, args, kwargs):
 def _untimed(stats):
     """The stats without their timings (which differ from run to run)."""
     if isinstance(stats, dict):
-        return {k: _untimed(v) for k, v in stats.items() if "seconds" not in k}
+        return {k: _untimed(v) for k, v in stats.items() if "second" not in k}
     if isinstance(stats, list):
         return [_untimed(v) for v in stats]
     return stats
@@ -88,6 +88,22 @@ def test_mesh_stats_are_the_clis_stats_file(cli, tmp_path, spec, args, kwargs):
     clip = kwargs.pop("clip", None)
     _, _, stats = zeroset.Surface(spec, clip=clip, **params).mesh(quality=True, **kwargs)
     assert _untimed(stats) == _untimed(json.loads((tmp_path / "cli.json").read_text()))
+
+
+@pytest.mark.parametrize("spec,args,kwargs", [
+    ("kummer", ["--param", "mu=1.5", "--max-count", "300", "--seed", "3"],
+     dict(params={"mu": 1.5}, max_count=300, seed=3)),
+    # The clip of the catalog's Kummer surface follows mu: it must start at the first value.
+    ("kummer", ["--max-count", "200", "--animate", "mu=4.2:4.5", "--steps", "30",
+                "--settle-steps", "100"],
+     dict(max_count=200, animate=("mu", 4.2, 4.5), steps=30, settle_steps=100)),
+])
+def test_sample_stats_are_the_clis_stats_file(cli, tmp_path, spec, args, kwargs):
+    cli("sample", spec, *args, "--stats", tmp_path / "cli.json", "-o", tmp_path / "cli.ply")
+    params = kwargs.pop("params", {})
+    f = zeroset.Surface(spec, **params).sample(quality=True, **kwargs)
+    assert _untimed(f.stats) == _untimed(json.loads((tmp_path / "cli.json").read_text()))
+    np.testing.assert_array_equal(f.positions.shape, (f.stats["metrics"]["count"], 3))
 
 
 def test_mesh_warnings_are_python_warnings():
