@@ -179,7 +179,7 @@ void run_sample(const SampleArgs& a) {
   run.singular_set = a.show_singular;
   run.on_warning = warn;
   Progress progress("sampling", global_flags().quiet);
-  run.on_progress = [&](double done) { progress.update(done); };
+  run.on_step = [&](const StepStats&, double done) { progress.update(done); };
   const SampleResult result = sample_surface(surface, options, run);
   progress.finish();
   if (!result.system) {

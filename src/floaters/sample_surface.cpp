@@ -27,8 +27,8 @@ const StepStats& count_step(SampleResult& r, const StepStats& st) {
   return r.last;
 }
 
-void progress(const SampleRun& run, std::size_t done, std::size_t of) {
-  if (run.on_progress) run.on_progress(static_cast<double>(done) / static_cast<double>(of));
+void report(const SampleRun& run, const StepStats& st, std::size_t done, std::size_t of) {
+  if (run.on_step) run.on_step(st, static_cast<double>(done) / static_cast<double>(of));
 }
 
 // Unanimated: a fixed number of steps, or until settled.
@@ -37,7 +37,7 @@ void settle(SampleResult& r, const SampleRun& run, std::stop_token stop) {
   const std::size_t limit = run.steps.value_or(run.max_steps);
   for (std::size_t k = 0; k < limit && !stop.stop_requested(); ++k) {
     const StepStats& st = count_step(r, sys.step());
-    progress(run, k + 1, limit);
+    report(run, st, k + 1, limit);
     if (!run.steps && st.converged) break;
   }
 }
@@ -47,8 +47,11 @@ void settle(SampleResult& r, const SampleRun& run, std::stop_token stop) {
 void animate(SampleResult& r, const SampleRun& run, int index, std::stop_token stop) {
   const SampleAnimation& a = *run.animation;
   FloaterSystem& sys = *r.system;
-  for (std::size_t k = 0; k < a.settle_steps && !stop.stop_requested(); ++k)
-    if (count_step(r, sys.step()).converged) break;
+  for (std::size_t k = 0; k < a.settle_steps && !stop.stop_requested(); ++k) {
+    const StepStats& st = count_step(r, sys.step());
+    report(run, st, 0, 1);
+    if (st.converged) break;
+  }
   SampleAnimationStats& s = r.animation.emplace();
   s.settle_steps = sys.steps_taken();
   s.count_min = s.count_max = sys.size();
@@ -61,7 +64,7 @@ void animate(SampleResult& r, const SampleRun& run, int index, std::stop_token s
     s.max_residual_worst = std::max(s.max_residual_worst, st.max_residual);
     s.count_min = std::min(s.count_min, st.count);
     s.count_max = std::max(s.count_max, st.count);
-    progress(run, k, a.steps);
+    report(run, st, k, a.steps);
   }
 }
 
@@ -104,7 +107,7 @@ SampleResult sample_surface(const Surface& surface, const FloaterOptions& option
   SampleResult r;
   r.surface = surface;
   r.run = run;
-  r.run.on_warning = nullptr, r.run.on_progress = nullptr;
+  r.run.on_warning = nullptr, r.run.on_step = nullptr;
   int index = -1;
   if (run.animation) {
     const SampleAnimation& a = *run.animation;

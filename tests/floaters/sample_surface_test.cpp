@@ -27,7 +27,7 @@ TEST(SampleSurface, SettlesAndMeasuresOnRequest) {
   SampleRun run;
   run.metrics = MetricsOptions{};
   std::vector<double> progress;
-  run.on_progress = [&](double f) { progress.push_back(f); };
+  run.on_step = [&](const StepStats&, double f) { progress.push_back(f); };
   const SampleResult r = sample_surface(s, few(), run);
   ASSERT_TRUE(r.system);
   ASSERT_TRUE(r.converged_at);  // the default: until settled
@@ -90,7 +90,7 @@ TEST(SampleSurface, NoSurfaceNoFloatersAndAStopEndsTheRun) {
   EXPECT_TRUE(none.to_json()["field"]["vanishes_identically"].get<bool>());
   std::stop_source stop;
   SampleRun run;
-  run.on_progress = [&](double) { stop.request_stop(); };
+  run.on_step = [&](const StepStats&, double) { stop.request_stop(); };
   const SampleResult r =
       sample_surface(test::catalog_surface("cone"), few(), run, stop.get_token());
   EXPECT_TRUE(r.stopped);

@@ -45,8 +45,9 @@ struct SampleRun {
   bool singular_set = false;
   /// Each warning as it arises (kept in SampleResult::warnings too).
   std::function<void(const std::string&)> on_warning;
-  /// After each step: the fraction of the run done (the settling of an animation not counted).
-  std::function<void(double)> on_progress;
+  /// After each step: its figures and the fraction of the run done (the settling of an
+  /// animation not counted: 0 until it is over).
+  std::function<void(const StepStats&, double done)> on_step;
 };
 
 /// Figures of an animation.
