@@ -58,7 +58,7 @@ bench: build
 	scripts/bench.sh $(BUILD)
 
 # Formats the C++ sources in place with clang-format and the repository's .clang-format.
-FORMAT_DIRS ?= src include apps tests bench examples
+FORMAT_DIRS ?= src include apps tests bench examples python/src
 format:
 	find $(FORMAT_DIRS) \( -name '*.cpp' -o -name '*.h' \) -print0 | xargs -0 clang-format -i
 

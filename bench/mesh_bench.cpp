@@ -98,7 +98,8 @@ void BM_MeshPipeline(benchmark::State& state) {
   settings.improver = state.range(1) != 0 ? zeroset::Improver::kRemesh : zeroset::Improver::kPaper;
   zeroset::MeshResult r;
   for (auto _ : state) r = zeroset::mesh_surface(s, settings);
-  const zeroset::ImproveStats st = r.improvement ? r.improvement->summary() : zeroset::ImproveStats{};
+  const zeroset::ImproveStats st =
+      r.improvement ? r.improvement->summary() : zeroset::ImproveStats{};
   state.counters["steps"] = st.steps;
   state.counters["converged"] = st.converged;
   state.counters["vertices"] = static_cast<double>(r.mesh.vertex_count());

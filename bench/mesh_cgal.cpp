@@ -60,14 +60,16 @@ int main(int argc, char** argv) {
   CGAL::make_surface_mesh(c2t3, surface, criteria, CGAL::Non_manifold_tag(), 200);
   CGAL::Surface_mesh<Point_3> sm;
   CGAL::facets_in_complex_2_to_triangle_mesh(c2t3, sm);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::ofstream out(argv[3]);
   out.precision(17);
   out << "OFF\n" << sm.number_of_vertices() << ' ' << sm.number_of_faces() << " 0\n";
   for (auto v : sm.vertices()) out << sm.point(v) << '\n';
   for (auto f : sm.faces()) {
     out << 3;
-    for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm)) out << ' ' << static_cast<std::size_t>(v);
+    for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm))
+      out << ' ' << static_cast<std::size_t>(v);
     out << '\n';
   }
   std::cout << "{\"seconds\": " << seconds << ", \"vertices\": " << sm.number_of_vertices()

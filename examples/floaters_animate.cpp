@@ -35,8 +35,7 @@ int main(int argc, char** argv) {
     if (!r.system) return 1;
     std::printf("settled after %zu steps; %zu floaters at the end\n", r.animation->settle_steps,
                 r.system->size());
-    zeroset::write_points_ply(out, r.system->positions(), r.system->normals(),
-                              r.system->radii());
+    zeroset::write_points_ply(out, r.system->positions(), r.system->normals(), r.system->radii());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "floaters_animate: %s\n", e.what());
     return 1;

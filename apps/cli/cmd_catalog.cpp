@@ -7,8 +7,8 @@
 #include "zeroset/error.h"
 #include "zeroset/expr/polynomial.h"
 #include "zeroset/surface/catalog.h"
-#include "zeroset/surface/singular_set.h"
 #include "zeroset/surface/json_read.h"
+#include "zeroset/surface/singular_set.h"
 
 namespace zeroset::cli {
 namespace {
@@ -31,7 +31,9 @@ Vec3 parse_point(const std::string& text) {
   return {v[0], v[1], v[2]};
 }
 
-std::string fmt_vec(const Vec3& v) { return fmt::format("({:.10g}, {:.10g}, {:.10g})", v.x(), v.y(), v.z()); }
+std::string fmt_vec(const Vec3& v) {
+  return fmt::format("({:.10g}, {:.10g}, {:.10g})", v.x(), v.y(), v.z());
+}
 
 void run_list() {
   for (const auto& e : catalog()) {
@@ -94,9 +96,10 @@ void run_info(const SurfaceArgs& args, bool as_json) {
     fmt::print("degree:     {} (polynomial, {} terms expanded)\n", s.field.degree(),
                s.field.polynomial().terms().size());
   else if (s.field.is_polynomial())
-    fmt::print("degree:     {} (polynomial, not expanded above degree {}: ray tracing uses "
-               "interval arithmetic, no POV-Ray export)\n",
-               s.field.degree(), Field::kMaxExpansionDegree);
+    fmt::print(
+        "degree:     {} (polynomial, not expanded above degree {}: ray tracing uses "
+        "interval arithmetic, no POV-Ray export)\n",
+        s.field.degree(), Field::kMaxExpansionDegree);
   else
     fmt::print("degree:     not a polynomial (ray tracing uses interval arithmetic)\n");
   if (s.ranges.empty()) fmt::print("parameters: none\n");
@@ -104,8 +107,9 @@ void run_info(const SurfaceArgs& args, bool as_json) {
     fmt::print("parameter:  {} = {:g}   (range {:g} .. {:g})\n", r.name,
                s.field.parameter_values()[s.field.parameter_index(r.name)], r.min, r.max);
   if (s.clip.is_empty_spec())
-    fmt::print("clip:       none (unbounded: give --clip sphere:R for sampling, meshing, "
-               "rendering)\n");
+    fmt::print(
+        "clip:       none (unbounded: give --clip sphere:R for sampling, meshing, "
+        "rendering)\n");
   for (const auto& c : s.clip.to_specs()) fmt::print("clip:       {}\n", c);
   if (s.clip.is_parametric())  // sized by the parameters: what that gives now
     for (const auto& c : s.clip.to_specs(true)) fmt::print("clip now:   {}\n", c);
@@ -138,8 +142,7 @@ void run_eval(const SurfaceArgs& args, const std::vector<std::string>& at, bool 
       j["hessian"] = nlohmann::json::array();
       for (int i = 0; i < 3; ++i)
         j["hessian"].push_back({r.hessian(i, 0), r.hessian(i, 1), r.hessian(i, 2)});
-      for (size_t k = 0; k < r.dq.size(); ++k)
-        j["dF_d" + s.field.parameter_names()[k]] = r.dq[k];
+      for (size_t k = 0; k < r.dq.size(); ++k) j["dF_d" + s.field.parameter_names()[k]] = r.dq[k];
       out.push_back(j);
       continue;
     }

@@ -57,9 +57,9 @@ std::string value_kind(const CLI::Option& opt) {
 struct CommandInfo {
   std::string path;  // "zeroset", "zeroset mesh", ...
   std::vector<std::string> subcommands;
-  std::vector<std::string> options;                             // every name, "-o" and "--output"
+  std::vector<std::string> options;                               // every name, "-o" and "--output"
   std::vector<std::pair<std::string, std::string>> option_kinds;  // options taking a value
-  std::vector<std::string> positionals;                         // kinds, in order
+  std::vector<std::string> positionals;                           // kinds, in order
   bool last_positional_repeats = false;
 };
 

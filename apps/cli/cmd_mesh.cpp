@@ -61,9 +61,10 @@ void refuse_paper_only_flags(const MeshArgs& a, const MeshSettings& m) {
   if (m.improver != Improver::kRemesh) return;
   for (const auto& [given, flag] : flags)
     if (given)
-      throw InvalidArgument(fmt::format("{} sets the paper's improver, but the improver is "
-                                        "remesh: add --improver paper",
-                                        flag));
+      throw InvalidArgument(
+          fmt::format("{} sets the paper's improver, but the improver is "
+                      "remesh: add --improver paper",
+                      flag));
 }
 
 // Settings from a scene file's "mesh" object (as the viewer saves them, or with improve as
@@ -120,13 +121,15 @@ void run_mesh(const MeshArgs& a) {
         "nothing to write: give -o FILE.{obj,ply,stl,glb}, --png FILE.png or --stats FILE.json");
   if (!a.output.empty()) check_mesh_path(a.output);
   for (const auto& [flag, path] : {std::pair{"--png", a.png}, std::pair{"--png-raw", a.png_raw}})
-    if (!path.empty() && file_extension(path) != "png") throw InvalidArgument(flag, path, "use a .png name");
+    if (!path.empty() && file_extension(path) != "png")
+      throw InvalidArgument(flag, path, "use a .png name");
   if (!a.stats.empty() && file_extension(a.stats) != "json")
     throw InvalidArgument("--stats", a.stats, "use a .json name");
   const auto [width, height] = parse_size(a.size, "--size");
   OutputTransaction outputs;  // every file or none (docs/architecture.md, "Errors")
-  for (const auto& [flag, path] : {std::pair{"--output", a.output}, std::pair{"--png-raw", a.png_raw},
-                                   std::pair{"--png", a.png}, std::pair{"--stats", a.stats}})
+  for (const auto& [flag, path] :
+       {std::pair{"--output", a.output}, std::pair{"--png-raw", a.png_raw},
+        std::pair{"--png", a.png}, std::pair{"--stats", a.stats}})
     if (!path.empty()) outputs.declare(path, flag);
 
   Scene scene = a.surface.resolve();
@@ -141,8 +144,8 @@ void run_mesh(const MeshArgs& a) {
   run.on_warning = warn;
   run.on_polygonized = [&](const MeshResult& r) {
     if (r.mesh.empty() && !r.survey->vanishes_identically())  // that was said
-      say(fmt::format("{}: the grid of {} cells found no surface inside the clip",
-                      surface.label(), settings.cells));
+      say(fmt::format("{}: the grid of {} cells found no surface inside the clip", surface.label(),
+                      settings.cells));
     if (!a.png_raw.empty())
       write_picture(surface, r.mesh, a.png_raw, width, height, a.wireframe,
                     a.show_singular && r.singular ? &*r.singular : nullptr);
@@ -171,13 +174,14 @@ void run_mesh(const MeshArgs& a) {
                                  surface.label(), mesh.vertex_count(), mesh.triangle_count(),
                                  ps.sparse ? "sparse" : "dense", settings.cells, ps.seconds_total);
   if (max_steps > 0)
-    line += fmt::format("; {} in {} {} ({:.2f} s{})", remeshing ? "remeshed" : "improved",
-                        is.steps, remeshing ? "iterations" : "steps", is.seconds,
-                        is.converged || mesh.empty() ? ""
-                                                     : ", stopped at the step limit, not at rest");
+    line +=
+        fmt::format("; {} in {} {} ({:.2f} s{})", remeshing ? "remeshed" : "improved", is.steps,
+                    remeshing ? "iterations" : "steps", is.seconds,
+                    is.converged || mesh.empty() ? "" : ", stopped at the step limit, not at rest");
   say(line);
   if (before && after)
-    say(fmt::format("  min angle < 30°: {:.1f}% -> {:.1f}%, mean min angle {:.1f}° -> {:.1f}°, "
+    say(
+        fmt::format("  min angle < 30°: {:.1f}% -> {:.1f}%, mean min angle {:.1f}° -> {:.1f}°, "
                     "max residual {:.1e}",
                     before->percent_below_30, after->percent_below_30, before->mean_min_angle_deg,
                     after->mean_min_angle_deg, after->max_residual));
@@ -267,7 +271,8 @@ void register_mesh_command(CLI::App& app) {
                   "singular set found")
       ->type_name("FILE.json");
   cmd->add_option("--png", args->png, "Picture of the final mesh")->type_name("FILE.png");
-  cmd->add_option("--png-raw", args->png_raw, "Picture of the polygonizer's mesh before improvement")
+  cmd->add_option("--png-raw", args->png_raw,
+                  "Picture of the polygonizer's mesh before improvement")
       ->type_name("FILE.png");
   cmd->add_option("--size", args->size, "Picture size WxH")->capture_default_str();
   cmd->add_flag("--wireframe", args->wireframe, "Draw the mesh edges in the pictures");

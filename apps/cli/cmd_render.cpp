@@ -33,9 +33,9 @@ namespace fs = std::filesystem;
 struct LookArgs {
   std::string size = "800x800";
   int aa = 2;
-  std::string camera;  // az,el[,dist]
+  std::string camera;      // az,el[,dist]
   std::string projection;  // perspective | ortho[:height]
-  std::string target;  // x,y,z
+  std::string target;      // x,y,z
   double fov = 0;
   std::string background, front, back;
   CLI::Option* size_opt = nullptr;
@@ -61,8 +61,9 @@ struct LookArgs {
                     "volume); default: the surface's (perspective unless its scene file says "
                     "otherwise)")
         ->type_name("perspective|ortho[:H]");
-    cmd->add_option("--target", target, "Point the camera orbits and looks at (default: the "
-                                        "surface's, usually the origin)")
+    cmd->add_option("--target", target,
+                    "Point the camera orbits and looks at (default: the "
+                    "surface's, usually the origin)")
         ->type_name("X,Y,Z");
     fov_opt = cmd->add_option("--fov", fov,
                               "Vertical field of view in degrees, 1 to 170 (default: the "
@@ -152,10 +153,10 @@ void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string
   write_image(image, output);
   const char* method = stats.exact ? "polynomial roots" : "interval arithmetic";
   if (stats.abandoned_rays > 0)
-    warn(fmt::format("{}: {} of {} rays gave up after {} interval evaluations each (F undefined "
-                     "or unbounded along them) and are drawn as misses",
-                     surface.label(), stats.abandoned_rays, stats.rays,
-                     RaycastOptions{}.interval_budget));
+    warn(fmt::format(
+        "{}: {} of {} rays gave up after {} interval evaluations each (F undefined "
+        "or unbounded along them) and are drawn as misses",
+        surface.label(), stats.abandoned_rays, stats.rays, RaycastOptions{}.interval_budget));
   if (!stats_path.empty())
     write_json({{"surface", surface.label()},
                 {"width", o.width},
@@ -172,8 +173,8 @@ void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string
                 {"singular_set", singular_stats(singular)}},
                stats_path);
   outputs.commit();
-  say(fmt::format("wrote {} ({}x{}, {} rays, {:.2f} s, {})", output, o.width, o.height,
-                  stats.rays, stats.seconds, method));
+  say(fmt::format("wrote {} ({}x{}, {} rays, {:.2f} s, {})", output, o.width, o.height, stats.rays,
+                  stats.seconds, method));
   if (!stats_path.empty()) say("wrote " + stats_path);
 }
 
@@ -264,7 +265,8 @@ int frame_number_of(const std::string& name) {
   if (name.size() < prefix.size() + 4 + suffix.size() || !name.starts_with(prefix) ||
       !name.ends_with(suffix))
     return -1;
-  const std::string digits = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+  const std::string digits =
+      name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
   if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) return -1;
   const int f = std::stoi(digits);
   return frame_file_name(f) == name ? f : -1;
@@ -272,8 +274,8 @@ int frame_number_of(const std::string& name) {
 
 /// Runs ffmpeg on the staged frames (`first_frame_temp`: frame 0's temp file, whose name
 /// numbers them as the frames' own names do) into `video_temp`. Throws Error with its log.
-void encode_video(const std::string& first_frame_temp, const std::string& video_temp,
-                  double fps, const std::string& video) {
+void encode_video(const std::string& first_frame_temp, const std::string& video_temp, double fps,
+                  const std::string& video) {
   // The temp files keep the frames' names without their extension: frame_0000 in
   // .frame_0000.tmp-TOKEN.png becomes frame_%04d.
   fs::path pattern(first_frame_temp);
@@ -314,8 +316,7 @@ void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArg
   if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
     throw IoError(a.dir, "exists and is not a directory");
   // Before any work: frames can be written into DIR, or DIR can be created.
-  check_writable(fs::is_directory(dir, ec) ? (dir / frame_file_name(range.first)).string()
-                                           : a.dir);
+  check_writable(fs::is_directory(dir, ec) ? (dir / frame_file_name(range.first)).string() : a.dir);
   const bool want_video = !a.no_video && whole;
   const bool have_ffmpeg = want_video && on_path("ffmpeg");
   std::string video = a.video.empty() ? (dir / "animation.mp4").string() : a.video;
@@ -339,8 +340,8 @@ void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArg
   }
   // The video of an earlier run shows frames this one replaces: without a new one it goes too.
   const fs::path old_video = dir / "animation.mp4";
-  const bool stale_video = !have_ffmpeg && (fs::is_regular_file(old_video, ec) ||
-                                            fs::is_symlink(old_video, ec));
+  const bool stale_video =
+      !have_ffmpeg && (fs::is_regular_file(old_video, ec) || fs::is_symlink(old_video, ec));
   if (stale_video) outputs.remove_on_commit(old_video.string());
 
   Progress progress("animate", global_flags().quiet);
@@ -367,7 +368,8 @@ void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArg
     say("wrote " + video);
   else if (want_video)
     say("ffmpeg not found on PATH: no video (frames are in " + a.dir + ")");
-  if (stale_video) say("removed " + old_video.string() + ", an earlier run's video of other frames");
+  if (stale_video)
+    say("removed " + old_video.string() + ", an earlier run's video of other frames");
 }
 
 // ---------------------------------------------------------------------------------- export
@@ -437,8 +439,8 @@ void run_export(const SurfaceArgs& args, const LookArgs& look, const ExportArgs&
     return;
   }
   write_pov_scene(scene.surface, o, output);
-  say(fmt::format("wrote {}; render it with: povray +W{} +H{} +A0.1 +I{} +O{}.png", output,
-                  o.width, o.height, output, fs::path(output).stem().string()));
+  say(fmt::format("wrote {}; render it with: povray +W{} +H{} +A0.1 +I{} +O{}.png", output, o.width,
+                  o.height, output, fs::path(output).stem().string()));
 }
 
 }  // namespace
@@ -467,7 +469,9 @@ void register_render_commands(CLI::App& app) {
     look->add_to(cmd);
     cmd->add_option("-o,--output", *output,
                     "Output picture: .png, or .ppm (binary netpbm, uncompressed: the fastest "
-                    "to write)")->required()->type_name("FILE");
+                    "to write)")
+        ->required()
+        ->type_name("FILE");
     cmd->add_option("--stats", *stats,
                     "Write figures (rays, hits, seconds, the singular set found) as JSON to FILE")
         ->type_name("FILE");
@@ -501,11 +505,13 @@ void register_render_commands(CLI::App& app) {
         ->type_name("DIR");
     cmd->add_option("--frames", a->frames, "Number of frames of the whole animation")
         ->capture_default_str();
-    a->frame_range_opt = cmd->add_option("--frame-range", a->frame_range,
-                    "Render only frames FIRST to LAST (both included, counted from 0 as the file "
-                    "names) of the --frames animation, e.g. to share it out over the nodes of a "
-                    "cluster; no video unless it is the whole animation")
-        ->type_name("FIRST-LAST");
+    a->frame_range_opt =
+        cmd->add_option(
+               "--frame-range", a->frame_range,
+               "Render only frames FIRST to LAST (both included, counted from 0 as the file "
+               "names) of the --frames animation, e.g. to share it out over the nodes of a "
+               "cluster; no video unless it is the whole animation")
+            ->type_name("FIRST-LAST");
     cmd->add_option("--fps", a->fps, "Frames per second of the video")
         ->check(CLI::Range(1.0, 240.0))
         ->capture_default_str();
@@ -538,8 +544,9 @@ void register_render_commands(CLI::App& app) {
     auto e = std::make_shared<ExportArgs>();
     args->add_to(cmd);
     cmd->get_option("--param")
-        ->description("Fixed value name=value, or with --animate an animated range name=from:to "
-                      "(repeatable)")
+        ->description(
+            "Fixed value name=value, or with --animate an animated range name=from:to "
+            "(repeatable)")
         ->type_name("NAME=V|A:B");
     look->add_to(cmd, false);
     cmd->add_option("-o,--output", e->output, "Output .pov or .jsurf file")

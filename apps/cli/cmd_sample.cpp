@@ -8,8 +8,8 @@
 
 #include "common.h"
 #include "zeroset/error.h"
-#include "zeroset/floaters/sample_surface.h"
 #include "zeroset/floaters/ply.h"
+#include "zeroset/floaters/sample_surface.h"
 #include "zeroset/floaters/settings.h"
 #include "zeroset/io/atomic_file.h"
 #include "zeroset/io/image.h"
@@ -66,7 +66,6 @@ struct SampleArgs {
   CLI::Option* estimator_interval_opt = nullptr;
 };
 
-
 // Settings from a scene file's "floaters" object (keys named as the FloaterOptions fields);
 // command-line flags given explicitly win. The scene's values are checked as it is read, the
 // flags' here, by the same validator.
@@ -93,15 +92,14 @@ FloaterOptions options_from(const SampleArgs& a, const Scene& scene) {
   if (a.estimator_interval_opt->count()) o.estimator_interval = a.estimator_interval;
   if (!a.radius_adapt.empty())
     o.radius_adapt = parse_radius_adapt(a.radius_adapt, "--radius-adapt");
-  validate_flags([&] { validate_settings(o); },
-                 {{"radius", "--radius"},
-                  {"max_count", "--max-count"},
-                  {"seed_count", "--seed-count"},
-                  {"seed", "--seed"},
-                  {"radius_grading", "--grading"},
-                  {"feedback", "--feedback"},
-                  {"equilibrium_speed", "--equilibrium-speed"},
-                  {"estimator_interval", "--estimator-interval"}});
+  validate_flags([&] { validate_settings(o); }, {{"radius", "--radius"},
+                                                 {"max_count", "--max-count"},
+                                                 {"seed_count", "--seed-count"},
+                                                 {"seed", "--seed"},
+                                                 {"radius_grading", "--grading"},
+                                                 {"feedback", "--feedback"},
+                                                 {"equilibrium_speed", "--equilibrium-speed"},
+                                                 {"estimator_interval", "--estimator-interval"}});
   o.threads = global_flags().threads;
   check_floater_memory(o, o.seed_count > o.max_count ? "--seed-count" : "--max-count");
   return o;
@@ -112,7 +110,8 @@ FloaterOptions options_from(const SampleArgs& a, const Scene& scene) {
 void write_empty_sample(const SampleArgs& a, const Surface& surface, const Camera& camera,
                         int width, int height) {
   if (!a.output.empty())
-    write_points_ply(a.output, {}, {}, {}, a.ascii ? PlyFormat::kAscii : PlyFormat::kBinaryLittleEndian);
+    write_points_ply(a.output, {}, {}, {},
+                     a.ascii ? PlyFormat::kAscii : PlyFormat::kBinaryLittleEndian);
   if (!a.png.empty()) {
     RenderOptions ro;
     ro.width = width;
@@ -208,12 +207,11 @@ void run_sample(const SampleArgs& a) {
   if (!a.stats.empty()) write_json(result.to_json(), a.stats);
   outputs.commit();
   const double seconds = result.seconds;
-  say(fmt::format("{} floaters after {} steps ({}), sigma^ = {:.4g}, {:.0f} steps/s", sys.size(),
-                  sys.steps_taken(),
-                  result.converged_at ? fmt::format("settled at step {}", *result.converged_at)
-                                      : "not settled",
-                  sys.nominal_radius(),
-                  seconds > 0 ? static_cast<double>(sys.steps_taken()) / seconds : 0.0));
+  say(fmt::format(
+      "{} floaters after {} steps ({}), sigma^ = {:.4g}, {:.0f} steps/s", sys.size(),
+      sys.steps_taken(),
+      result.converged_at ? fmt::format("settled at step {}", *result.converged_at) : "not settled",
+      sys.nominal_radius(), seconds > 0 ? static_cast<double>(sys.steps_taken()) / seconds : 0.0));
 }
 
 }  // namespace
@@ -236,12 +234,13 @@ void register_sample_command(CLI::App& app) {
       "  zeroset sample kummer --animate mu=1.02:2.44 --steps 500 --stats anim.json\n"
       "  zeroset sample \"x^2 + y^2 = z^2\" --clip sphere:1 --radius 0.05 -o cone.ply");
   a->surface.add_to(cmd);
-  a->radius_opt = cmd->add_option("--radius", a->radius,
-                                  "Nominal floater radius sigma^ (the density knob; spacing is "
-                                  "about 1.5 sigma^). Default (or 0): from the surface's area so that "
-                                  "about max-count/3 floaters would cover it uniformly. "
-                                  "Kept within [1e-9, 1] times the scene radius")
-                      ->type_name("LENGTH");
+  a->radius_opt =
+      cmd->add_option("--radius", a->radius,
+                      "Nominal floater radius sigma^ (the density knob; spacing is "
+                      "about 1.5 sigma^). Default (or 0): from the surface's area so that "
+                      "about max-count/3 floaters would cover it uniformly. "
+                      "Kept within [1e-9, 1] times the scene radius")
+          ->type_name("LENGTH");
   a->max_count_opt = cmd->add_option("--max-count", a->max_count,
                                      "Population cap (default 2000, at most 100000000)");
   a->seed_count_opt = cmd->add_option("--seed-count", a->seed_count,
@@ -259,9 +258,10 @@ void register_sample_command(CLI::App& app) {
                 "Plain repulsion: no |cos| weighting between sheets (paper figure 4(d))");
   cmd->add_flag("--no-clip-projection", a->no_clip_projection,
                 "Remove floaters that leave the clip volume instead of projecting them back");
-  cmd->add_flag("--no-snap", a->no_snap,
-                "Do not hold floaters on the singular set: on nodes they come near, on pinch, triple and "
-                "other special points, and along singular curves");
+  cmd->add_flag(
+      "--no-snap", a->no_snap,
+      "Do not hold floaters on the singular set: on nodes they come near, on pinch, triple and "
+      "other special points, and along singular curves");
   cmd->add_flag("--plain-repulsion", a->plain_repulsion,
                 "Witkin-Heckbert's desired velocity exactly, instead of pair forces scaled by "
                 "the pair's mean radius (with it a graded density never settles)");

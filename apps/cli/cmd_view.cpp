@@ -63,7 +63,8 @@ void register_view_command(CLI::App& app) {
 #if defined(ZEROSET_HAVE_VIEWER)
   auto a = std::make_shared<ViewArgs>();
   a->surface.add_to(cmd, /*optional=*/true);
-  cmd->add_option("--mode", a->mode, "floaters, mesh or raytrace (default: the scene's, else raytrace)")
+  cmd->add_option("--mode", a->mode,
+                  "floaters, mesh or raytrace (default: the scene's, else raytrace)")
       ->type_name("MODE");
   cmd->add_option("--size", a->size, "Window size WIDTHxHEIGHT")->capture_default_str();
   cmd->add_option("--screenshot", a->screenshot,

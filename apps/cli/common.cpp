@@ -30,12 +30,14 @@ void warn(const std::string& line) {
 void add_show_singular_flag(CLI::App* cmd, bool& flag, const std::string& pictures) {
   cmd->add_flag("--show-singular", flag,
                 "Draw the singular set (where F = 0 and ∇F = 0, as `zeroset info` lists it) "
-                "over " + pictures + ": curves as thin tubes, green where two sheets cross, "
-                "magenta where the curve is isolated (no sheet through it, e.g. Whitney's "
-                "handle; the surface alone would not show it), cyan where degenerate (e.g. a "
-                "cuspidal edge); special points as small spheres, black: node, red: pinch "
-                "point, yellow: triple point, grey: a curve leaves the clip, cyan: degenerate "
-                "point. Whatever is in front hides them");
+                "over " +
+                    pictures +
+                    ": curves as thin tubes, green where two sheets cross, "
+                    "magenta where the curve is isolated (no sheet through it, e.g. Whitney's "
+                    "handle; the surface alone would not show it), cyan where degenerate (e.g. a "
+                    "cuspidal edge); special points as small spheres, black: node, red: pinch "
+                    "point, yellow: triple point, grey: a curve leaves the clip, cyan: degenerate "
+                    "point. Whatever is in front hides them");
 }
 
 void warn_if_singular_sheet(const Surface& surface, const std::optional<SingularSet>& known) {
@@ -141,12 +143,11 @@ FrameRange parse_frame_range(const std::string& text, int frames, const std::str
   FrameRange r;
   r.first = frame_number(text.substr(0, dash));
   r.last = dash == std::string::npos ? r.first : frame_number(text.substr(dash + 1));
-  if (r.first > r.last)
-    throw InvalidArgument(flag, text, "the first frame comes after the last");
+  if (r.first > r.last) throw InvalidArgument(flag, text, "the first frame comes after the last");
   if (r.last >= frames)
-    throw InvalidArgument(flag, text,
-                          fmt::format("the animation has {} frames, numbered 0 to {}", frames,
-                                      frames - 1));
+    throw InvalidArgument(
+        flag, text,
+        fmt::format("the animation has {} frames, numbered 0 to {}", frames, frames - 1));
   return r;
 }
 
@@ -158,7 +159,8 @@ void check_flag_range(const std::string& flag, double value, double lo, double h
 
 std::pair<int, int> parse_size(const std::string& text, const std::string& flag) {
   const size_t x = text.find('x');
-  if (x == std::string::npos) throw InvalidArgument(flag, text, "expected WIDTHxHEIGHT, e.g. 800x600");
+  if (x == std::string::npos)
+    throw InvalidArgument(flag, text, "expected WIDTHxHEIGHT, e.g. 800x600");
   const double w = parse_finite(text.substr(0, x), flag, text);
   const double h = parse_finite(text.substr(x + 1), flag, text);
   if (w != std::floor(w) || h != std::floor(h))
@@ -211,9 +213,9 @@ Camera with_camera_flag(Camera camera, const std::string& spec) {
   // The flag gives the whole orientation: a scene file's roll does not stay behind.
   camera.roll_deg = v.size() == 4 ? v[3] : 0.0;
   validate_flags([&] { validate_camera(camera); }, {{"azimuth_deg", "--camera azimuth"},
-                                                     {"elevation_deg", "--camera elevation"},
-                                                     {"distance", "--camera distance"},
-                                                     {"roll_deg", "--camera roll"}});
+                                                    {"elevation_deg", "--camera elevation"},
+                                                    {"distance", "--camera distance"},
+                                                    {"roll_deg", "--camera roll"}});
   return camera;
 }
 

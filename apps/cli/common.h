@@ -5,10 +5,10 @@
 #include <functional>
 #include <initializer_list>
 #include <map>
-#include <string_view>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "zeroset/surface/field_survey.h"
@@ -126,11 +126,11 @@ void warn_if_singular_sheet(const Surface& surface, const std::optional<Singular
 /// calls it once, so they all say the same.
 FieldSurvey survey_and_warn(const Surface& surface);
 
-void register_catalog_commands(CLI::App& app);  // list, info, eval
-void register_render_commands(CLI::App& app);   // render, animate, export
-void register_sample_command(CLI::App& app);    // sample
-void register_mesh_command(CLI::App& app);      // mesh
-void register_view_command(CLI::App& app);      // view
+void register_catalog_commands(CLI::App& app);    // list, info, eval
+void register_render_commands(CLI::App& app);     // render, animate, export
+void register_sample_command(CLI::App& app);      // sample
+void register_mesh_command(CLI::App& app);        // mesh
+void register_view_command(CLI::App& app);        // view
 void register_completion_command(CLI::App& app);  // completion
 
 }  // namespace zeroset::cli

@@ -1,4 +1,5 @@
 // zeroset: make implicit surfaces F(x, y, z; q) = 0 visible.
+#include <fmt/core.h>
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cerrno>
@@ -9,7 +10,6 @@
 #include <iostream>
 #include <string>
 #include <string_view>
-#include <fmt/core.h>
 #if defined(__linux__)
 #include <unistd.h>
 #endif
@@ -33,8 +33,7 @@ namespace {
 // whose work runs in OpenMP loops pay for that (the renderer has its own threads).
 void choose_openmp_waiting(int argc, char** argv) {
 #if defined(__linux__)
-  if (std::getenv("OMP_WAIT_POLICY") != nullptr || std::getenv("GOMP_SPINCOUNT") != nullptr)
-    return;
+  if (std::getenv("OMP_WAIT_POLICY") != nullptr || std::getenv("GOMP_SPINCOUNT") != nullptr) return;
   const auto uses_openmp = [](std::string_view a) {
     return a == "mesh" || a == "sample" || a == "view";
   };
@@ -116,8 +115,9 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     // Same form as every other error, and a pointer to the help of the command at fault.
     const auto commands = app.get_subcommands();
-    const std::string help =
-        commands.empty() ? "zeroset --help" : fmt::format("zeroset {} --help", commands.front()->get_name());
+    const std::string help = commands.empty()
+                                 ? "zeroset --help"
+                                 : fmt::format("zeroset {} --help", commands.front()->get_name());
     print_error(fmt::format("{}\nSee `{}` for the usage.", e.what(), help));
     return 2;
   } catch (const BadInput& e) {

@@ -20,8 +20,8 @@ void pan(Camera& camera, const View& view, double dx_px, double dy_px) {
 
 void zoom(Camera& camera, double factor, double scene_radius) {
   if (camera.is_orthographic()) {  // parallel rays: zooming is the window's height
-    camera.ortho_height = std::clamp(camera.view_height(scene_radius) * factor,
-                                     0.02 * scene_radius, 100 * scene_radius);
+    camera.ortho_height = std::clamp(camera.view_height(scene_radius) * factor, 0.02 * scene_radius,
+                                     100 * scene_radius);
     return;
   }
   Camera c = with_explicit_distance(camera, scene_radius);

@@ -327,13 +327,15 @@ const std::vector<CommandInfo>& command_table() {
       {"load", 1, 1, "load FILE.json", "open a scene file", run_load},
       {"param", 2, 2, "param NAME VALUE", "set a parameter", run_param},
       {"range", 3, 3, "range NAME MIN MAX", "set a parameter's slider range", run_range},
-      {"clip", 1, -1, "clip SPEC...", "replace the clip: sphere:R, box:H, plane:nx,ny,nz,d, ...", run_clip},
+      {"clip", 1, -1, "clip SPEC...", "replace the clip: sphere:R, box:H, plane:nx,ny,nz,d, ...",
+       run_clip},
       // modes and animation
       {"mode", 1, 1, "mode floaters|mesh|raytrace", "switch what the view shows", run_mode},
       {"play", 0, 1, "play [NAME]", "animate a parameter through its range", run_play},
       {"pause", 0, 0, "pause", "stop the animation", run_pause},
       {"loop", 1, 1, "loop on|off", "animate back and forth, or stop at the end", run_loop},
-      {"speed", 1, 1, "speed RANGES_PER_SECOND", "animation speed (0.1: one sweep in 10 s)", run_speed},
+      {"speed", 1, 1, "speed RANGES_PER_SECOND", "animation speed (0.1: one sweep in 10 s)",
+       run_speed},
       {"floaters", 1, -1, "floaters KEY=VALUE... | floaters reset",
        "keys of the scene file's floaters object: max_count, radius (σ̂, 0 auto), cos_weight, "
        "radius_adapt (wh|curvature|singular|mixed), feedback (φ), equilibrium_speed (γ), ...",
@@ -345,13 +347,16 @@ const std::vector<CommandInfo>& command_table() {
       {"set", 2, 2, "set floaters.KEY|mesh.KEY VALUE",
        "one setting by its scene file key, checked as in scene files", run_set},
       {"draw", 1, 1, "draw disks|points", "how floaters are drawn", run_draw},
-      {"disk-scale", 1, 1, "disk-scale S", "disk radius as a multiple of the floater radius", run_disk_scale},
+      {"disk-scale", 1, 1, "disk-scale S", "disk radius as a multiple of the floater radius",
+       run_disk_scale},
       {"point-size", 1, 1, "point-size PIXELS", "size of floaters drawn as points", run_point_size},
       {"wireframe", 1, 1, "wireframe on|off", "overlay the mesh edges", run_wireframe},
       {"singular", 1, 1, "singular on|off",
        "overlay the singular set: curves as tubes, special points as spheres", run_singular},
-      {"lights", 1, 1, "lights follow|fixed", "lights follow the camera, or stay in the world", run_lights},
-      {"color", 4, 4, "color front|back|background R G B", "a colour (components in [0, 1])", run_color},
+      {"lights", 1, 1, "lights follow|fixed", "lights follow the camera, or stay in the world",
+       run_lights},
+      {"color", 4, 4, "color front|back|background R G B", "a colour (components in [0, 1])",
+       run_color},
       {"keyframe", 1, 3,
        "keyframe add TIME [EASE] | update I [EASE] | ease I EASE | move I TIME | delete I | "
        "clear | time T",
@@ -359,7 +364,8 @@ const std::vector<CommandInfo>& command_table() {
        "time T shows the animation at T)",
        run_keyframe},
       // camera
-      {"camera", 2, 3, "camera AZIMUTH ELEVATION [DISTANCE]", "set the orbit camera (degrees)", run_camera},
+      {"camera", 2, 3, "camera AZIMUTH ELEVATION [DISTANCE]", "set the orbit camera (degrees)",
+       run_camera},
       {"projection", 1, 2, "projection perspective|orthographic [HEIGHT]",
        "pinhole or parallel rays (HEIGHT > 0: the window's height in world units; omitted: "
        "the camera's own)",
@@ -370,15 +376,18 @@ const std::vector<CommandInfo>& command_table() {
       {"reset-view", 0, 0, "reset-view", "back to the surface's camera", run_reset_view},
       // files
       {"save-scene", 1, 1, "save-scene FILE.json", "surface, camera and settings", run_save_scene},
-      {"save-mesh", 1, 1, "save-mesh FILE.ply|obj|stl", "the current mesh (mesh mode)", run_save_mesh},
-      {"save-floaters", 1, 1, "save-floaters FILE.ply", "the current floaters (floaters mode)", run_save_floaters},
+      {"save-mesh", 1, 1, "save-mesh FILE.ply|obj|stl", "the current mesh (mesh mode)",
+       run_save_mesh},
+      {"save-floaters", 1, 1, "save-floaters FILE.ply", "the current floaters (floaters mode)",
+       run_save_floaters},
       {"save-pov", 1, 1, "save-pov FILE.pov", "the view as a POV-Ray scene", run_save_pov},
       // frame loop
       {"frames", 1, 1, "frames N", "run N frames"},
       {"wait", 0, 1, "wait [SECONDS]",
        "run frames until the mode's work is done (default: at most 60 s)"},
       {"steps", 1, 2, "steps N [SECONDS]",
-       "run frames until the floaters took N more steps (and the singular set, if shown, is found)"},
+       "run frames until the floaters took N more steps (and the singular set, if shown, is "
+       "found)"},
       {"sleep", 1, 1, "sleep SECONDS", "run frames for this long"},
       {"screenshot", 1, 1, "screenshot FILE.png", "save the next frame"},
       {"ui", 1, 1, "ui on|off", "show or hide the panel"},
@@ -422,19 +431,18 @@ const CommandInfo& check_command(const CommandLine& command) {
   const CommandInfo* info = find_command(command.name);
   if (!info) {
     std::string names;
-    for (const auto& c : command_table()) names += (names.empty() ? "" : ", ") + std::string(c.name);
+    for (const auto& c : command_table())
+      names += (names.empty() ? "" : ", ") + std::string(c.name);
     throw InvalidArgument(fmt::format("unknown command '{}' (commands: {})", command.name, names));
   }
   const int n = static_cast<int>(command.args.size());
   if (n < info->min_args || (info->max_args >= 0 && n > info->max_args))
-    throw InvalidArgument(fmt::format("'{}' takes {}: usage: {}", command.name,
-                                      info->min_args == info->max_args
-                                          ? fmt::format("{} argument(s)", info->min_args)
-                                      : info->max_args < 0
-                                          ? fmt::format("at least {} argument(s)", info->min_args)
-                                          : fmt::format("{} to {} arguments", info->min_args,
-                                                        info->max_args),
-                                      info->usage));
+    throw InvalidArgument(fmt::format(
+        "'{}' takes {}: usage: {}", command.name,
+        info->min_args == info->max_args ? fmt::format("{} argument(s)", info->min_args)
+        : info->max_args < 0             ? fmt::format("at least {} argument(s)", info->min_args)
+                             : fmt::format("{} to {} arguments", info->min_args, info->max_args),
+        info->usage));
   return *info;
 }
 
@@ -449,7 +457,8 @@ double parse_number(std::string_view text, std::string_view what) {
   const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
   if (text.empty() || ec != std::errc() || end != text.data() + text.size())
     throw InvalidArgument(std::string(what), std::string(text), "not a number");
-  if (!std::isfinite(v)) throw InvalidArgument(std::string(what), std::string(text), "must be finite");
+  if (!std::isfinite(v))
+    throw InvalidArgument(std::string(what), std::string(text), "must be finite");
   return v;
 }
 

@@ -19,9 +19,9 @@ using CommandHandler = void (*)(ViewerState& state, const CommandLine& command);
 struct CommandInfo {
   std::string_view name;
   int min_args = 0;
-  int max_args = 0;          ///< -1: any number (the rest of the line)
-  std::string_view usage;    ///< e.g. "param NAME VALUE"
-  std::string_view help;     ///< one line
+  int max_args = 0;        ///< -1: any number (the rest of the line)
+  std::string_view usage;  ///< e.g. "param NAME VALUE"
+  std::string_view help;   ///< one line
   /// What the command does to the viewer state; nullptr for a command that needs the
   /// window's frame loop (the script runner handles those).
   CommandHandler run = nullptr;

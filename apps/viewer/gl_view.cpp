@@ -264,7 +264,8 @@ void make_triangle_arrays(GLuint& vao, GLuint& vbo, GLuint& ebo) {
   glEnableVertexAttribArray(0);
   glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
   glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<void*>(3 * sizeof(float)));
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
+                        reinterpret_cast<void*>(3 * sizeof(float)));
 }
 
 void set_material(GLint diffuse, GLint params, const Material& m) {
@@ -295,9 +296,11 @@ GlView::GlView() {
   glEnableVertexAttribArray(1);
   glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride, nullptr);
   glEnableVertexAttribArray(2);
-  glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(3 * sizeof(float)));
+  glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, stride,
+                        reinterpret_cast<void*>(3 * sizeof(float)));
   glEnableVertexAttribArray(3);
-  glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(6 * sizeof(float)));
+  glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, stride,
+                        reinterpret_cast<void*>(6 * sizeof(float)));
 
   make_triangle_arrays(mesh_vao_, mesh_vbo_, mesh_ebo_);
   // The singular set's tubes and spheres, drawn with the mesh's program.
@@ -330,9 +333,10 @@ std::vector<double> GlView::scene_key(const ViewerState& state, int width, int h
   // the uploaded ones, so an address cannot be reused while it is in the key.
   std::vector<double> key = {static_cast<double>(state.mode()), static_cast<double>(width),
                              static_cast<double>(height)};
-  const void* frame = state.mode() == Mode::kRaytrace  ? static_cast<const void*>(state.preview().get())
-                      : state.mode() == Mode::kFloaters ? static_cast<const void*>(state.floaters().get())
-                                                        : static_cast<const void*>(state.mesh().get());
+  const void* frame =
+      state.mode() == Mode::kRaytrace   ? static_cast<const void*>(state.preview().get())
+      : state.mode() == Mode::kFloaters ? static_cast<const void*>(state.floaters().get())
+                                        : static_cast<const void*>(state.mesh().get());
   key.push_back(static_cast<double>(reinterpret_cast<std::uintptr_t>(frame)));
   // The ray tracer draws the singular set into its picture; the GL modes draw it here.
   key.push_back(static_cast<double>(reinterpret_cast<std::uintptr_t>(state.singular().get())));
@@ -344,8 +348,8 @@ std::vector<double> GlView::scene_key(const ViewerState& state, int width, int h
                          static_cast<double>(d.wireframe)});
   const RenderOptions& look = state.look();
   for (const Material* m : {&look.front, &look.back})
-    key.insert(key.end(), {m->diffuse.x(), m->diffuse.y(), m->diffuse.z(), m->ambient,
-                           m->specular, m->shininess});
+    key.insert(key.end(), {m->diffuse.x(), m->diffuse.y(), m->diffuse.z(), m->ambient, m->specular,
+                           m->shininess});
   key.insert(key.end(), {look.background.x(), look.background.y(), look.background.z()});
   for (const Light& l : look.lights)
     key.insert(key.end(), {l.direction.x(), l.direction.y(), l.direction.z(), l.color.x(),
@@ -405,10 +409,12 @@ void GlView::draw_scene(const ViewerState& state, int width, int height) {
     draw_preview(state);
     return;
   }
-  const View view = View::from_camera(state.camera(), state.surface().scene_radius(), width, height);
+  const View view =
+      View::from_camera(state.camera(), state.surface().scene_radius(), width, height);
   double near = 0, far = 0;
   // The clip volume plus a margin for disks reaching past its boundary.
-  depth_range(view, state.surface().bounds().center(), 1.2 * state.surface().scene_radius(), near, far);
+  depth_range(view, state.surface().bounds().center(), 1.2 * state.surface().scene_radius(), near,
+              far);
   const Eigen::Matrix4f view_m = view_matrix(view);
   const Eigen::Matrix4f proj_m = projection_matrix(view, near, far);
   glEnable(GL_DEPTH_TEST);
@@ -483,8 +489,8 @@ void GlView::draw_floaters(const ViewerState& state, const Eigen::Matrix4f& view
       d[6] = static_cast<float>(frame->radii[i]);
     }
     glBindBuffer(GL_ARRAY_BUFFER, floater_vbo_);
-    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)),
-                 data.data(), GL_STREAM_DRAW);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data(),
+                 GL_STREAM_DRAW);
     floater_count_ = static_cast<GLsizei>(n);
     uploaded_floaters_ = frame;
   }
@@ -585,8 +591,9 @@ void GlView::draw_singular(const ViewerState& state, const Eigen::Matrix4f& view
                      .shininess = style.shininess};
     set_material(mesh_.front_diffuse, mesh_.front_params, m);
     set_material(mesh_.back_diffuse, mesh_.back_params, m);
-    glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(b.count), GL_UNSIGNED_INT,
-                   reinterpret_cast<void*>(static_cast<std::uintptr_t>(b.first) * sizeof(std::uint32_t)));
+    glDrawElements(
+        GL_TRIANGLES, static_cast<GLsizei>(b.count), GL_UNSIGNED_INT,
+        reinterpret_cast<void*>(static_cast<std::uintptr_t>(b.first) * sizeof(std::uint32_t)));
   }
 }
 

@@ -55,7 +55,7 @@ class GlView {
   Program disks_;   // point sprites cut to the ellipse each disk projects to
   Program points_;  // round point sprites of a fixed size
   Program mesh_;
-  Program image_;   // a full-viewport textured triangle
+  Program image_;  // a full-viewport textured triangle
 
   GLuint floater_vbo_ = 0, floater_vao_ = 0;
   GLsizei floater_count_ = 0;

@@ -65,11 +65,12 @@ void surface_section(ViewerState& state, PanelState& panel) {
     panel.shown_equation = state.equation_text();
   }
   ImGui::TextUnformatted("Equation");
-  help_marker("Type F(x, y, z) or lhs = rhs. Local definitions first, separated by ';' or new "
-              "lines. Other names are parameters. Enter applies, Ctrl+Enter starts a new line.");
+  help_marker(
+      "Type F(x, y, z) or lhs = rhs. Local definitions first, separated by ';' or new "
+      "lines. Other names are parameters. Enter applies, Ctrl+Enter starts a new line.");
   if (panel.mono_font) ImGui::PushFont(panel.mono_font);
-  const float lines = static_cast<float>(std::clamp<long>(
-      std::count(panel.equation.begin(), panel.equation.end(), '\n') + 1, 2, 8));
+  const float lines = static_cast<float>(
+      std::clamp<long>(std::count(panel.equation.begin(), panel.equation.end(), '\n') + 1, 2, 8));
   const bool entered = ImGui::InputTextMultiline(
       "##equation", &panel.equation, ImVec2(-1, (lines + 0.6f) * ImGui::GetTextLineHeight()),
       ImGuiInputTextFlags_EnterReturnsTrue | ImGuiInputTextFlags_CtrlEnterForNewLine);
@@ -158,8 +159,7 @@ void floaters_settings(ViewerState& state) {
   const ViewerStats st = state.stats();
   ImGui::Text("%zu floaters   %.0f steps/s   step %zu", st.floater_count, st.steps_per_second,
               st.floater_steps);
-  ImGui::Text("residual |F|/|grad F|: median %.1e, max %.1e", st.median_residual,
-              st.max_residual);
+  ImGui::Text("residual |F|/|grad F|: median %.1e, max %.1e", st.median_residual, st.max_residual);
   ImGui::Text("sigma-hat %.4g   %s", st.nominal_radius, st.converged ? "at rest" : "moving");
   const bool off_surface = st.floater_count == 0 || !(st.median_residual <= st.nominal_radius);
   if (st.floater_steps > 0 && off_surface)
@@ -205,8 +205,7 @@ void mesh_settings(ViewerState& state) {
     if (c.crossing_curves > 0 && c.failure.empty())
       ImGui::Text("%d crossing curve%s joined exactly", c.crossing_curves,
                   c.crossing_curves == 1 ? "" : "s");
-    if (!c.failure.empty())
-      ImGui::TextWrapped("Crossings left rounded: %s", c.failure.c_str());
+    if (!c.failure.empty()) ImGui::TextWrapped("Crossings left rounded: %s", c.failure.c_str());
     if (frame->improver_steps > 0) {
       ImGui::Text("improver step %d%s", frame->improver_steps,
                   frame->is_final ? (frame->improve.converged ? ", converged" : ", done") : "");
@@ -233,11 +232,12 @@ void raytrace_info(ViewerState& state) {
 
 // A small square of an overlay colour (linear RGB) and a label after it.
 void swatch(const Color& c, const std::string& label) {
-  auto encode = [](double v) { return static_cast<float>(std::pow(std::clamp(v, 0.0, 1.0), 1 / 2.2)); };
+  auto encode = [](double v) {
+    return static_cast<float>(std::pow(std::clamp(v, 0.0, 1.0), 1 / 2.2));
+  };
   const float h = ImGui::GetTextLineHeight();
   ImGui::ColorButton(label.c_str(), ImVec4(encode(c.x()), encode(c.y()), encode(c.z()), 1),
-                     ImGuiColorEditFlags_NoTooltip | ImGuiColorEditFlags_NoDragDrop,
-                     ImVec2(h, h));
+                     ImGuiColorEditFlags_NoTooltip | ImGuiColorEditFlags_NoDragDrop, ImVec2(h, h));
   ImGui::SameLine();
   ImGui::TextUnformatted(label.c_str());
 }
@@ -245,9 +245,10 @@ void swatch(const Color& c, const std::string& label) {
 void singular_section(ViewerState& state) {
   DisplaySettings d = state.display();
   if (ImGui::Checkbox("Singular set (S)", &d.show_singular)) state.set_display(d);
-  help_marker("Where grad F = 0 on the surface: curves as thin tubes, special points as small "
-              "spheres, in the colours listed below, hidden where the surface lies in front. "
-              "Found again whenever the equation, a parameter or the clip changes.");
+  help_marker(
+      "Where grad F = 0 on the surface: curves as thin tubes, special points as small "
+      "spheres, in the colours listed below, hidden where the surface lies in front. "
+      "Found again whenever the equation, a parameter or the clip changes.");
   if (!d.show_singular) return;
   const auto frame = state.singular();
   if (!frame) {
@@ -269,7 +270,7 @@ void singular_section(ViewerState& state) {
         SingularPointKind::kDegenerate, SingularPointKind::kClipEnd})
     if (!frame->set.points_of(k).empty())
       swatch(style.color(k), k == SingularPointKind::kNode ? std::string("nodes")
-                                                             : std::string(to_string(k)) + " points");
+                                                           : std::string(to_string(k)) + " points");
   if (!state.singular_is_current())
     ImGui::TextColored(kDimColor, "updating...");
   else
@@ -286,9 +287,15 @@ void mode_section(ViewerState& state) {
   changed |= ImGui::RadioButton("Ray traced", &mode, static_cast<int>(Mode::kRaytrace));
   if (changed) state.set_mode(static_cast<Mode>(mode));
   switch (state.mode()) {
-    case Mode::kFloaters: floaters_settings(state); break;
-    case Mode::kMesh: mesh_settings(state); break;
-    case Mode::kRaytrace: raytrace_info(state); break;
+    case Mode::kFloaters:
+      floaters_settings(state);
+      break;
+    case Mode::kMesh:
+      mesh_settings(state);
+      break;
+    case Mode::kRaytrace:
+      raytrace_info(state);
+      break;
   }
   ImGui::Separator();
   singular_section(state);

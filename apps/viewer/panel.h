@@ -20,10 +20,10 @@ struct PanelState {
   std::string mesh_path = "zeroset-mesh.ply";
   std::string floaters_path = "zeroset-floaters.ply";
   std::string pov_path = "zeroset-scene.pov";
-  double keyframe_time = 0;              ///< time of the next keyframe the Add button records
-  Ease keyframe_ease = Ease::kInOut;      ///< and its ease
-  bool wants_screenshot = false;  ///< set by the Save button (or F12); the window saves it
-  ImFont* mono_font = nullptr;    ///< for the equation and its diagnostics (nullptr: default)
+  double keyframe_time = 0;           ///< time of the next keyframe the Add button records
+  Ease keyframe_ease = Ease::kInOut;  ///< and its ease
+  bool wants_screenshot = false;      ///< set by the Save button (or F12); the window saves it
+  ImFont* mono_font = nullptr;        ///< for the equation and its diagnostics (nullptr: default)
 };
 
 /// Width of the panel in screen coordinates.

@@ -30,8 +30,9 @@ bool ease_combo(const char* id, Ease& ease) {
       }
     ImGui::EndCombo();
   }
-  tooltip("How the values move towards the next keyframe: linear, in (start slowly), out (end "
-          "slowly) or in-out (both)");
+  tooltip(
+      "How the values move towards the next keyframe: linear, in (start slowly), out (end "
+      "slowly) or in-out (both)");
   return chosen;
 }
 
@@ -43,8 +44,7 @@ void keyframes_section(ViewerState& state, PanelState& panel) {
                                state.has_keyframes() ? ImGuiTreeNodeFlags_DefaultOpen : 0))
     return;
   std::size_t count = state.keyframes().size();
-  if (count == 0)
-    ImGui::TextDisabled("no keyframes: Play animates one parameter");
+  if (count == 0) ImGui::TextDisabled("no keyframes: Play animates one parameter");
   // A row's Delete takes effect after the table: the rows below it would otherwise ask for
   // keyframes that are no longer there.
   std::optional<std::size_t> deleted;
@@ -89,8 +89,9 @@ void keyframes_section(ViewerState& state, PanelState& panel) {
     const double lo = 0, hi = 1;
     if (ImGui::SliderScalar("Time", ImGuiDataType_Double, &t, &lo, &hi, "%.3f"))
       state.scrub_keyframes(t);
-    tooltip("Scrub: show the animation at this time (Play runs through it at Speed "
-            "animations per second)");
+    tooltip(
+        "Scrub: show the animation at this time (Play runs through it at Speed "
+        "animations per second)");
     if (ImGui::Button("Clear all")) state.clear_keyframes();
     tooltip("Remove every keyframe; Play then animates one parameter again");
   }

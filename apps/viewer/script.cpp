@@ -82,7 +82,8 @@ void Script::advance(ViewerState& state, ScriptHost& host, double now_s) {
     run(line, state, host, now_s);
     if (wait_ != Wait::kNone || is_finished_) return;
     const CommandInfo* info = find_command(line.command.name);
-    changed_since_frame = changed_since_frame || !info->is_frame_loop() || line.command.name == "ui";
+    changed_since_frame =
+        changed_since_frame || !info->is_frame_loop() || line.command.name == "ui";
   }
   settle_pending_failure(host);
   is_finished_ = true;
@@ -121,8 +122,10 @@ void Script::run(const Line& line, ViewerState& state, ScriptHost& host, double 
     if (!has_pending_failure_)
       fail(line, host, "the previous command did not fail");
     else if (!c.rest.empty() && pending_message_.find(c.rest) == std::string::npos)
-      fail(line, host, fmt::format("the previous command failed, but its message does not "
-                                   "contain '{}': {}", c.rest, pending_message_));
+      fail(line, host,
+           fmt::format("the previous command failed, but its message does not "
+                       "contain '{}': {}",
+                       c.rest, pending_message_));
     else
       host.print(fmt::format("{}:{}: failed as expected", origin_, line.number));
     has_pending_failure_ = false;

@@ -87,16 +87,19 @@ void draw_improve(ViewerState& state, const SettingWidget& w, const json& value)
   if (ImGui::SliderInt("Max steps", &steps, lo, hi, steps == 0 ? "auto" : "%d",
                        w.logarithmic ? ImGuiSliderFlags_Logarithmic : 0))
     apply(state, w, steps == 0 ? json("auto") : json(steps));
-  tooltip("At most this many remesher iterations or paper improver steps; auto (0): until at "
-          "rest, at most 30 iterations of the remesher; for the paper's improver until every "
-          "vertex moves less than 0.005 mean edge lengths in a step, at most 200 steps live "
-          "(300 in zeroset mesh).");
+  tooltip(
+      "At most this many remesher iterations or paper improver steps; auto (0): until at "
+      "rest, at most 30 iterations of the remesher; for the paper's improver until every "
+      "vertex moves less than 0.005 mean edge lengths in a step, at most 200 steps live "
+      "(300 in zeroset mesh).");
 }
 
 }  // namespace
 
 const std::vector<SettingWidget>& setting_widgets() {
   using K = WidgetKind;
+  // One row a setting, laid out by hand: the fields of a row read as one line.
+  // clang-format off
   static const std::vector<SettingWidget> table = {
       // ---- floaters (docs/floaters.md, docs/algorithms.md A and B) ----
       {.object = "floaters", .key = "max_count", .label = "Max count", .kind = K::kWhole,
@@ -248,6 +251,7 @@ const std::vector<SettingWidget>& setting_widgets() {
        .tooltip = "Newton's method on grad F = 0 from vertices whose Newton step is shorter than "
                   "an edge; the nearest vertex is moved onto each point found and held."},
   };
+  // clang-format on
   return table;
 }
 
@@ -264,11 +268,21 @@ void draw_setting_widgets(ViewerState& state, std::string_view object) {
     ImGui::PushID(key.c_str());
     ImGui::BeginDisabled(disabled);
     switch (w.kind) {
-      case WidgetKind::kSwitch: draw_switch(state, w, value); break;
-      case WidgetKind::kWhole: draw_whole(state, w, value); break;
-      case WidgetKind::kNumber: draw_number(state, w, value); break;
-      case WidgetKind::kChoice: draw_choice(state, w, value); break;
-      case WidgetKind::kImprove: draw_improve(state, w, value); break;
+      case WidgetKind::kSwitch:
+        draw_switch(state, w, value);
+        break;
+      case WidgetKind::kWhole:
+        draw_whole(state, w, value);
+        break;
+      case WidgetKind::kNumber:
+        draw_number(state, w, value);
+        break;
+      case WidgetKind::kChoice:
+        draw_choice(state, w, value);
+        break;
+      case WidgetKind::kImprove:
+        draw_improve(state, w, value);
+        break;
     }
     ImGui::EndDisabled();
     if (disabled)

@@ -29,9 +29,9 @@ struct SettingWidget {
   double min = 0;
   double max = 0;
   bool logarithmic = false;
-  bool scene_relative = false;   ///< kNumber: min and max are in scene radii
-  std::string_view zero_label;   ///< what a slider shows at 0 ("auto", "off"), if special
-  std::string_view choices;      ///< kChoice: the values, separated by '|'
+  bool scene_relative = false;  ///< kNumber: min and max are in scene radii
+  std::string_view zero_label;  ///< what a slider shows at 0 ("auto", "off"), if special
+  std::string_view choices;     ///< kChoice: the values, separated by '|'
   std::string_view tooltip;
 };
 

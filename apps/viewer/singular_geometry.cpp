@@ -125,7 +125,8 @@ OverlayGeometry singular_overlay_geometry(const SingularSet& set, const Singular
   OverlayGeometry g;
   Builder b(g);
   if (tube > 0)
-    for (const CurveKind kind : {CurveKind::kCrossing, CurveKind::kIsolated, CurveKind::kDegenerate}) {
+    for (const CurveKind kind :
+         {CurveKind::kCrossing, CurveKind::kIsolated, CurveKind::kDegenerate}) {
       b.begin(style.color(kind));
       for (const SingularCurve& curve : set.curves) {
         if (curve.kind != kind) continue;

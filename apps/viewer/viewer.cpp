@@ -91,8 +91,10 @@ class Window {
   Window(int width, int height, const std::string& title) {
     glfwSetErrorCallback(on_glfw_error);
     if (!glfwInit())
-      throw Error(fmt::format("cannot open a window: {} (without a display, run under "
-                              "xvfb-run)", glfw_error_text()));
+      throw Error(
+          fmt::format("cannot open a window: {} (without a display, run under "
+                      "xvfb-run)",
+                      glfw_error_text()));
     glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
     glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
     glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
@@ -265,7 +267,8 @@ int run_viewer(const ViewerOptions& options) {
   if (options.width < 64 || options.height < 64 || options.width > 16384 || options.height > 16384)
     throw InvalidArgument("--size", fmt::format("{}x{}", options.width, options.height),
                           "each side must lie in [64, 16384]");
-  if (options.frames < 0) throw InvalidArgument("--frames", std::to_string(options.frames), "must be ≥ 0");
+  if (options.frames < 0)
+    throw InvalidArgument("--frames", std::to_string(options.frames), "must be ≥ 0");
   if (!options.screenshot.empty() && file_extension(options.screenshot) != "png")
     throw InvalidArgument("--screenshot", options.screenshot, "the file name must end in .png");
   {
@@ -299,9 +302,8 @@ int run_viewer(const ViewerOptions& options) {
   bool show_ui = options.show_ui;
   Host host(window.get(), show_ui, options.quiet);
   if (is_scripted) {
-    state.set_status_sink([&host](const StatusLine& s) {
-      host.print((s.is_error ? "error: " : "") + s.text);
-    });
+    state.set_status_sink(
+        [&host](const StatusLine& s) { host.print((s.is_error ? "error: " : "") + s.text); });
     // The surface given on the command line was surveyed before the log existed.
     if (!state.field_warning().empty()) host.print("warning: " + state.field_warning());
   }
@@ -423,8 +425,7 @@ int run_viewer(const ViewerOptions& options) {
       outputs_written = false;
     }
   }
-  if (outputs && outputs_written && !state.guard("outputs", [&] { outputs->commit(); }))
-    ++failures;
+  if (outputs && outputs_written && !state.guard("outputs", [&] { outputs->commit(); })) ++failures;
   return failures > 0 ? 1 : 0;
 }
 

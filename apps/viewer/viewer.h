@@ -22,12 +22,12 @@ std::string_view to_string(Mode mode);
 Mode parse_mode(std::string_view text, std::string_view flag = "mode");
 
 struct ViewerOptions {
-  Scene scene;                 ///< the surface to open with, and its saved settings
+  Scene scene;                         ///< the surface to open with, and its saved settings
   std::string scene_origin = "scene";  ///< names the scene in messages (its file name)
-  std::optional<Mode> mode;    ///< nullopt: the scene's saved mode, else ray tracing
-  int width = 1280;            ///< window size in screen coordinates
+  std::optional<Mode> mode;            ///< nullopt: the scene's saved mode, else ray tracing
+  int width = 1280;                    ///< window size in screen coordinates
   int height = 800;
-  bool show_ui = true;         ///< false: the picture only (the panel can be shown again with H)
+  bool show_ui = true;  ///< false: the picture only (the panel can be shown again with H)
   /// Save the last of `frames` frames as PNG and exit (with `script`: after the script).
   std::string screenshot;
   /// Frames to run before the screenshot (0: 60 with a screenshot, else until the window is
@@ -41,8 +41,8 @@ struct ViewerOptions {
   std::string script;
   /// Write the final statistics (frame rate, floater steps per second, ...) as JSON here.
   std::string stats_out;
-  int threads = 0;             ///< worker threads for the simulation and ray caster; 0: all cores
-  bool quiet = false;          ///< no script log on stdout
+  int threads = 0;     ///< worker threads for the simulation and ray caster; 0: all cores
+  bool quiet = false;  ///< no script log on stdout
 };
 
 /// Opens the window and runs until it is closed, or until the screenshot / script is done.

@@ -3,8 +3,8 @@
 #include <cmath>
 
 #include "camera_control.h"
-#include "zeroset/surface/settings.h"
 #include "viewer_state.h"
+#include "zeroset/surface/settings.h"
 
 namespace zeroset::viewer {
 

@@ -11,8 +11,8 @@
 #include "viewer_state.h"
 #include "viewer_state_detail.h"
 #include "zeroset/mesh/carry.h"
-#include "zeroset/mesh/mesh_surface.h"
 #include "zeroset/mesh/mesh_ops.h"
+#include "zeroset/mesh/mesh_surface.h"
 #include "zeroset/surface/singular_set.h"
 
 namespace zeroset::viewer {
@@ -154,9 +154,15 @@ void ViewerState::restart_job() {
   cancel_now_ = false;
   fresh_floaters_ = false;
   switch (mode_) {
-    case Mode::kRaytrace: start_preview_job(); break;
-    case Mode::kMesh: start_mesh_job(); break;
-    case Mode::kFloaters: start_floater_job(); break;
+    case Mode::kRaytrace:
+      start_preview_job();
+      break;
+    case Mode::kMesh:
+      start_mesh_job();
+      break;
+    case Mode::kFloaters:
+      start_floater_job();
+      break;
   }
 }
 
@@ -488,8 +494,8 @@ ViewerStats ViewerState::stats() const {
     s.mesh_triangles = mesh_->mesh.triangle_count();
     s.improver_steps = mesh_->improver_steps;
     s.polygonize_seconds = mesh_->polygonize.seconds_total;
-    s.mesh_update = mesh_->carried                  ? fmt::format("carried in {:.0f} ms",
-                                                                  1000 * mesh_->carry_seconds)
+    s.mesh_update = mesh_->carried
+                        ? fmt::format("carried in {:.0f} ms", 1000 * mesh_->carry_seconds)
                     : !mesh_->rebuild_reason.empty() ? "rebuilt: " + mesh_->rebuild_reason
                                                      : "built";
   }

@@ -73,8 +73,7 @@ Keyframes ViewerState::keyframe_tracks() const {
 void ViewerState::replace_keyframes(json keys) {
   // The same reader as scene files and `zeroset animate`: what it refuses is never kept.
   if (!keys.empty())
-    (void)read_keyframes(settings_with(keys), surface_, detail::keyframe_frames(keys),
-                         "keyframes");
+    (void)read_keyframes(settings_with(keys), surface_, detail::keyframe_frames(keys), "keyframes");
   keyframes_ = std::move(keys);
 }
 
@@ -115,9 +114,10 @@ bool ViewerState::add_keyframe(double time, std::optional<Ease> ease) {
     for (; at < keyframes_.size(); ++at) {
       const double t = entry_time(keyframes_[at], frames);
       if (t == time)
-        throw InvalidArgument(fmt::format("keyframe {} is at time {} already (keyframe update {} "
-                                          "records the current state into it)",
-                                          at, time, at));
+        throw InvalidArgument(
+            fmt::format("keyframe {} is at time {} already (keyframe update {} "
+                        "records the current state into it)",
+                        at, time, at));
       if (t > time) break;
     }
     json keys = keyframes_;

@@ -86,9 +86,10 @@ bool ViewerState::play(std::string_view parameter) {
   return guard("play", [&] {
     if (has_keyframes()) {
       if (!parameter.empty())
-        throw InvalidArgument(fmt::format("the keyframes animate this scene, not '{}' alone "
-                                          "(keyframe clear removes them)",
-                                          parameter));
+        throw InvalidArgument(
+            fmt::format("the keyframes animate this scene, not '{}' alone "
+                        "(keyframe clear removes them)",
+                        parameter));
       (void)keyframe_tracks();  // they still fit the surface
       animation_.is_playing = true;
       // Without loop a finished animation stopped at an end: play it back the other way.
@@ -108,7 +109,8 @@ bool ViewerState::play(std::string_view parameter) {
     const int index = surface_.field.parameter_index(name);
     const ParamSpec& r = surface_.ranges[index];
     const double value = surface_.field.parameter_values()[index];
-    if ((animation_.direction > 0 && value >= r.max) || (animation_.direction < 0 && value <= r.min))
+    if ((animation_.direction > 0 && value >= r.max) ||
+        (animation_.direction < 0 && value <= r.min))
       animation_.direction = -animation_.direction;
   });
 }
@@ -139,7 +141,8 @@ void ViewerState::advance_animation(double dt) {
     return;
   }
   const ParamSpec& r = surface_.ranges[index];
-  double v = surface_.field.parameter_values()[index] + animation_.direction * animation_.speed * (r.max - r.min) * dt;
+  double v = surface_.field.parameter_values()[index] +
+             animation_.direction * animation_.speed * (r.max - r.min) * dt;
   if (v >= r.max || v <= r.min) {
     const double edge = v >= r.max ? r.max : r.min;
     if (animation_.loop) {
@@ -240,7 +243,8 @@ void ViewerState::set_lights_follow_camera(bool follow) {
   for (Light& l : look_.lights) {
     if (l.follows_camera == follow) continue;
     if (follow)
-      l.direction = Vec3(l.direction.dot(v.right), l.direction.dot(v.up), -l.direction.dot(v.forward));
+      l.direction =
+          Vec3(l.direction.dot(v.right), l.direction.dot(v.up), -l.direction.dot(v.forward));
     else
       l.direction = v.camera_to_world(l.direction);
     l.follows_camera = follow;
@@ -319,7 +323,8 @@ void ViewerState::apply_settings(const json& settings, const std::string& origin
     if (v.contains("lights_follow_camera"))
       set_lights_follow_camera(
           boolean(v["lights_follow_camera"], origin, "/viewer/lights_follow_camera"));
-    if (v.contains("front")) look_.front.diffuse = setting_color(v["front"], origin, "/viewer/front");
+    if (v.contains("front"))
+      look_.front.diffuse = setting_color(v["front"], origin, "/viewer/front");
     if (v.contains("back")) look_.back.diffuse = setting_color(v["back"], origin, "/viewer/back");
     if (v.contains("background"))
       look_.background = setting_color(v["background"], origin, "/viewer/background");

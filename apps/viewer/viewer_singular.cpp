@@ -19,8 +19,9 @@ SingularFrame find_singular_frame(const Surface& surface, bool substitute_clip,
                                   std::stop_token stop) {
   SingularFrame frame;
   if (!surface.clip.is_bounded()) {
-    frame.note = "not searched: the search needs a bounded clip (a sphere, or planes closing "
-                 "a box, under Clip)";
+    frame.note =
+        "not searched: the search needs a bounded clip (a sphere, or planes closing "
+        "a box, under Clip)";
     return frame;
   }
   const auto start = std::chrono::steady_clock::now();
@@ -46,8 +47,8 @@ SingularFrame find_singular_frame(const Surface& surface, bool substitute_clip,
   if (substitute_clip) {
     std::string specs;
     for (const std::string& s : surface.clip.to_specs()) specs += (specs.empty() ? "" : " ") + s;
-    add_note(fmt::format("The surface has no bounded clip of its own: searched inside {} only.",
-                         specs));
+    add_note(
+        fmt::format("The surface has no bounded clip of its own: searched inside {} only.", specs));
   }
   return frame;
 }

@@ -24,9 +24,12 @@ namespace zeroset::viewer {
 
 std::string_view to_string(Mode mode) {
   switch (mode) {
-    case Mode::kFloaters: return "floaters";
-    case Mode::kMesh: return "mesh";
-    case Mode::kRaytrace: return "raytrace";
+    case Mode::kFloaters:
+      return "floaters";
+    case Mode::kMesh:
+      return "mesh";
+    case Mode::kRaytrace:
+      return "raytrace";
   }
   return "raytrace";
 }
@@ -228,8 +231,7 @@ bool ViewerState::load_scene(const std::string& path) {
 bool ViewerState::set_parameter(std::string_view name, double value) {
   return guard("param", [&] {
     const int index = surface_.field.parameter_index(name);
-    if (index < 0)
-      throw InvalidArgument(fmt::format("the surface has no parameter '{}'", name));
+    if (index < 0) throw InvalidArgument(fmt::format("the surface has no parameter '{}'", name));
     if (!std::isfinite(value))
       throw InvalidArgument(std::string(name), fmt::format("{}", value), "must be finite");
     Field field = surface_.field;
@@ -247,11 +249,10 @@ bool ViewerState::set_parameter(std::string_view name, double value) {
 bool ViewerState::set_parameter_range(std::string_view name, double min, double max) {
   return guard("range", [&] {
     const int index = surface_.field.parameter_index(name);
-    if (index < 0)
-      throw InvalidArgument(fmt::format("the surface has no parameter '{}'", name));
+    if (index < 0) throw InvalidArgument(fmt::format("the surface has no parameter '{}'", name));
     if (!(std::isfinite(min) && std::isfinite(max) && min < max))
-      throw InvalidArgument(fmt::format("range of {}: needs finite min < max, got {} .. {}",
-                                        name, min, max));
+      throw InvalidArgument(
+          fmt::format("range of {}: needs finite min < max, got {} .. {}", name, min, max));
     check_parameter_value(name, min);
     check_parameter_value(name, max);
     ParamSpec& r = surface_.ranges[index];

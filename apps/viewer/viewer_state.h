@@ -20,11 +20,11 @@
 #include "zeroset/floaters/floaters.h"
 #include "zeroset/io/image.h"
 #include "zeroset/mesh/carry.h"
-#include "zeroset/mesh/improve.h"
-#include "zeroset/mesh/settings.h"
-#include "zeroset/mesh/mesh.h"
 #include "zeroset/mesh/crossings.h"
+#include "zeroset/mesh/improve.h"
+#include "zeroset/mesh/mesh.h"
 #include "zeroset/mesh/polygonize.h"
+#include "zeroset/mesh/settings.h"
 #include "zeroset/render/render.h"
 #include "zeroset/render/view.h"
 #include "zeroset/surface/keyframes.h"
@@ -57,9 +57,9 @@ SingularFrame find_singular_frame(const Surface& surface, bool substitute_clip,
 /// One ray-traced preview: the picture at 1/divisor of the viewport's resolution.
 struct PreviewFrame {
   Image image;
-  int divisor = 1;            ///< 8, 4, 2, then 1 (full resolution)
+  int divisor = 1;  ///< 8, 4, 2, then 1 (full resolution)
   RenderStats stats;
-  std::uint64_t generation = 0;  ///< the job it came from
+  std::uint64_t generation = 0;                   ///< the job it came from
   std::shared_ptr<const SingularFrame> singular;  ///< the singular set drawn into it, if any
 };
 
@@ -78,12 +78,12 @@ struct FloaterFrame {
 
 /// The mesh as polygonized, then after each improver step.
 struct MeshFrame {
-  Mesh mesh;                    ///< with unit normals (∇F, face normals where ∇F vanishes)
+  Mesh mesh;  ///< with unit normals (∇F, face normals where ∇F vanishes)
   PolygonizeStats polygonize;
-  CrossingStats crossings;      ///< the sheets joined along singular curves (docs/meshing.md)
-  ImproveStats improve;         ///< after the last step (default before the first)
-  int improver_steps = 0;       ///< steps applied to `mesh` so far
-  bool is_final = false;        ///< no more steps will follow for this generation
+  CrossingStats crossings;  ///< the sheets joined along singular curves (docs/meshing.md)
+  ImproveStats improve;     ///< after the last step (default before the first)
+  int improver_steps = 0;   ///< steps applied to `mesh` so far
+  bool is_final = false;    ///< no more steps will follow for this generation
   std::uint64_t generation = 0;
   /// What the mesh lies on (its parameter values): a parameter change carries it from here.
   Surface surface;
@@ -92,11 +92,11 @@ struct MeshFrame {
   std::uint64_t structure = 0;
   /// The singular curves when the settings leave them out of `mesh` (carrying needs them).
   std::vector<MeshCurve> hidden_curves;
-  bool carried = false;         ///< carried from the previous mesh (docs/viewer.md, live meshes)
-  double carry_seconds = 0;     ///< the carrying's time
+  bool carried = false;      ///< carried from the previous mesh (docs/viewer.md, live meshes)
+  double carry_seconds = 0;  ///< the carrying's time
   /// The singular set the carrying found on `surface`: the next carry need not search it again.
   std::optional<CarrySingularSet> singular;
-  std::string rebuild_reason;   ///< why carrying failed when it was tried and this was rebuilt
+  std::string rebuild_reason;  ///< why carrying failed when it was tried and this was rebuilt
 };
 
 /// A parameter animation: the parameter runs through its range at `speed` ranges per second,
@@ -105,16 +105,16 @@ struct Animation {
   std::string parameter;  ///< empty: the first parameter of the surface
   bool is_playing = false;
   bool loop = true;
-  double speed = 0.1;     ///< fraction of the parameter's range per second
-  int direction = 1;      ///< +1 towards max, -1 towards min
+  double speed = 0.1;  ///< fraction of the parameter's range per second
+  int direction = 1;   ///< +1 towards max, -1 towards min
 };
 
 /// How the GL modes draw.
 struct DisplaySettings {
-  bool draw_points = false;  ///< floaters as round points instead of oriented disks
-  double disk_scale = 0.75;  ///< disk radius = disk_scale·σ_i (as `zeroset sample --png`)
-  double point_size_px = 3;  ///< size of a point in pixels
-  bool wireframe = false;    ///< mesh: overlay the edges
+  bool draw_points = false;    ///< floaters as round points instead of oriented disks
+  double disk_scale = 0.75;    ///< disk radius = disk_scale·σ_i (as `zeroset sample --png`)
+  double point_size_px = 3;    ///< size of a point in pixels
+  bool wireframe = false;      ///< mesh: overlay the edges
   bool show_singular = false;  ///< overlay the singular set (every mode)
 };
 
@@ -133,9 +133,9 @@ inline constexpr int kMinLiveCells = 4;
 inline constexpr int kMaxLiveCells = 512;
 /// The viewer's mesh settings before a scene or the user changes them.
 inline const MeshSettings kLiveMeshDefaults{.cells = 64,
-                                                .improve = true,
-                                                .max_improve_steps = std::nullopt,
-                                                .boundary = BoundaryMode::kConstrained};
+                                            .improve = true,
+                                            .max_improve_steps = std::nullopt,
+                                            .boundary = BoundaryMode::kConstrained};
 /// Improver steps at most when "improve" is auto (each step is drawn).
 inline constexpr int kLiveImproveSteps = 200;
 /// Improver steps after carrying a mesh to new parameter values (docs/viewer.md, live meshes).
@@ -181,7 +181,7 @@ struct ViewerStats {
   // ray tracing
   int preview_divisor = 0;  ///< 0: nothing yet
   double preview_seconds = 0;
-  bool is_busy = false;     ///< the mode's job has not finished yet
+  bool is_busy = false;  ///< the mode's job has not finished yet
   // the singular set (while the overlay is on)
   bool show_singular = false;
   std::shared_ptr<const SingularFrame> singular;  ///< the latest found, nullptr before the first
@@ -270,8 +270,8 @@ class ViewerState {
   /// the live limits; the mode's job restarts or takes the new options as for the setters
   /// above. `max_steps`, if given, is the mesh's improver step limit (the viewer's own key).
   /// Nothing changes when anything is refused.
-  bool set_settings(std::string_view object, const nlohmann::json& entries,
-                    std::string_view action, std::optional<int> max_steps = std::nullopt);
+  bool set_settings(std::string_view object, const nlohmann::json& entries, std::string_view action,
+                    std::optional<int> max_steps = std::nullopt);
   /// The scene file's `object` ("floaters" or "mesh") for the current settings.
   nlohmann::json settings_object(std::string_view object) const;
   bool set_display(const DisplaySettings& display);
@@ -438,7 +438,7 @@ class ViewerState {
   int threads_ = 0;
   int viewport_w_ = 800;
   int viewport_h_ = 800;
-  bool clip_is_substitute_ = false;  // ensure_bounded_clip chose the clip, the surface had none
+  bool clip_is_substitute_ = false;    // ensure_bounded_clip chose the clip, the surface had none
   std::uint64_t surface_version_ = 0;  // counts surface edits (equation, parameter, clip)
 
   // status
@@ -458,11 +458,11 @@ class ViewerState {
   double draw_seconds_ = 0;
 
   // what changed since the job started
-  bool needs_restart_ = true;     // anything the current job depends on changed
+  bool needs_restart_ = true;  // anything the current job depends on changed
   // Restart at once (mode, catalog, scene, equation, mesh settings); other changes (camera,
   // parameters, clip, look) let the running job show its first result before it is replaced.
   bool cancel_now_ = false;
-  bool fresh_floaters_ = true;      // floaters: start a new system (new seeding)
+  bool fresh_floaters_ = true;  // floaters: start a new system (new seeding)
 
   // background work
   std::uint64_t generation_ = 0;  // of the job currently wanted

@@ -17,7 +17,7 @@ namespace zeroset::viewer {
 struct ViewerState::FloaterControl {
   std::mutex mutex;
   std::condition_variable_any changed;
-  Surface surface;                  // the latest surface, parameters included
+  Surface surface;                    // the latest surface, parameters included
   std::uint64_t surface_version = 0;  // new equation or clip
   std::uint64_t params_version = 0;   // new parameter values
   FloaterOptions options;

@@ -23,7 +23,10 @@ class BadInput : public Error {
 class ParseError : public BadInput {
  public:
   ParseError(std::string message, int line, int column, std::string formatted)
-      : BadInput(std::move(formatted)), message_(std::move(message)), line_(line), column_(column) {}
+      : BadInput(std::move(formatted)),
+        message_(std::move(message)),
+        line_(line),
+        column_(column) {}
   const std::string& message() const { return message_; }
   int line() const { return line_; }      ///< 1-based
   int column() const { return column_; }  ///< 1-based, in characters of that line
@@ -88,11 +91,11 @@ class WriteError : public Error {
 };
 
 /// An internal invariant does not hold: a bug in zeroset.
-#define ZS_ASSERT(cond)                                                                   \
-  do {                                                                                    \
-    if (!(cond))                                                                          \
-      throw ::zeroset::Error(std::string("internal error: ") + #cond + " at " + __FILE__ + \
-                             ":" + std::to_string(__LINE__));                             \
+#define ZS_ASSERT(cond)                                                                          \
+  do {                                                                                           \
+    if (!(cond))                                                                                 \
+      throw ::zeroset::Error(std::string("internal error: ") + #cond + " at " + __FILE__ + ":" + \
+                             std::to_string(__LINE__));                                          \
   } while (0)
 
 }  // namespace zeroset

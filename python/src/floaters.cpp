@@ -2,8 +2,8 @@
 // with the same options, and a floater system to step from Python (animation in a loop).
 #include <algorithm>
 #include <cmath>
-#include <optional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <tuple>
 
 #include "bindings.h"
@@ -102,7 +102,8 @@ py::tuple sample(const PySurface& s, const std::string& given, std::optional<siz
   if (quality) run.metrics = MetricsOptions{};
   const FloaterOptions options = options_from(s, given, threads);
   std::optional<SampleResult> result;
-  run_interruptible([&](std::stop_token stop) { result = sample_surface(surface, options, run, stop); });
+  run_interruptible(
+      [&](std::stop_token stop) { result = sample_surface(surface, options, run, stop); });
   if (!result->system)  // F vanishes identically
     throw InvalidArgument(result->warnings.empty() ? surface.label() + ": there is no surface"
                                                    : result->warnings.front());

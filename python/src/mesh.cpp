@@ -79,7 +79,8 @@ py::tuple make_mesh(const PySurface& s, const MeshArgs& a) {
   run.singular_set = true;  // as `zeroset mesh --stats`
   run.cells_option = "resolution";
   std::optional<MeshResult> result;
-  run_interruptible([&](std::stop_token stop) { result = mesh_surface(surface, settings, run, stop); });
+  run_interruptible(
+      [&](std::stop_token stop) { result = mesh_surface(surface, settings, run, stop); });
   Mesh mesh = std::move(result->mesh);
   return py::make_tuple(PyMesh{std::move(mesh), surface}, result->to_json().dump(),
                         result->warnings);
@@ -142,31 +143,31 @@ void bind_mesh(py::module_& m) {
           },
           "width"_a, "height"_a, "wireframe"_a, "show_singular"_a, "threads"_a);
 
-  m.def("_mesh", [](const PySurface& s, std::optional<int> resolution,
-                    std::optional<std::string> improve, std::optional<std::string> boundary,
-                    std::optional<std::string> grid, std::optional<int> refine_steps,
-                    std::optional<bool> curvature, std::optional<double> curvature_weight,
-                    std::optional<bool> singularity, std::optional<bool> flips,
-                    std::optional<bool> find_singular, std::optional<bool> crossings,
-                    std::optional<bool> curves, std::optional<std::string> improver,
-                    bool quality, int threads) {
-    MeshArgs a{.resolution = resolution,
-               .improve = improve,
-               .boundary = boundary,
-               .improver = improver,
-               .grid = grid,
-               .refine_steps = refine_steps,
-               .curvature = curvature,
-               .singularity = singularity,
-               .flips = flips,
-               .find_singular = find_singular,
-               .crossings = crossings,
-               .curves = curves,
-               .curvature_weight = curvature_weight,
-               .quality = quality,
-               .threads = threads};
-    return make_mesh(s, a);
-  });
+  m.def("_mesh",
+        [](const PySurface& s, std::optional<int> resolution, std::optional<std::string> improve,
+           std::optional<std::string> boundary, std::optional<std::string> grid,
+           std::optional<int> refine_steps, std::optional<bool> curvature,
+           std::optional<double> curvature_weight, std::optional<bool> singularity,
+           std::optional<bool> flips, std::optional<bool> find_singular,
+           std::optional<bool> crossings, std::optional<bool> curves,
+           std::optional<std::string> improver, bool quality, int threads) {
+          MeshArgs a{.resolution = resolution,
+                     .improve = improve,
+                     .boundary = boundary,
+                     .improver = improver,
+                     .grid = grid,
+                     .refine_steps = refine_steps,
+                     .curvature = curvature,
+                     .singularity = singularity,
+                     .flips = flips,
+                     .find_singular = find_singular,
+                     .crossings = crossings,
+                     .curves = curves,
+                     .curvature_weight = curvature_weight,
+                     .quality = quality,
+                     .threads = threads};
+          return make_mesh(s, a);
+        });
   // Carrying (docs/meshing.md, "Carrying a mesh"): the carried mesh, or None with the reason.
   m.def(
       "_carry",
@@ -175,14 +176,14 @@ void bind_mesh(py::module_& m) {
         CarryOptions options;
         options.improve_steps = improve_steps, options.threads = threads;
         CarryResult r;
-        run_interruptible(
-            [&](std::stop_token stop) { r = carry_mesh(p.mesh, p.surface, target, options, stop); });
-        py::dict stats("carried"_a = r.carried(), "failure"_a = std::string(to_string(r.failure)),
-                       "reason"_a = r.reason, "seconds"_a = r.seconds,
-                       "max_move_edges"_a = r.max_move_edges, "max_residual"_a = r.max_residual,
-                       "smallest_angle_deg"_a = r.smallest_angle_deg,
-                       "flipped_triangles"_a = r.flipped_triangles,
-                       "node_vertices"_a = r.node_vertices);
+        run_interruptible([&](std::stop_token stop) {
+          r = carry_mesh(p.mesh, p.surface, target, options, stop);
+        });
+        py::dict stats(
+            "carried"_a = r.carried(), "failure"_a = std::string(to_string(r.failure)),
+            "reason"_a = r.reason, "seconds"_a = r.seconds, "max_move_edges"_a = r.max_move_edges,
+            "max_residual"_a = r.max_residual, "smallest_angle_deg"_a = r.smallest_angle_deg,
+            "flipped_triangles"_a = r.flipped_triangles, "node_vertices"_a = r.node_vertices);
         py::object mesh = py::none();
         if (r.carried()) mesh = py::cast(PyMesh{std::move(r.mesh), target});
         return py::make_tuple(mesh, stats);

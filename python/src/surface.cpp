@@ -45,8 +45,7 @@ void set_parameters(PySurface& s, const std::map<std::string, double>& values) {
 py::dict camera_dict(const Camera& c) {
   return py::dict("azimuth_deg"_a = c.azimuth_deg, "elevation_deg"_a = c.elevation_deg,
                   "distance"_a = c.distance, "fov_deg"_a = c.fov_deg,
-                  "projection"_a = projection_name(c.projection),
-                  "ortho_height"_a = c.ortho_height,
+                  "projection"_a = projection_name(c.projection), "ortho_height"_a = c.ortho_height,
                   "target"_a = py::make_tuple(c.target.x(), c.target.y(), c.target.z()));
 }
 

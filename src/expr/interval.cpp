@@ -104,39 +104,52 @@ Interval tangent(Interval a) {
 Interval apply_interval(Code code, Interval a, Interval b) {
   if (a.is_empty() || b.is_empty()) return kEmpty;
   switch (code) {
-    case Code::kNeg: return {-a.hi, -a.lo};
-    case Code::kSquare: return square(a);
+    case Code::kNeg:
+      return {-a.hi, -a.lo};
+    case Code::kSquare:
+      return square(a);
     case Code::kSqrt:
       if (a.hi < 0) return kEmpty;
       return {std::max(0.0, down(std::sqrt(std::max(a.lo, 0.0)))), up(std::sqrt(a.hi))};
-    case Code::kExp: return {std::max(0.0, down(std::exp(a.lo))), up(std::exp(a.hi))};
+    case Code::kExp:
+      return {std::max(0.0, down(std::exp(a.lo))), up(std::exp(a.hi))};
     case Code::kLog:
       if (a.hi < 0) return kEmpty;
       return {a.lo <= 0 ? -kInf : down(std::log(a.lo)), up(std::log(a.hi))};
-    case Code::kSin: return sine_like(a, std::numbers::pi / 2, sin_fn);
-    case Code::kCos: return sine_like(a, 0.0, cos_fn);
-    case Code::kTan: return tangent(a);
+    case Code::kSin:
+      return sine_like(a, std::numbers::pi / 2, sin_fn);
+    case Code::kCos:
+      return sine_like(a, 0.0, cos_fn);
+    case Code::kTan:
+      return tangent(a);
     case Code::kAbs:
       if (a.contains_zero()) return {0, std::max(-a.lo, a.hi)};
       return a.lo > 0 ? a : Interval{-a.hi, -a.lo};
-    case Code::kSign: return {sign(a.lo), sign(a.hi)};
+    case Code::kSign:
+      return {sign(a.lo), sign(a.hi)};
     case Code::kAdd:
-    case Code::kAddU: return outward(a.lo + b.lo, a.hi + b.hi);
+    case Code::kAddU:
+      return outward(a.lo + b.lo, a.hi + b.hi);
     case Code::kSub:
     case Code::kSubVU:
-    case Code::kSubUV: return outward(a.lo - b.hi, a.hi - b.lo);
+    case Code::kSubUV:
+      return outward(a.lo - b.hi, a.hi - b.lo);
     case Code::kMul:
-    case Code::kMulU: return mul(a, b);
+    case Code::kMulU:
+      return mul(a, b);
     case Code::kDiv:
     case Code::kDivVU:
-    case Code::kDivUV: return mul(a, reciprocal(b));
-    case Code::kPowU: return power(a, b.lo);
+    case Code::kDivUV:
+      return mul(a, reciprocal(b));
+    case Code::kPowU:
+      return power(a, b.lo);
     case Code::kMulAdd:
     case Code::kMulSub:
     case Code::kSubMul:
     case Code::kMulUAdd:
     case Code::kMulUSub:
-    case Code::kSubMulU: break;  // three operands: see IntervalEvaluator::eval
+    case Code::kSubMulU:
+      break;  // three operands: see IntervalEvaluator::eval
   }
   return kEntire;
 }
@@ -154,8 +167,7 @@ using detail::Program;
 IntervalEvaluator::IntervalEvaluator(const Field& field) : field_(field), tape_(&field_.tape()) {
   field_.require_parameters();
   detail::eval_uniforms(*tape_, field_.parameter_values(), uniforms_);
-  slots_.resize(static_cast<size_t>(
-      std::max(tape_->value.slot_count, tape_->gradient.slot_count)));
+  slots_.resize(static_cast<size_t>(std::max(tape_->value.slot_count, tape_->gradient.slot_count)));
 }
 
 Interval IntervalEvaluator::output(const Program& p, size_t i) const {
@@ -192,12 +204,16 @@ void IntervalEvaluator::run(const Program& p, const Interval& x, const Interval&
       case Code::kAdd:
       case Code::kSub:
       case Code::kMul:
-      case Code::kDiv: b = slots_[static_cast<size_t>(in.b)]; break;
+      case Code::kDiv:
+        b = slots_[static_cast<size_t>(in.b)];
+        break;
       case Code::kAddU:
       case Code::kSubVU:
       case Code::kMulU:
       case Code::kDivVU:
-      case Code::kPowU: b = uniform(in.b); break;
+      case Code::kPowU:
+        b = uniform(in.b);
+        break;
       case Code::kMulAdd:
       case Code::kMulSub:
       case Code::kSubMul:
@@ -205,8 +221,8 @@ void IntervalEvaluator::run(const Program& p, const Interval& x, const Interval&
       case Code::kMulUSub:
       case Code::kSubMulU: {
         // Fused product and sum: enclosed as the two operations it stands for.
-        const bool uniform_factor = in.code == Code::kMulUAdd || in.code == Code::kMulUSub ||
-                                    in.code == Code::kSubMulU;
+        const bool uniform_factor =
+            in.code == Code::kMulUAdd || in.code == Code::kMulUSub || in.code == Code::kSubMulU;
         const Interval p = apply_interval(
             Code::kMul, a, uniform_factor ? uniform(in.b) : slots_[static_cast<size_t>(in.b)]);
         const Interval c = slots_[static_cast<size_t>(in.c)];
@@ -228,7 +244,8 @@ void IntervalEvaluator::run(const Program& p, const Interval& x, const Interval&
             apply_interval(in.code == Code::kSubUV ? Code::kSub : Code::kDiv, u, a);
         continue;
       }
-      default: break;
+      default:
+        break;
     }
     slots_[static_cast<size_t>(in.dst)] = apply_interval(in.code, a, b);
   }

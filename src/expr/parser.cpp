@@ -480,7 +480,7 @@ class Parser {
   int depth_ = 0;
   std::string_view defining_;  ///< name of the definition being parsed, to catch recursion
   std::unordered_map<std::string_view, int> locals_;
-  std::unordered_map<std::string_view, Token> parameter_uses_;  ///< first use of each name
+  std::unordered_map<std::string_view, Token> parameter_uses_;   ///< first use of each name
   std::unordered_map<std::string_view, int> parameter_indices_;  ///< in program_.parameters
 };
 

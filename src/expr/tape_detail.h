@@ -183,9 +183,9 @@ struct Tape {
   /// Index of each name in `parameters` (Field::parameter_index: constant time, so looking up
   /// every parameter of an equation with thousands stays linear).
   std::unordered_map<std::string, int> parameter_indices;
-  std::vector<UniformInstr> uniforms;   ///< registers used by the three programs
-  Program value;                        ///< outputs: F
-  Program gradient;                     ///< outputs: F, Fx, Fy, Fz
+  std::vector<UniformInstr> uniforms;  ///< registers used by the three programs
+  Program value;                       ///< outputs: F
+  Program gradient;                    ///< outputs: F, Fx, Fy, Fz
   Program full;     ///< outputs: F, Fx, Fy, Fz, Fxx, Fxy, Fxz, Fyy, Fyz, Fzz, ∂F/∂q_0, ...
   int degree = -1;  ///< total degree when F is a polynomial in x, y, z, else -1
 };

@@ -232,9 +232,9 @@ struct FloaterState {
   std::vector<RailCurve> rails;  // its curves with their arc lengths
   bool singular_current = false;
   bool singular_placed = false;
-  std::size_t still_steps = 0;  // steps since the parameters last changed
-  double rail_sigma = 0;        // σ of the floaters held on the set
-  double rail_spacing = 0;      // their spacing along the curves
+  std::size_t still_steps = 0;    // steps since the parameters last changed
+  double rail_sigma = 0;          // σ of the floaters held on the set
+  double rail_spacing = 0;        // their spacing along the curves
   std::vector<double> rail_push;  // per floater on a curve: its desired velocity along it
 
   // Per-step scratch.
@@ -289,10 +289,11 @@ void parallel_chunks(FloaterState& sys, std::size_t n, Body&& body) {
   const auto chunks = static_cast<std::int64_t>((n + kChunk - 1) / kChunk);
   ExceptionTrap trap;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(sys.threads) if (n >= kParallelMin)
-  for (std::int64_t c = 0; c < chunks; ++c) trap.run([&] {
-    const std::size_t b = static_cast<std::size_t>(c) * kChunk;
-    body(b, std::min(n, b + kChunk), sys.evaluators[worker_index()]);
-  });
+  for (std::int64_t c = 0; c < chunks; ++c)
+    trap.run([&] {
+      const std::size_t b = static_cast<std::size_t>(c) * kChunk;
+      body(b, std::min(n, b + kChunk), sys.evaluators[worker_index()]);
+    });
   trap.rethrow();
 }
 

@@ -7,9 +7,9 @@
 
 #include "rng_detail.h"
 #include "spatial_hash_detail.h"
-#include "zeroset/surface/singular_index.h"
 #include "zeroset/detail/parallel.h"
 #include "zeroset/surface/analysis.h"
+#include "zeroset/surface/singular_index.h"
 
 namespace zeroset {
 namespace {
@@ -43,35 +43,36 @@ ReferenceSampling reference_sampling(const Surface& surface, const ReferenceOpti
     std::vector<std::size_t> shell_hits(static_cast<std::size_t>(chunks), 0);
     detail::ExceptionTrap trap;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(workers)
-    for (std::int64_t c = 0; c < chunks; ++c) trap.run([&] {
-      Evaluator& ev = evs.local();
-      const std::size_t b = static_cast<std::size_t>(c) * kChunk;
-      const std::size_t e = std::min(m, b + kChunk);
-      std::array<double, kChunk> x, y, z, f, gx, gy, gz;
-      std::array<std::uint8_t, kChunk> inside{};
-      for (std::size_t k = b; k < e; ++k) {
-        detail::Rng rng(options.seed, base + k, 0, detail::Stream::kReference);
-        const Vec3 p(rng.uniform(box.lo.x(), box.hi.x()), rng.uniform(box.lo.y(), box.hi.y()),
-                     rng.uniform(box.lo.z(), box.hi.z()));
-        x[k - b] = p.x();
-        y[k - b] = p.y();
-        z[k - b] = p.z();
-        inside[k - b] = surface.clip.contains(p) ? 1 : 0;
-      }
-      const std::size_t len = e - b;
-      ev.values_gradients({x.data(), len}, {y.data(), len}, {z.data(), len}, {f.data(), len},
-                          {gx.data(), len}, {gy.data(), len}, {gz.data(), len});
-      for (std::size_t k = 0; k < len; ++k) {
-        if (!inside[k]) continue;
-        const double g = std::sqrt(gx[k] * gx[k] + gy[k] * gy[k] + gz[k] * gz[k]);
-        if (!std::isfinite(f[k]) || !(std::abs(f[k]) < shell * g)) continue;
-        ++shell_hits[static_cast<std::size_t>(c)];
-        Vec3 p(x[k], y[k], z[k]);
-        if (project_onto_surface(ev, p, tolerance, 4 * shell) &&
-            surface.clip.contains(p, tolerance))
-          found[static_cast<std::size_t>(c)].push_back(p);
-      }
-    });
+    for (std::int64_t c = 0; c < chunks; ++c)
+      trap.run([&] {
+        Evaluator& ev = evs.local();
+        const std::size_t b = static_cast<std::size_t>(c) * kChunk;
+        const std::size_t e = std::min(m, b + kChunk);
+        std::array<double, kChunk> x, y, z, f, gx, gy, gz;
+        std::array<std::uint8_t, kChunk> inside{};
+        for (std::size_t k = b; k < e; ++k) {
+          detail::Rng rng(options.seed, base + k, 0, detail::Stream::kReference);
+          const Vec3 p(rng.uniform(box.lo.x(), box.hi.x()), rng.uniform(box.lo.y(), box.hi.y()),
+                       rng.uniform(box.lo.z(), box.hi.z()));
+          x[k - b] = p.x();
+          y[k - b] = p.y();
+          z[k - b] = p.z();
+          inside[k - b] = surface.clip.contains(p) ? 1 : 0;
+        }
+        const std::size_t len = e - b;
+        ev.values_gradients({x.data(), len}, {y.data(), len}, {z.data(), len}, {f.data(), len},
+                            {gx.data(), len}, {gy.data(), len}, {gz.data(), len});
+        for (std::size_t k = 0; k < len; ++k) {
+          if (!inside[k]) continue;
+          const double g = std::sqrt(gx[k] * gx[k] + gy[k] * gy[k] + gz[k] * gz[k]);
+          if (!std::isfinite(f[k]) || !(std::abs(f[k]) < shell * g)) continue;
+          ++shell_hits[static_cast<std::size_t>(c)];
+          Vec3 p(x[k], y[k], z[k]);
+          if (project_onto_surface(ev, p, tolerance, 4 * shell) &&
+              surface.clip.contains(p, tolerance))
+            found[static_cast<std::size_t>(c)].push_back(p);
+        }
+      });
     trap.rethrow();
     // Appending in chunk order (and stopping at `count`) keeps the result thread-independent.
     for (std::size_t c = 0; c < found.size(); ++c) {
@@ -205,9 +206,8 @@ SampleMetrics measure_samples(const Surface& surface, std::span<const Vec3> samp
 
 namespace zeroset {
 
-SingularSetCoverage measure_singular_coverage(const SingularSet& set,
-                                              std::span<const Vec3> samples, int local_neighbours,
-                                              double on_set) {
+SingularSetCoverage measure_singular_coverage(const SingularSet& set, std::span<const Vec3> samples,
+                                              int local_neighbours, double on_set) {
   SingularSetCoverage c;
   c.point_ratio.assign(set.points.size(), 0.0);
   c.curve_gap.assign(set.curves.size(), 0.0);

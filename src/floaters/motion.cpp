@@ -133,8 +133,8 @@ std::uint32_t gather_block(const FloaterState& sys, const SpatialHash::Run& run,
     reach = std::max(reach, cut[s]);
     c.slot[s - run.first] = s;
   }
-  const std::size_t m = own + filter_box(sys.filter, forward, x, y, z, cut, lo, hi, reach,
-                                                 c.slot.data() + own);
+  const std::size_t m =
+      own + filter_box(sys.filter, forward, x, y, z, cut, lo, hi, reach, c.slot.data() + own);
   for (std::size_t k = 0; k < m; ++k) {
     const std::uint32_t t = c.slot[k];
     c.x[k] = x[t];
@@ -191,8 +191,8 @@ void move_one(FloaterState& sys, std::size_t i, const PairSums& sum, Evaluator& 
       // is unreliable, so the pull converges whatever the degree of F.
       if (sys.value[i] != 0 && residual(sys.value[i], sys.gnorm[i]) > kCheckedResidual * s &&
           sys.gnorm[i] > 0 && std::isfinite(sys.gnorm[i]))
-        if (const auto t = far_normal_root(ev, p, sys.value[i], sys.gnorm[i] * nrm,
-                                           sys.gnorm[i], 2 * s))
+        if (const auto t =
+                far_normal_root(ev, p, sys.value[i], sys.gnorm[i] * nrm, sys.gnorm[i], 2 * s))
           pull = sys.opt.feedback * dt * *t - sys.fq[i] / sys.gnorm[i] * dt;
       if (!std::isfinite(pull)) pull = std::copysign(max_scene_step, pull);
       normal_move = std::clamp(pull, -max_scene_step, max_scene_step) * nrm;
@@ -247,8 +247,8 @@ void repulsion_and_move(FloaterState& sys) {
   sys.chunk_near.resize(chunks);
   sys.scratch.resize(static_cast<std::size_t>(sys.threads));
   const MoveConstants k = move_constants(sys);
-  const PairConstants pk{sys.opt.repulsion, sys.opt.cos_weight ? 1.0 : 0.0,
-                         sys.opt.radius_grading, sys.opt.energy_taper ? 1.0 : 0.0};
+  const PairConstants pk{sys.opt.repulsion, sys.opt.cos_weight ? 1.0 : 0.0, sys.opt.radius_grading,
+                         sys.opt.energy_taper ? 1.0 : 0.0};
   const auto runs = sys.hash.runs();
   const auto order = sys.hash.order();
   const std::span<PairSums> sums(sys.pair_sums);
@@ -258,55 +258,59 @@ void repulsion_and_move(FloaterState& sys) {
     PairScratch& c = sys.scratch[static_cast<std::size_t>(worker_index())];
     Evaluator& ev = sys.evaluators[static_cast<std::size_t>(worker_index())];
 #pragma omp for schedule(static)
-    for (std::int64_t slot = 0; slot < static_cast<std::int64_t>(n); ++slot) trap.run([&] {
-      const auto s = static_cast<std::size_t>(slot);
-      pack_slot(sys, s);
-      sums[s] = {0, 0, 0, 0, 0, sys.mu[order[s]] * sigma_max(sys)};
-    });
+    for (std::int64_t slot = 0; slot < static_cast<std::int64_t>(n); ++slot)
+      trap.run([&] {
+        const auto s = static_cast<std::size_t>(slot);
+        pack_slot(sys, s);
+        sums[s] = {0, 0, 0, 0, 0, sys.mu[order[s]] * sigma_max(sys)};
+      });
     const auto layers = sys.hash.layers();
     const auto layer_runs = sys.hash.layer_runs();
     SpatialHash::ForwardWalk walk(sys.hash);
     for (std::int64_t parity = 0; parity < 2; ++parity) {
 #pragma omp for schedule(dynamic, 1)
-      for (std::int64_t l = 0; l < static_cast<std::int64_t>(layers.size()); ++l) trap.run([&] {
-        const auto& layer = layers[static_cast<std::size_t>(l)];
-        if ((layer.layer & 1) != parity) return;
-        for (std::uint32_t r = layer.first; r < layer.last; ++r) {
-          const auto& run = runs[layer_runs[r]];
-          const std::uint32_t candidates = gather_block(sys, run, walk, c);
-          for (std::uint32_t s = run.first; s < run.last; ++s) {
-            // The later floaters of the cell and the forward cells' candidates.
-            const SpatialHash::Range later{s - run.first + 1, candidates};
-            const std::size_t kept = filter_near(
-                sys.filter, {&later, 1}, c.x.data(), c.y.data(), c.z.data(), c.cut.data(),
-                sys.fx[s], sys.fy[s], sys.fz[s], sys.fcut[s], c.near.data());
-            c.batch.add(s, c.slot.data(), c.near.data(), kept);
-            if (c.batch.pairs() >= kPairBatch) accumulate_pairs(sys, c.batch, pk);
+      for (std::int64_t l = 0; l < static_cast<std::int64_t>(layers.size()); ++l)
+        trap.run([&] {
+          const auto& layer = layers[static_cast<std::size_t>(l)];
+          if ((layer.layer & 1) != parity) return;
+          for (std::uint32_t r = layer.first; r < layer.last; ++r) {
+            const auto& run = runs[layer_runs[r]];
+            const std::uint32_t candidates = gather_block(sys, run, walk, c);
+            for (std::uint32_t s = run.first; s < run.last; ++s) {
+              // The later floaters of the cell and the forward cells' candidates.
+              const SpatialHash::Range later{s - run.first + 1, candidates};
+              const std::size_t kept = filter_near(sys.filter, {&later, 1}, c.x.data(), c.y.data(),
+                                                   c.z.data(), c.cut.data(), sys.fx[s], sys.fy[s],
+                                                   sys.fz[s], sys.fcut[s], c.near.data());
+              c.batch.add(s, c.slot.data(), c.near.data(), kept);
+              if (c.batch.pairs() >= kPairBatch) accumulate_pairs(sys, c.batch, pk);
+            }
           }
-        }
-        accumulate_pairs(sys, c.batch, pk);  // the layer's pairs are all in the sums
-      });
+          accumulate_pairs(sys, c.batch, pk);  // the layer's pairs are all in the sums
+        });
     }
 #pragma omp for schedule(dynamic, 256)
-    for (std::int64_t slot = 0; slot < static_cast<std::int64_t>(n); ++slot) trap.run([&] {
-      const auto s = static_cast<std::size_t>(slot);
-      const std::uint32_t i = order[s];
-      sys.graded[i] = sums[s].limit;
-      move_one(sys, i, sums[s], ev, k);
-    });
-    // Summed per chunk in index order: the same on any number of threads.
+    for (std::int64_t slot = 0; slot < static_cast<std::int64_t>(n); ++slot)
+      trap.run([&] {
+        const auto s = static_cast<std::size_t>(slot);
+        const std::uint32_t i = order[s];
+        sys.graded[i] = sums[s].limit;
+        move_one(sys, i, sums[s], ev, k);
+      });
+      // Summed per chunk in index order: the same on any number of threads.
 #pragma omp for schedule(static)
-    for (std::int64_t chunk = 0; chunk < static_cast<std::int64_t>(chunks); ++chunk) trap.run([&] {
-      const std::size_t b = static_cast<std::size_t>(chunk) * kChunk;
-      double sq = 0;
-      std::size_t near = 0;
-      for (std::size_t i = b; i < std::min(n, b + kChunk); ++i) {
-        sq += sys.speed_sq[i];
-        near += sys.near_flag[i];
-      }
-      sys.chunk_speed[static_cast<std::size_t>(chunk)] = sq;
-      sys.chunk_near[static_cast<std::size_t>(chunk)] = near;
-    });
+    for (std::int64_t chunk = 0; chunk < static_cast<std::int64_t>(chunks); ++chunk)
+      trap.run([&] {
+        const std::size_t b = static_cast<std::size_t>(chunk) * kChunk;
+        double sq = 0;
+        std::size_t near = 0;
+        for (std::size_t i = b; i < std::min(n, b + kChunk); ++i) {
+          sq += sys.speed_sq[i];
+          near += sys.near_flag[i];
+        }
+        sys.chunk_speed[static_cast<std::size_t>(chunk)] = sq;
+        sys.chunk_near[static_cast<std::size_t>(chunk)] = near;
+      });
   }
   trap.rethrow();
   sys.smax.swap(sys.graded);

@@ -38,9 +38,11 @@ unsigned lanes_in_range(std::uint32_t t, std::uint32_t last) {
   return left >= kLanes ? (1u << kLanes) - 1 : (1u << left) - 1;
 }
 
-__attribute__((target("avx2"))) std::size_t filter_avx2(
-    std::span<const SpatialHash::Range> ranges, const float* x, const float* y, const float* z,
-    const float* cut, float px, float py, float pz, float p_cut, std::uint32_t* out) {
+__attribute__((target("avx2"))) std::size_t filter_avx2(std::span<const SpatialHash::Range> ranges,
+                                                        const float* x, const float* y,
+                                                        const float* z, const float* cut, float px,
+                                                        float py, float pz, float p_cut,
+                                                        std::uint32_t* out) {
   const __m256 vx = _mm256_set1_ps(px), vy = _mm256_set1_ps(py), vz = _mm256_set1_ps(pz);
   const __m256 vcut = _mm256_set1_ps(p_cut);
   std::size_t m = 0;
@@ -64,9 +66,9 @@ __attribute__((target("avx2"))) std::size_t filter_avx2(
   return m;
 }
 
-std::size_t filter_sse2(std::span<const SpatialHash::Range> ranges, const float* x,
-                        const float* y, const float* z, const float* cut, float px, float py,
-                        float pz, float p_cut, std::uint32_t* out) {
+std::size_t filter_sse2(std::span<const SpatialHash::Range> ranges, const float* x, const float* y,
+                        const float* z, const float* cut, float px, float py, float pz, float p_cut,
+                        std::uint32_t* out) {
   const __m128 vx = _mm_set1_ps(px), vy = _mm_set1_ps(py), vz = _mm_set1_ps(pz);
   const __m128 vcut = _mm_set1_ps(p_cut);
   std::size_t m = 0;
@@ -90,10 +92,10 @@ std::size_t filter_sse2(std::span<const SpatialHash::Range> ranges, const float*
 }
 
 __attribute__((target("avx2"))) std::size_t box_avx2(std::span<const SpatialHash::Range> ranges,
-                                                     const float* x, const float* y,
-                                                     const float* z, const float* cut,
-                                                     const float* lo, const float* hi,
-                                                     float reach, std::uint32_t* out) {
+                                                     const float* x, const float* y, const float* z,
+                                                     const float* cut, const float* lo,
+                                                     const float* hi, float reach,
+                                                     std::uint32_t* out) {
   const __m256 lox = _mm256_set1_ps(lo[0]), loy = _mm256_set1_ps(lo[1]);
   const __m256 loz = _mm256_set1_ps(lo[2]), hix = _mm256_set1_ps(hi[0]);
   const __m256 hiy = _mm256_set1_ps(hi[1]), hiz = _mm256_set1_ps(hi[2]);
@@ -166,9 +168,9 @@ std::size_t filter_scalar(std::span<const SpatialHash::Range> ranges, const floa
   return m;
 }
 
-std::size_t box_scalar(std::span<const SpatialHash::Range> ranges, const float* x,
-                       const float* y, const float* z, const float* cut, const float* lo,
-                       const float* hi, float reach, std::uint32_t* out) {
+std::size_t box_scalar(std::span<const SpatialHash::Range> ranges, const float* x, const float* y,
+                       const float* z, const float* cut, const float* lo, const float* hi,
+                       float reach, std::uint32_t* out) {
   std::size_t m = 0;
   for (const auto& [first, last] : ranges)
     for (std::uint32_t t = first; t < last; ++t) {
@@ -212,9 +214,9 @@ FilterPath best_filter_path() {
   return FilterPath::kScalar;
 }
 
-std::size_t filter_near(FilterPath path, std::span<const SpatialHash::Range> ranges,
-                        const float* x, const float* y, const float* z, const float* cut,
-                        float px, float py, float pz, float p_cut, std::uint32_t* out) {
+std::size_t filter_near(FilterPath path, std::span<const SpatialHash::Range> ranges, const float* x,
+                        const float* y, const float* z, const float* cut, float px, float py,
+                        float pz, float p_cut, std::uint32_t* out) {
   switch (path) {
 #ifdef ZS_FILTER_X86
     case FilterPath::kAvx2:
@@ -227,9 +229,9 @@ std::size_t filter_near(FilterPath path, std::span<const SpatialHash::Range> ran
   }
 }
 
-std::size_t filter_box(FilterPath path, std::span<const SpatialHash::Range> ranges,
-                       const float* x, const float* y, const float* z, const float* cut,
-                       const float* lo, const float* hi, float reach, std::uint32_t* out) {
+std::size_t filter_box(FilterPath path, std::span<const SpatialHash::Range> ranges, const float* x,
+                       const float* y, const float* z, const float* cut, const float* lo,
+                       const float* hi, float reach, std::uint32_t* out) {
   switch (path) {
 #ifdef ZS_FILTER_X86
     case FilterPath::kAvx2:

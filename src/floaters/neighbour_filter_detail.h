@@ -26,17 +26,17 @@ FilterPath best_filter_path();
 /// Appends to `out`, in order, every index t of the slot `ranges` whose squared distance to
 /// (px, py, pz), computed in single precision as (dx² + dy²) + dz², is below
 /// max(p_cut, cut[t]); returns how many. `path` must be available. Pure and thread-safe.
-std::size_t filter_near(FilterPath path, std::span<const SpatialHash::Range> ranges,
-                        const float* x, const float* y, const float* z, const float* cut,
-                        float px, float py, float pz, float p_cut, std::uint32_t* out);
+std::size_t filter_near(FilterPath path, std::span<const SpatialHash::Range> ranges, const float* x,
+                        const float* y, const float* z, const float* cut, float px, float py,
+                        float pz, float p_cut, std::uint32_t* out);
 
 /// The same test against the box [lo, hi] (three coordinates each), the bounding box of a cell's
 /// floaters, with threshold max(reach, cut[t]): the distance to the box is never more than to a
 /// point in it, also after rounding (each operation is monotone), so with `reach` the largest
 /// of their thresholds this keeps every index filter_near() keeps for any of them.
-std::size_t filter_box(FilterPath path, std::span<const SpatialHash::Range> ranges,
-                       const float* x, const float* y, const float* z, const float* cut,
-                       const float* lo, const float* hi, float reach, std::uint32_t* out);
+std::size_t filter_box(FilterPath path, std::span<const SpatialHash::Range> ranges, const float* x,
+                       const float* y, const float* z, const float* cut, const float* lo,
+                       const float* hi, float reach, std::uint32_t* out);
 
 /// Doubles in a neighbour record: records are 64-byte aligned groups of this many.
 inline constexpr std::size_t kRecordFields = 8;

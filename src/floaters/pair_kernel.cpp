@@ -67,8 +67,9 @@ void terms_scalar(const PairConstants& k, const double* records, const std::uint
 
 #ifdef ZS_PAIR_LANES4
 // Fields of four records, transposed into lane vectors: x, y, z, σ, σ_max, nx, ny, nz.
-__attribute__((target("avx2,fma"), always_inline)) inline void transpose(
-    const double* records, const std::uint32_t* slot, Double4* f) {
+__attribute__((target("avx2,fma"), always_inline)) inline void transpose(const double* records,
+                                                                         const std::uint32_t* slot,
+                                                                         Double4* f) {
   for (int half = 0; half < 2; ++half) {
     const double* r = records + 4 * half;
     const __m256d a = _mm256_load_pd(r + kRecordFields * slot[0]);
@@ -89,9 +90,9 @@ __attribute__((target("avx2,fma"), always_inline)) inline void transpose(
 // be a multiple of four.
 template <bool kScaled>
 __attribute__((target("avx2,fma"))) void terms_avx2(const PairConstants& k, const double* records,
-                                                const std::uint64_t* ids, std::size_t m,
-                                                const std::uint32_t* i, const std::uint32_t* j,
-                                                Terms* out) {
+                                                    const std::uint64_t* ids, std::size_t m,
+                                                    const std::uint32_t* i, const std::uint32_t* j,
+                                                    Terms* out) {
   const Double4 zero = splat<Double4>(0.0), one = splat<Double4>(1.0);
   for (std::size_t q = 0; q < m; q += kLanes) {
     Double4 a[kRecordFields], b[kRecordFields];  // floaters i and j of the four pairs
@@ -104,8 +105,8 @@ __attribute__((target("avx2,fma"))) void terms_avx2(const PairConstants& k, cons
     const Mask4 free_i = (a[5] == zero) & (a[6] == zero) & (a[7] == zero);
     const Mask4 free_j = (b[5] == zero) & (b[6] == zero) & (b[7] == zero);
     const Double4 no_normal = (free_i | free_j) ? one : zero;
-    const PairTermsBoth<Double4> r = pair_terms<kScaled>(
-        dx, dy, dz, d2, _mm256_sqrt_pd(d2), si, sj, a[4], b[4], cosine, no_normal, k);
+    const PairTermsBoth<Double4> r = pair_terms<kScaled>(dx, dy, dz, d2, _mm256_sqrt_pd(d2), si, sj,
+                                                         a[4], b[4], cosine, no_normal, k);
     // Lane vectors back to one record per pair and floater: four 4×4 transposes.
     for (int side = 0; side < 2; ++side) {
       const PairTerms<Double4>& t = side == 0 ? r.i : r.j;
@@ -151,10 +152,8 @@ void list_pairs_scalar(std::uint32_t* i, std::uint32_t* j, std::uint32_t self,
 // The same, eight at a time: lanes past `kept` neither read, and written with whatever (i and
 // j need room for whole groups of eight).
 __attribute__((target("avx2"))) void list_pairs_avx2(std::uint32_t* i, std::uint32_t* j,
-                                                     std::uint32_t self,
-                                                     const std::uint32_t* slots,
-                                                     const std::uint32_t* near,
-                                                     std::size_t kept) {
+                                                     std::uint32_t self, const std::uint32_t* slots,
+                                                     const std::uint32_t* near, std::size_t kept) {
   const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
   const __m256i own = _mm256_set1_epi32(static_cast<int>(self));
   for (std::size_t q = 0; q < kept; q += 8) {
@@ -268,24 +267,24 @@ void PairBatch::accumulate(bool scaled, const PairConstants& k, const double* re
               i_.begin() + static_cast<std::ptrdiff_t>(padded), i_[0]);
     std::fill(j_.begin() + static_cast<std::ptrdiff_t>(m),
               j_.begin() + static_cast<std::ptrdiff_t>(padded), j_[0]);
-    (scaled ? terms_avx2<true> : terms_avx2<false>)(k, records, ids, padded, i_.data(),
-                                                     j_.data(), out);
+    (scaled ? terms_avx2<true> : terms_avx2<false>)(k, records, ids, padded, i_.data(), j_.data(),
+                                                    out);
   } else
 #endif
   {
-    (scaled ? terms_scalar<true> : terms_scalar<false>)(k, records, ids, m, i_.data(),
-                                                         j_.data(), out);
+    (scaled ? terms_scalar<true> : terms_scalar<false>)(k, records, ids, m, i_.data(), j_.data(),
+                                                        out);
   }
   const bool graded = k.grading > 0;
 #ifdef ZS_PAIR_LANES4
   if (path_ == FilterPath::kAvx2) {
     (graded ? sum_terms_avx2<true> : sum_terms_avx2<false>)(out, i_.data(), j_.data(), m,
-                                                             sums.data());
+                                                            sums.data());
   } else
 #endif
   {
     (graded ? sum_terms_scalar<true> : sum_terms_scalar<false>)(out, i_.data(), j_.data(), m,
-                                                                 sums.data());
+                                                                sums.data());
   }
   pairs_ = 0;
 }

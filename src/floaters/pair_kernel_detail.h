@@ -28,9 +28,7 @@ namespace zeroset::detail {
 [[gnu::always_inline]] inline std::uint64_t to_bits(double v) {
   return std::bit_cast<std::uint64_t>(v);
 }
-[[gnu::always_inline]] inline double from_bits(std::uint64_t b) {
-  return std::bit_cast<double>(b);
-}
+[[gnu::always_inline]] inline double from_bits(std::uint64_t b) { return std::bit_cast<double>(b); }
 template <class V>
 [[gnu::always_inline]] inline V splat(double v) {
   return v;
@@ -93,10 +91,9 @@ template <class V>
   const V t = mul_add(a, splat<V>(std::numbers::log2e), splat<V>(kShift));
   const V k = t - kShift;
   const V r = mul_add(k, splat<V>(-kLn2Lo), mul_add(k, splat<V>(-kLn2Hi), a));
-  constexpr double kCoefficients[] = {0x1.6da753185ad01p-10, 0x1.1110a6222ea35p-7,
-                                      0x1.555464a0f079ep-5,  0x1.5555557e7125ep-3,
-                                      0x1.0000005c89e4ep-1,  0x1.fffffffff61fdp-1,
-                                      0x1.ffffffffa7135p-1};
+  constexpr double kCoefficients[] = {
+      0x1.6da753185ad01p-10, 0x1.1110a6222ea35p-7, 0x1.555464a0f079ep-5, 0x1.5555557e7125ep-3,
+      0x1.0000005c89e4ep-1,  0x1.fffffffff61fdp-1, 0x1.ffffffffa7135p-1};
   V p = splat<V>(0x1.a17df2ec2bc60p-13);
   for (double c : kCoefficients) p = mul_add(p, r, splat<V>(c));
   return from_bits(to_bits(p) + (to_bits(t) << 52));
@@ -113,7 +110,6 @@ inline float prefilter_threshold(double reach) {
   // The factor covers the float rounding of the sum of squares and of the threshold itself.
   return static_cast<float>(widened * widened * (1 + 0x1p-18));
 }
-
 
 /// a·b for three-vectors given by their coordinates, as the pair terms take it (for |r|² and
 /// the normals' cosine).
@@ -157,8 +153,8 @@ struct PairTermsBoth {
 /// limits.
 template <bool kScaled, class V>
 [[gnu::always_inline]] inline PairTermsBoth<V> pair_terms(V dx, V dy, V dz, V d2, V dist, V si,
-                                                         V sj, V pi, V pj, V cosine,
-                                                         V no_normal, const PairConstants& k) {
+                                                          V sj, V pi, V pj, V cosine, V no_normal,
+                                                          const PairConstants& k) {
   const V zero = splat<V>(0.0), one = splat<V>(1.0);
   // w_ij = |cos(∇F_i, ∇F_j)|, or 1 when either has no normal (then the cosine is exactly 0).
   const V w = k.cos_weight > 0 ? cosine + no_normal : one;
@@ -242,7 +238,7 @@ class PairBatch {
   FilterPath path_;
   std::size_t pairs_ = 0;
   std::vector<std::uint32_t> i_, j_;  // each pair's slots (the first pairs_ of them)
-  std::vector<Terms> terms_;  // per pair: the terms for i, then for j
+  std::vector<Terms> terms_;          // per pair: the terms for i, then for j
 };
 
 }  // namespace zeroset::detail

@@ -48,12 +48,12 @@ void validate_settings(const FloaterOptions& o) {
         num(o.desired_energy_factor), "must be positive");
   check(finite(o.radius_rate) && o.radius_rate >= 0, "radius_rate", num(o.radius_rate),
         "must not be negative");
-  check(finite(o.radius_damping) && o.radius_damping > 0, "radius_damping",
-        num(o.radius_damping), "must be positive");
+  check(finite(o.radius_damping) && o.radius_damping > 0, "radius_damping", num(o.radius_damping),
+        "must be positive");
   // The pull's Euler step shrinks the distance to F = 0 by (1 − φ·dt): it diverges from
   // φ·dt = 2 on.
-  check(finite(o.feedback) && o.feedback >= 0 && o.feedback * o.dt < kMaxFeedbackStep,
-        "feedback", num(o.feedback),
+  check(finite(o.feedback) && o.feedback >= 0 && o.feedback * o.dt < kMaxFeedbackStep, "feedback",
+        num(o.feedback),
         fmt::format("must lie in [0, {:g}) (feedback·dt below {:g}: the pull's Euler step is "
                     "stable)",
                     kMaxFeedbackStep / o.dt, kMaxFeedbackStep));
@@ -62,8 +62,7 @@ void validate_settings(const FloaterOptions& o) {
   // A tangential move is at most max_step_fraction·σ per step: a γ beyond max_step_fraction/dt
   // counts every floater as near equilibrium; γ = 0 none, and nothing would ever fission.
   const double most_speed = o.max_step_fraction / o.dt;
-  check(finite(o.equilibrium_speed) && o.equilibrium_speed > 0 &&
-            o.equilibrium_speed <= most_speed,
+  check(finite(o.equilibrium_speed) && o.equilibrium_speed > 0 && o.equilibrium_speed <= most_speed,
         "equilibrium_speed", num(o.equilibrium_speed),
         fmt::format("must lie in (0, {:g}] (max_step_fraction/dt: above it every floater counts "
                     "as near equilibrium)",
@@ -79,16 +78,16 @@ void validate_settings(const FloaterOptions& o) {
         fmt::format("must lie in [1, {}]", kMaxEstimatorInterval));
   check(o.curvature_samples >= 1 && o.curvature_samples <= 64, "curvature_samples",
         std::to_string(o.curvature_samples), "must be between 1 and 64");
-  check(finite(o.singular_scale) && o.singular_scale >= 0, "singular_scale",
-        num(o.singular_scale), "must be a positive length (or 0 for scene_radius/3)");
+  check(finite(o.singular_scale) && o.singular_scale >= 0, "singular_scale", num(o.singular_scale),
+        "must be a positive length (or 0 for scene_radius/3)");
   check(finite(o.min_radius_factor) && o.min_radius_factor > 0 && o.min_radius_factor <= 1,
         "min_radius_factor", num(o.min_radius_factor), "must be in (0, 1]");
   check(o.converge_window >= 1, "converge_window", std::to_string(o.converge_window),
         "must be at least 1");
-  check(finite(o.converge_churn) && o.converge_churn >= 0, "converge_churn",
-        num(o.converge_churn), "must not be negative");
-  check(finite(o.converge_speed) && o.converge_speed >= 0, "converge_speed",
-        num(o.converge_speed), "must not be negative");
+  check(finite(o.converge_churn) && o.converge_churn >= 0, "converge_churn", num(o.converge_churn),
+        "must not be negative");
+  check(finite(o.converge_speed) && o.converge_speed >= 0, "converge_speed", num(o.converge_speed),
+        "must not be negative");
   check(o.threads >= 0, "threads", std::to_string(o.threads), "must not be negative");
 }
 

@@ -53,9 +53,8 @@ double singular_factor(const FloaterOptions& o) {
 
 void index_set(FloaterState& sys) {
   const double reach = std::min(sys.singular_scale, kReachNominal * sys.sigma_hat);
-  sys.singular_index = sys.singular.empty() || !(reach > 0)
-                           ? SingularSetIndex()
-                           : SingularSetIndex(sys.singular, reach);
+  sys.singular_index = sys.singular.empty() || !(reach > 0) ? SingularSetIndex()
+                                                            : SingularSetIndex(sys.singular, reach);
 }
 
 // The arc length of the point of curve c nearest to p, and its distance.
@@ -99,8 +98,8 @@ std::vector<Seat> seats(FloaterState& sys) {
     add_point(c.points.back());
   }
   const std::size_t points = out.size();
-  const double budget = kHeldShare * static_cast<double>(sys.opt.max_count) -
-                        static_cast<double>(points);
+  const double budget =
+      kHeldShare * static_cast<double>(sys.opt.max_count) - static_cast<double>(points);
   sys.rail_sigma = singular_factor(sys.opt) * sigma_max(sys);
   sys.rail_spacing = kRailSpacing * sys.rail_sigma;
   if (budget < 1 || total == 0) return out;
@@ -132,12 +131,14 @@ std::vector<Seat> seats(FloaterState& sys) {
     if (breaks.empty() && c.closed) {
       add_piece(0, length, true);
     } else if (c.closed) {
-      for (std::size_t k = 0; k + 1 < breaks.size(); ++k) add_piece(breaks[k], breaks[k + 1], false);
+      for (std::size_t k = 0; k + 1 < breaks.size(); ++k)
+        add_piece(breaks[k], breaks[k + 1], false);
       add_piece(breaks.back(), breaks.front() + length, false);
     } else {
       if (breaks.empty() || breaks.front() > 0) breaks.insert(breaks.begin(), 0.0);
       if (breaks.back() < length) breaks.push_back(length);
-      for (std::size_t k = 0; k + 1 < breaks.size(); ++k) add_piece(breaks[k], breaks[k + 1], false);
+      for (std::size_t k = 0; k + 1 < breaks.size(); ++k)
+        add_piece(breaks[k], breaks[k + 1], false);
     }
   }
   for (Seat& s : out)

@@ -37,9 +37,7 @@ std::size_t SpatialHash::lay_grid(const Box3& region, double cell, std::size_t p
   // ForwardWalk works across in layers.
   const int major =
       across[2] >= std::max(across[0], across[1]) ? 2 : (across[1] >= across[0] ? 1 : 0);
-  axis_ = major == 2   ? std::array{0, 1, 2}
-          : major == 1 ? std::array{0, 2, 1}
-                       : std::array{1, 2, 0};
+  axis_ = major == 2 ? std::array{0, 1, 2} : major == 1 ? std::array{0, 2, 1} : std::array{1, 2, 0};
   for (int k = 0; k < 3; ++k) {
     dims_[k] = across[static_cast<std::size_t>(axis_[k])];
     limit_[k] = static_cast<double>(dims_[k] - 1);
@@ -240,8 +238,7 @@ int SpatialHash::ForwardWalk::ranges(std::uint64_t key, std::span<Range> out) {
   struct Row {
     std::int64_t dy, dz;
   };
-  constexpr std::array<Row, kMaxForwardRanges> kRows{
-      {{0, 0}, {1, 0}, {-1, 1}, {0, 1}, {1, 1}}};
+  constexpr std::array<Row, kMaxForwardRanges> kRows{{{0, 0}, {1, 0}, {-1, 1}, {0, 1}, {1, 1}}};
   if (row != row_ || x < x_) {  // a new row (or a step back): start each forward row over
     const auto [cx, y, z] = unpack(key);
     for (std::size_t r = 0; r < kRows.size(); ++r) {

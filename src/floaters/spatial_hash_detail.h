@@ -140,8 +140,8 @@ class SpatialHash {
   template <bool kDense>
   std::uint64_t bucket_index(std::uint64_t key) const {
     if constexpr (kDense)
-      return ((key >> kBits) & kAxisMask) + static_cast<std::uint64_t>(dims_[1]) *
-                                                (key >> (2 * kBits));
+      return ((key >> kBits) & kAxisMask) +
+             static_cast<std::uint64_t>(dims_[1]) * (key >> (2 * kBits));
     else
       return mix64(key & ~kAxisMask) & mask_;
   }

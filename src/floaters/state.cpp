@@ -71,10 +71,12 @@ void permute_state(FloaterState& sys, std::span<const std::uint32_t> order) {
 #pragma omp parallel num_threads(sys.threads) if (order.size() >= kParallelMin)
   [&]<std::size_t... k>(std::index_sequence<k...>) {
     (permute_into(std::get<k>(now), std::get<k>(sys.permuted), order), ...);
-  }(std::make_index_sequence<kStateArrays>{});
+  }
+  (std::make_index_sequence<kStateArrays>{});
   [&]<std::size_t... k>(std::index_sequence<k...>) {
     (std::get<k>(now).swap(std::get<k>(sys.permuted)), ...);
-  }(std::make_index_sequence<kStateArrays>{});
+  }
+  (std::make_index_sequence<kStateArrays>{});
 }
 
 // F and ∇F at every floater, batched in fixed chunks; and, for residual_stats(), the residual

@@ -161,8 +161,8 @@ void write_png(const Image& image, const std::string& path) {
 
 void write_ppm(const Image& image, const std::string& path) {
   if (image.width <= 0 || image.height <= 0) throw IoError(path, "image is empty");
-  const std::string header = "P6\n" + std::to_string(image.width) + " " +
-                             std::to_string(image.height) + "\n255\n";
+  const std::string header =
+      "P6\n" + std::to_string(image.width) + " " + std::to_string(image.height) + "\n255\n";
   write_file_atomically(path, [&](std::ostream& out) {
     out.write(header.data(), static_cast<std::streamsize>(header.size()));
     out.write(reinterpret_cast<const char*>(image.rgb.data()),
@@ -185,9 +185,8 @@ void write_image(const Image& image, const std::string& path) {
 Image read_image(const std::string& path) {
   const std::string bytes = read_text_file(path);
   int w = 0, h = 0, n = 0;
-  unsigned char* data =
-      stbi_load_from_memory(reinterpret_cast<const unsigned char*>(bytes.data()),
-                            static_cast<int>(bytes.size()), &w, &h, &n, 3);
+  unsigned char* data = stbi_load_from_memory(reinterpret_cast<const unsigned char*>(bytes.data()),
+                                              static_cast<int>(bytes.size()), &w, &h, &n, 3);
   if (!data)
     throw IoError(path, std::string("not a readable PNG or PPM: ") + stbi_failure_reason());
   Image img(w, h);

@@ -19,8 +19,10 @@ namespace {
 constexpr double kUnlimited = 1e18;
 
 std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t' || s.front() == '\n')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\n' || s.back() == '\r'))
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t' || s.front() == '\n'))
+    s.remove_prefix(1);
+  while (!s.empty() &&
+         (s.back() == ' ' || s.back() == '\t' || s.back() == '\n' || s.back() == '\r'))
     s.remove_suffix(1);
   return s;
 }
@@ -50,7 +52,8 @@ std::optional<double> rlimit_bytes(int resource) {
 
 // Usage of one cgroup without the page cache the kernel would reclaim before failing.
 double cgroup_used(const std::filesystem::path& dir, bool v1) {
-  const auto usage = parse_byte_count(slurp(dir / (v1 ? "memory.usage_in_bytes" : "memory.current")));
+  const auto usage =
+      parse_byte_count(slurp(dir / (v1 ? "memory.usage_in_bytes" : "memory.current")));
   if (!usage) return 0;
   const auto inactive =
       parse_memory_stat(slurp(dir / "memory.stat"), v1 ? "total_inactive_file" : "inactive_file");
@@ -97,8 +100,10 @@ MemoryLimit least_memory_limit(const MemoryFacts& facts) {
     if (!best.known || bytes < best.bytes) best = {true, bytes, source};
   };
   if (facts.physical) consider(*facts.physical, "physical memory");
-  if (facts.address_limit) consider(*facts.address_limit - facts.mapped, "the process limit (ulimit -v)");
-  if (facts.data_limit) consider(*facts.data_limit - facts.data, "the process data limit (ulimit -d)");
+  if (facts.address_limit)
+    consider(*facts.address_limit - facts.mapped, "the process limit (ulimit -v)");
+  if (facts.data_limit)
+    consider(*facts.data_limit - facts.data, "the process data limit (ulimit -d)");
   for (const MemoryFacts::Cgroup& c : facts.cgroups)
     consider(c.limit - c.used, "the cgroup memory limit");
   return best;
@@ -107,10 +112,12 @@ MemoryLimit least_memory_limit(const MemoryFacts& facts) {
 MemoryLimit available_memory() {
   MemoryFacts facts;
   const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
-  if (pages > 0 && page > 0) facts.physical = static_cast<double>(pages) * static_cast<double>(page);
+  if (pages > 0 && page > 0)
+    facts.physical = static_cast<double>(pages) * static_cast<double>(page);
   facts.address_limit = rlimit_bytes(RLIMIT_AS);
   facts.data_limit = rlimit_bytes(RLIMIT_DATA);
-  if (page > 0) parse_statm(slurp("/proc/self/statm"), static_cast<double>(page), facts.mapped, facts.data);
+  if (page > 0)
+    parse_statm(slurp("/proc/self/statm"), static_cast<double>(page), facts.mapped, facts.data);
   read_cgroups(facts);
   return least_memory_limit(facts);
 }

@@ -10,13 +10,13 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <ostream>
 #include <new>
+#include <ostream>
 #include <utility>
 
+#include "temp_file_detail.h"
 #include "zeroset/error.h"
 #include "zeroset/io/atomic_file.h"
-#include "temp_file_detail.h"
 
 namespace zeroset {
 namespace fs = std::filesystem;
@@ -103,8 +103,8 @@ fs::path follow_links(const std::string& path) {
 }
 
 struct CheckedPath {
-  fs::path target;   // links followed
-  bool direct;       // an existing file that is not a regular file: written in place
+  fs::path target;  // links followed
+  bool direct;      // an existing file that is not a regular file: written in place
 };
 
 CheckedPath check_output_path(const std::string& path) {
@@ -174,12 +174,12 @@ void check_writable(const std::string& path) { check_output_path(path); }
 
 // -------------------------------------------------------------------------- transaction
 struct OutputTransaction::Output {
-  std::string path;        // as given
+  std::string path;  // as given
   std::string flag;
-  fs::path target;         // links followed
-  detail::TempFile temp;   // path empty: written directly
-  int mode = -1;           // the permission bits of the file it replaces; -1: a new file
-  int slot = -1;           // of `temp` in the signal clean-up
+  fs::path target;        // links followed
+  detail::TempFile temp;  // path empty: written directly
+  int mode = -1;          // the permission bits of the file it replaces; -1: a new file
+  int slot = -1;          // of `temp` in the signal clean-up
   bool written = false;
   bool external = false;
   bool renamed = false;
@@ -209,8 +209,9 @@ void OutputTransaction::declare(const std::string& path, const std::string& flag
     const auto by_inode = exists ? by_inode_.find(inode) : by_inode_.end();
     if (by_name != by_name_.end() || by_inode != by_inode_.end()) {
       const Output& o = outputs_[by_name != by_name_.end() ? by_name->second : by_inode->second];
-      throw InvalidArgument(flag, path, "names the same file as " + o.flag + " " + o.path +
-                                            "; give each output its own file");
+      throw InvalidArgument(
+          flag, path,
+          "names the same file as " + o.flag + " " + o.path + "; give each output its own file");
     }
   }
   Output o;

@@ -42,23 +42,30 @@ void check_content(const PlyContent& c) {
         throw InvalidArgument(fmt::format("write_ply: a triangle refers to vertex {} of {}", v, n));
   for (const auto& e : c.edges)
     for (std::uint32_t v : e)
-      if (v >= n) throw InvalidArgument(fmt::format("write_ply: an edge refers to vertex {} of {}", v, n));
+      if (v >= n)
+        throw InvalidArgument(fmt::format("write_ply: an edge refers to vertex {} of {}", v, n));
   if (!c.edge_kinds.empty() && c.edge_kinds.size() != c.edges.size())
-    throw InvalidArgument(fmt::format("write_ply: {} edge kinds for {} edges", c.edge_kinds.size(), c.edges.size()));
+    throw InvalidArgument(
+        fmt::format("write_ply: {} edge kinds for {} edges", c.edge_kinds.size(), c.edges.size()));
   // Every number is written as a float: one that is not finite, or does not fit (|v| above
   // 3.4e38 becomes inf), is refused rather than written as a word no reader parses.
   auto fits = [](double v) { return std::abs(v) <= std::numeric_limits<float>::max(); };
   for (std::size_t i = 0; i < n; ++i) {
-    const bool ok = fits(c.positions[i].x()) && fits(c.positions[i].y()) && fits(c.positions[i].z()) &&
-                    (c.normals.empty() || (fits(c.normals[i].x()) && fits(c.normals[i].y()) &&
-                                           fits(c.normals[i].z())));
+    const bool ok = fits(c.positions[i].x()) && fits(c.positions[i].y()) &&
+                    fits(c.positions[i].z()) &&
+                    (c.normals.empty() ||
+                     (fits(c.normals[i].x()) && fits(c.normals[i].y()) && fits(c.normals[i].z())));
     if (!ok)
-      throw BadInput(fmt::format("write_ply: vertex {} has a coordinate or normal that is not "
-                                 "finite or beyond a float's range; nothing written", i));
+      throw BadInput(
+          fmt::format("write_ply: vertex {} has a coordinate or normal that is not "
+                      "finite or beyond a float's range; nothing written",
+                      i));
     for (const PlyProperty& p : c.properties)
       if (p.type == PlyScalar::kFloat && !fits(p.values[i]))
-        throw BadInput(fmt::format("write_ply: the {} of vertex {} is not finite or beyond a "
-                                   "float's range ({}); nothing written", p.name, i, p.values[i]));
+        throw BadInput(
+            fmt::format("write_ply: the {} of vertex {} is not finite or beyond a "
+                        "float's range ({}); nothing written",
+                        p.name, i, p.values[i]));
   }
 }
 
@@ -76,7 +83,8 @@ std::string header(const PlyContent& c, bool binary) {
     h += fmt::format("element face {}\nproperty list uchar uint vertex_indices\n",
                      c.triangles.size());
   if (!c.edges.empty()) {
-    h += fmt::format("element edge {}\nproperty int vertex1\nproperty int vertex2\n", c.edges.size());
+    h += fmt::format("element edge {}\nproperty int vertex1\nproperty int vertex2\n",
+                     c.edges.size());
     if (!c.edge_kinds.empty()) h += "property uchar kind\n";
   }
   h += "end_header\n";
@@ -384,11 +392,13 @@ PlyData read_ply(const std::string& path) {
         if (e.properties[k].name == "vertex1") v1 = k;
         if (e.properties[k].name == "vertex2") v2 = k;
       }
-      if (e.count > 0 && (v1 == e.properties.size() || v2 == v1)) throw fail("an edge element needs vertex1 and vertex2");
+      if (e.count > 0 && (v1 == e.properties.size() || v2 == v1))
+        throw fail("an edge element needs vertex1 and vertex2");
       std::vector<double> v(e.properties.size());
       for (std::size_t i = 0; i < e.count; ++i) {
         body.at_record("edge", i, e.count);
-        for (std::size_t k = 0; k < e.properties.size(); ++k) v[k] = body.next(e.properties[k].type);
+        for (std::size_t k = 0; k < e.properties.size(); ++k)
+          v[k] = body.next(e.properties[k].type);
         for (double x : {v[v1], v[v2]})
           if (!(x >= 0 && x < 4294967296.0)) body.fail_record("bad vertex index");
         ply.edges.push_back({static_cast<std::uint32_t>(v[v1]), static_cast<std::uint32_t>(v[v2])});

@@ -75,9 +75,9 @@ int open_temp_for_writing(const TempFile& t, const std::string& path) {
   const int fd = ::open(t.path.c_str(), O_WRONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) {
     const int err = errno;
-    throw WriteError(path, "cannot open its temp file '" + t.path + "': " +
-                               (err == ELOOP ? "it was replaced by a symbolic link"
-                                             : std::strerror(err)));
+    throw WriteError(
+        path, "cannot open its temp file '" + t.path + "': " +
+                  (err == ELOOP ? "it was replaced by a symbolic link" : std::strerror(err)));
   }
   struct stat st {};
   if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || st.st_dev != t.dev || st.st_ino != t.ino) {

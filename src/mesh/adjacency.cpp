@@ -16,9 +16,9 @@ void check_vertices(size_t nv, Triangles triangles) {
   for (size_t t = 0; t < triangles.size(); ++t)
     for (std::uint32_t v : triangles[t])
       if (v >= nv)
-        throw InvalidArgument("triangle " + std::to_string(t), std::to_string(v),
-                              "refers to a vertex the mesh does not have (" +
-                                  std::to_string(nv) + " vertices)");
+        throw InvalidArgument(
+            "triangle " + std::to_string(t), std::to_string(v),
+            "refers to a vertex the mesh does not have (" + std::to_string(nv) + " vertices)");
 }
 
 // Every directed triangle edge a → b (a ≠ b) bucketed by its smaller vertex, in triangle
@@ -29,7 +29,8 @@ void bucket_edges(size_t nv, Triangles triangles, std::vector<std::uint32_t>& st
   start.assign(nv + 1, 0);
   for (const auto& tri : triangles)
     for (int k = 0; k < 3; ++k) {
-      const std::uint32_t a = tri[static_cast<size_t>(k)], b = tri[static_cast<size_t>((k + 1) % 3)];
+      const std::uint32_t a = tri[static_cast<size_t>(k)],
+                          b = tri[static_cast<size_t>((k + 1) % 3)];
       if (a != b) ++start[std::min(a, b) + 1];
     }
   for (size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
@@ -38,7 +39,8 @@ void bucket_edges(size_t nv, Triangles triangles, std::vector<std::uint32_t>& st
   for (size_t t = 0; t < triangles.size(); ++t) {
     const auto& tri = triangles[t];
     for (int k = 0; k < 3; ++k) {
-      const std::uint32_t a = tri[static_cast<size_t>(k)], b = tri[static_cast<size_t>((k + 1) % 3)];
+      const std::uint32_t a = tri[static_cast<size_t>(k)],
+                          b = tri[static_cast<size_t>((k + 1) % 3)];
       if (a == b) continue;
       half[fill[std::min(a, b)]++] = make(std::max(a, b), static_cast<std::uint32_t>(t));
     }
@@ -79,8 +81,9 @@ MeshAdjacency build_adjacency(size_t vertex_count,
   };
   std::vector<std::uint32_t> start;
   std::vector<Half> half;
-  bucket_edges(nv, triangles, start, half,
-               [](std::uint32_t other, std::uint32_t t) { return Half{other, t}; });
+  bucket_edges(nv, triangles, start, half, [](std::uint32_t other, std::uint32_t t) {
+    return Half{other, t};
+  });
   MeshAdjacency adj;
   adj.edges.reserve(half.size() / 2 + 1);
   adj.edge_triangles.reserve(half.size() / 2 + 1);
@@ -164,7 +167,8 @@ MeshTopology mesh_topology(const Mesh& mesh) {
   MeshTopology t;
   t.triangles = mesh.triangles.size();
   t.edges = adj.edges.size();
-  for (size_t v = 0; v < mesh.positions.size(); ++v) t.vertices += adj.valence(static_cast<std::uint32_t>(v)) > 0;
+  for (size_t v = 0; v < mesh.positions.size(); ++v)
+    t.vertices += adj.valence(static_cast<std::uint32_t>(v)) > 0;
   for (const auto& tri : mesh.triangles)
     if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) ++t.degenerate_triangles;
   auto direction = [&](std::uint32_t tri, std::uint32_t a, std::uint32_t b) {

@@ -319,9 +319,8 @@ CarryResult carry_mesh(const Mesh& mesh, const Surface& from, const Surface& to,
                        : why == CarryFailure::kClip   ? "left the clip curve"
                                                       : "found no surface nearby";
     return failed_after(
-        why,
-        fmt::format(fmt::runtime(fmt::format("a vertex {}", what)), options.max_move_edges) +
-            (v >= 0 ? fmt::format(" (vertex {})", v) : std::string()));
+        why, fmt::format(fmt::runtime(fmt::format("a vertex {}", what)), options.max_move_edges) +
+                 (v >= 0 ? fmt::format(" (vertex {})", v) : std::string()));
   }
   for (size_t v = 0; v < nv; ++v)
     r.max_move_edges = std::max(r.max_move_edges, moved[v] / fr.edge[v]);

@@ -64,10 +64,10 @@ inline std::array<double, 2> quad_splits(const Vec3& p0, const Vec3& p1, const V
                                _mm256_sub_pd(_mm256_permute4x64_pd(z, 0x4e), z));
   // Triangles (0,1,3), (1,2,3), (0,2,3), (0,1,2): sides u = a–b, v = a–c, w = b–c.
   const __m256d u = _mm256_blend_pd(_mm256_permute4x64_pd(side, 0x04), diag, 0b0100);
-  const __m256d v = _mm256_blend_pd(_mm256_permute4x64_pd(side, 0xff),
-                                    _mm256_permute4x64_pd(diag, 0x04), 0b1010);
-  const __m256d w = _mm256_blend_pd(_mm256_permute4x64_pd(side, 0x68),
-                                    _mm256_permute_pd(diag, 0b0101), 0b0001);
+  const __m256d v =
+      _mm256_blend_pd(_mm256_permute4x64_pd(side, 0xff), _mm256_permute4x64_pd(diag, 0x04), 0b1010);
+  const __m256d w =
+      _mm256_blend_pd(_mm256_permute4x64_pd(side, 0x68), _mm256_permute_pd(diag, 0b0101), 0b0001);
   const __m256d uv = _mm256_add_pd(u, v);
   const __m256d dot = _mm256_mul_pd(_mm256_set1_pd(0.5), _mm256_sub_pd(uv, w));
   const __m256d area2 =
@@ -105,12 +105,16 @@ void triangulate_cycle(const std::uint8_t* edges, const std::uint16_t* chords, i
     const auto splits = quad_splits(pos(edges[0]), pos(edges[1]), pos(edges[2]), pos(edges[3]));
     const double via1 = (chords[1] >> 3) & 1 ? splits[0] : -1;
     const double via2 = (chords[0] >> 2) & 1 ? splits[1] : -1;
-    if (via2 > via1) emit(edges[0], edges[2], edges[3]), emit(edges[0], edges[1], edges[2]);
-    else emit(edges[0], edges[1], edges[3]), emit(edges[1], edges[2], edges[3]);
+    if (via2 > via1)
+      emit(edges[0], edges[2], edges[3]), emit(edges[0], edges[1], edges[2]);
+    else
+      emit(edges[0], edges[1], edges[3]), emit(edges[1], edges[2], edges[3]);
     return;
   }
-  if (n == 5) triangulate_pentagon(edges, chords, pos, emit);
-  else triangulate_polygon(edges, chords, n, pos, emit);
+  if (n == 5)
+    triangulate_pentagon(edges, chords, pos, emit);
+  else
+    triangulate_polygon(edges, chords, n, pos, emit);
 }
 
 // Keeps the better of best and s (the first of equals), as the dynamic programming does.
@@ -147,20 +151,25 @@ void triangulate_pentagon(const std::uint8_t* edges, const std::uint16_t* chords
   int split = -1;
   keep_better(best, split, std::min(ok14 ? triangle_quality(d01, d04, d14) : -1, best14), 1);
   keep_better(best, split,
-              std::min(std::min(ok02 && ok24 ? triangle_quality(d02, d04, d24) : -1, q012), q234), 2);
+              std::min(std::min(ok02 && ok24 ? triangle_quality(d02, d04, d24) : -1, q012), q234),
+              2);
   keep_better(best, split, std::min(ok03 ? triangle_quality(d03, d04, d34) : -1, best03), 3);
   // The triangles in the order of triangulate_polygon's stack.
   const int e0 = edges[0], e1 = edges[1], e2 = edges[2], e3 = edges[3], e4 = edges[4];
   if (split == 1) {
     emit(e0, e1, e4);
-    if (split14 == 2) emit(e1, e2, e4), emit(e2, e3, e4);
-    else emit(e1, e3, e4), emit(e1, e2, e3);
+    if (split14 == 2)
+      emit(e1, e2, e4), emit(e2, e3, e4);
+    else
+      emit(e1, e3, e4), emit(e1, e2, e3);
   } else if (split == 2) {
     emit(e0, e2, e4), emit(e2, e3, e4), emit(e0, e1, e2);
   } else {
     emit(e0, e3, e4);
-    if (split03 == 1) emit(e0, e1, e3), emit(e1, e2, e3);
-    else emit(e0, e2, e3), emit(e0, e1, e2);
+    if (split03 == 1)
+      emit(e0, e1, e3), emit(e1, e2, e3);
+    else
+      emit(e0, e2, e3), emit(e0, e1, e2);
   }
 }
 

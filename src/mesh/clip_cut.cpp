@@ -44,11 +44,12 @@ ClipCutStats cut_at_clip(Mesh& mesh, const Surface& surface, double snap_distanc
   std::vector<std::uint8_t> side(static_cast<size_t>(nv));
   detail::ExceptionTrap trap;
 #pragma omp parallel for num_threads(workers) schedule(static)
-  for (long long v = 0; v < nv; ++v) trap.run([&] {
-    const double gv = clip.value(mesh.positions[static_cast<size_t>(v)]);
-    g[static_cast<size_t>(v)] = gv;
-    side[static_cast<size_t>(v)] = std::abs(gv) <= snap_distance ? kOn : gv < 0 ? kIn : kOut;
-  });
+  for (long long v = 0; v < nv; ++v)
+    trap.run([&] {
+      const double gv = clip.value(mesh.positions[static_cast<size_t>(v)]);
+      g[static_cast<size_t>(v)] = gv;
+      side[static_cast<size_t>(v)] = std::abs(gv) <= snap_distance ? kOn : gv < 0 ? kIn : kOut;
+    });
   trap.rethrow();
   // Only triangles with a vertex on or outside the clip can change, and every edge that
   // matters below (one with a vertex on the clip, or one that crosses it) has all its
@@ -122,21 +123,23 @@ ClipCutStats cut_at_clip(Mesh& mesh, const Surface& surface, double snap_distanc
 
   const long long ncut = static_cast<long long>(cut_edges.size());
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 64)
-  for (long long c = 0; c < ncut; ++c) trap.run([&] {
-    const auto [a, b] = adj.edges[cut_edges[static_cast<size_t>(c)]];
-    const Vec3& pa = mesh.positions[a];
-    const Vec3& pb = mesh.positions[b];
-    const Vec3 x = side[a] == kIn ? clip_crossing(clip, pa, pb) : clip_crossing(clip, pb, pa);
-    mesh.positions[static_cast<size_t>(nv + c)] =
-        project_onto_clip_curve(pool.local(), clip, x, (pb - pa).norm());
-  });
+  for (long long c = 0; c < ncut; ++c)
+    trap.run([&] {
+      const auto [a, b] = adj.edges[cut_edges[static_cast<size_t>(c)]];
+      const Vec3& pa = mesh.positions[a];
+      const Vec3& pb = mesh.positions[b];
+      const Vec3 x = side[a] == kIn ? clip_crossing(clip, pa, pb) : clip_crossing(clip, pb, pa);
+      mesh.positions[static_cast<size_t>(nv + c)] =
+          project_onto_clip_curve(pool.local(), clip, x, (pb - pa).norm());
+    });
   trap.rethrow();
   const long long nsnap = static_cast<long long>(snapped.size());
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 64)
-  for (long long s = 0; s < nsnap; ++s) trap.run([&] {
-    Vec3& p = mesh.positions[static_cast<size_t>(snapped[static_cast<size_t>(s)])];
-    p = project_onto_clip_curve(pool.local(), clip, p, 4 * snap_distance + 1e-300);
-  });
+  for (long long s = 0; s < nsnap; ++s)
+    trap.run([&] {
+      Vec3& p = mesh.positions[static_cast<size_t>(snapped[static_cast<size_t>(s)])];
+      p = project_onto_clip_curve(pool.local(), clip, p, 4 * snap_distance + 1e-300);
+    });
   trap.rethrow();
   for (long long v : snapped) mesh.is_boundary[static_cast<size_t>(v)] = 1;
   for (long long c = 0; c < ncut; ++c) mesh.is_boundary[static_cast<size_t>(nv + c)] = 1;
@@ -168,7 +171,8 @@ ClipCutStats cut_at_clip(Mesh& mesh, const Surface& surface, double snap_distanc
     std::uint32_t poly[4];
     int n = 0;
     for (int k = 0; k < 3; ++k) {
-      const std::uint32_t a = tri[static_cast<size_t>(k)], b = tri[static_cast<size_t>((k + 1) % 3)];
+      const std::uint32_t a = tri[static_cast<size_t>(k)],
+                          b = tri[static_cast<size_t>((k + 1) % 3)];
       if (side[a] != kOut) poly[n++] = a;
       if ((side[a] == kIn && side[b] == kOut) || (side[a] == kOut && side[b] == kIn))
         poly[n++] = cut_vertex(a, b);

@@ -3,10 +3,10 @@
 // triangles. See docs/meshing.md ("Crossings").
 #include "zeroset/mesh/crossings.h"
 
+#include <fmt/core.h>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <fmt/core.h>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -41,7 +41,7 @@ struct Network {
   };
   std::vector<Vec3> pos;
   std::vector<std::vector<std::uint32_t>> adj;
-  std::vector<std::uint8_t> special;  // curve end, junction, pinch or triple point
+  std::vector<std::uint8_t> special;   // curve end, junction, pinch or triple point
   std::vector<std::uint8_t> free_end;  // the end of one crossing curve, inside the clip
   std::vector<std::uint8_t> clip_end;  // the end of one crossing curve, on the clip
   std::vector<Curve> curves;
@@ -145,7 +145,8 @@ Anchor anchor_on_curve(const Network& net, std::uint32_t c, const Vec3& p, doubl
     const double len2 = ab.squaredNorm();
     const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
     const double d = (a + t * ab - p).norm();
-    if (d <= best_d) best_d = d, best = {.curve = c, .arc = curve.arc[i] + t * (curve.arc[i + 1] - curve.arc[i])};
+    if (d <= best_d)
+      best_d = d, best = {.curve = c, .arc = curve.arc[i] + t * (curve.arc[i + 1] - curve.arc[i])};
   }
   return best;
 }
@@ -153,10 +154,12 @@ Anchor anchor_on_curve(const Network& net, std::uint32_t c, const Vec3& p, doubl
 // A closed chain turned to start where a run of anchors on one curve starts (if it has more
 // than one run): runs are read from the first vertex on, and one split at the chain's start
 // would be joined as two, covering the curve edges between them twice.
-void start_at_run(std::vector<std::uint32_t>& verts, std::vector<Vec3>& points, std::vector<Anchor>& anchors) {
+void start_at_run(std::vector<std::uint32_t>& verts, std::vector<Vec3>& points,
+                  std::vector<Anchor>& anchors) {
   const size_t n = anchors.size();
   auto same = [&](size_t a, size_t b) {
-    return anchors[a].special == anchors[b].special && (anchors[a].special != kNone || anchors[a].curve == anchors[b].curve);
+    return anchors[a].special == anchors[b].special &&
+           (anchors[a].special != kNone || anchors[a].curve == anchors[b].curve);
   };
   size_t shift = 0;
   while (shift < n && same(shift, (shift + n - 1) % n)) ++shift;
@@ -189,10 +192,12 @@ void merge_short_runs(const Network& net, const std::vector<Vec3>& points, bool 
     const size_t before = (k + n - 1) % n, after = end % n;
     const std::uint32_t other = curve_at(before);
     double lo = anchors[k].arc, hi = lo;
-    for (size_t j = k; j < end; ++j) lo = std::min(lo, anchors[j].arc), hi = std::max(hi, anchors[j].arc);
+    for (size_t j = k; j < end; ++j)
+      lo = std::min(lo, anchors[j].arc), hi = std::max(hi, anchors[j].arc);
     if (other != kNone && other != c && curve_at(after) == other && hi - lo <= short_run) {
       std::vector<Anchor> moved;
-      for (size_t j = k; j < end; ++j) moved.push_back(anchor_on_curve(net, other, points[j], reach));
+      for (size_t j = k; j < end; ++j)
+        moved.push_back(anchor_on_curve(net, other, points[j], reach));
       if (std::all_of(moved.begin(), moved.end(), [](const Anchor& a) { return a.ok(); }))
         std::copy(moved.begin(), moved.end(), anchors.begin() + static_cast<long>(k));
     }
@@ -274,7 +279,8 @@ std::vector<std::uint32_t> chain_targets(const Network& net, const std::vector<A
       for (size_t j : {k, stop - 1}) {
         const double arc = u[j - k];
         if (arc <= free_reach && net.free_end[curve.verts.front()]) target[j] = curve.verts.front();
-        if (len - arc <= free_reach && net.free_end[curve.verts.back()]) target[j] = curve.verts.back();
+        if (len - arc <= free_reach && net.free_end[curve.verts.back()])
+          target[j] = curve.verts.back();
       }
     k = stop;
   }
@@ -287,7 +293,8 @@ std::vector<std::uint32_t> chain_targets(const Network& net, const std::vector<A
       if (curve.closed) continue;
       const double arc = anchors[j].arc, reach = kFreeEndReach * fold_depth;
       if (arc <= reach && net.clip_end[curve.verts.front()]) target[j] = curve.verts.front();
-      if (curve.length() - arc <= reach && net.clip_end[curve.verts.back()]) target[j] = curve.verts.back();
+      if (curve.length() - arc <= reach && net.clip_end[curve.verts.back()])
+        target[j] = curve.verts.back();
     }
   return target;
 }
@@ -376,12 +383,14 @@ long long refine_strips(Mesh& mesh, size_t first_added, double limit, const Surf
   auto file = [&](std::uint32_t t) {
     const auto& tri = mesh.triangles[t];
     for (int k = 0; k < 3; ++k)
-      on_edge[undirected(tri[static_cast<size_t>(k)], tri[static_cast<size_t>((k + 1) % 3)])].push_back(t);
+      on_edge[undirected(tri[static_cast<size_t>(k)], tri[static_cast<size_t>((k + 1) % 3)])]
+          .push_back(t);
   };
   auto unfile = [&](std::uint32_t t) {
     const auto& tri = mesh.triangles[t];
     for (int k = 0; k < 3; ++k) {
-      auto& list = on_edge[undirected(tri[static_cast<size_t>(k)], tri[static_cast<size_t>((k + 1) % 3)])];
+      auto& list =
+          on_edge[undirected(tri[static_cast<size_t>(k)], tri[static_cast<size_t>((k + 1) % 3)])];
       list.erase(std::remove(list.begin(), list.end(), t), list.end());
     }
   };
@@ -398,7 +407,8 @@ long long refine_strips(Mesh& mesh, size_t first_added, double limit, const Surf
   }
   Evaluator ev(surface.field);
   std::vector<std::uint32_t> queue;
-  for (size_t t = first_added; t < mesh.triangles.size(); ++t) queue.push_back(static_cast<std::uint32_t>(t));
+  for (size_t t = first_added; t < mesh.triangles.size(); ++t)
+    queue.push_back(static_cast<std::uint32_t>(t));
   long long added = 0;
   const auto& P = mesh.positions;
   // Each split halves an edge; the bound only guards against a cycle on degenerate input.
@@ -410,13 +420,15 @@ long long refine_strips(Mesh& mesh, size_t first_added, double limit, const Surf
     int longest = -1;
     double longest_len = limit;
     for (int k = 0; k < 3; ++k) {
-      const std::uint32_t a = tri[static_cast<size_t>(k)], b = tri[static_cast<size_t>((k + 1) % 3)];
+      const std::uint32_t a = tri[static_cast<size_t>(k)],
+                          b = tri[static_cast<size_t>((k + 1) % 3)];
       const double len = (P[a] - P[b]).norm();
       if (len > longest_len && !curve_edges.count(undirected(a, b))) longest = k, longest_len = len;
     }
     // A triangle with no area has no inside to fill: splitting it would not shorten its edges.
     if (longest < 0 || !(area2 > 1e-6 * longest_len * longest_len)) continue;
-    const std::uint32_t a = tri[static_cast<size_t>(longest)], b = tri[static_cast<size_t>((longest + 1) % 3)];
+    const std::uint32_t a = tri[static_cast<size_t>(longest)],
+                        b = tri[static_cast<size_t>((longest + 1) % 3)];
     const std::vector<std::uint32_t> sharing = on_edge[undirected(a, b)];
     if (sharing.empty() || sharing.size() > 2) continue;
     Vec3 m = 0.5 * (P[a] + P[b]);
@@ -427,7 +439,8 @@ long long refine_strips(Mesh& mesh, size_t first_added, double limit, const Surf
       Vec3 q = m;
       if (project_onto_surface(ev, q, 1e-13 * surface.scene_radius(), 0.3 * longest_len)) m = q;
     }
-    if (!((m - P[a]).norm() > 0.25 * longest_len && (m - P[b]).norm() > 0.25 * longest_len)) continue;
+    if (!((m - P[a]).norm() > 0.25 * longest_len && (m - P[b]).norm() > 0.25 * longest_len))
+      continue;
     // Both halves of every triangle on the edge must keep its side: near a singular curve the
     // projection can slide onto the curve, in line with the curve's own vertices, and a split
     // there would only make triangles without area.
@@ -455,7 +468,8 @@ long long refine_strips(Mesh& mesh, size_t first_added, double limit, const Surf
       while (!((old[static_cast<size_t>(k)] == a && old[static_cast<size_t>((k + 1) % 3)] == b) ||
                (old[static_cast<size_t>(k)] == b && old[static_cast<size_t>((k + 1) % 3)] == a)))
         ++k;
-      const std::uint32_t x = old[static_cast<size_t>(k)], y = old[static_cast<size_t>((k + 1) % 3)],
+      const std::uint32_t x = old[static_cast<size_t>(k)],
+                          y = old[static_cast<size_t>((k + 1) % 3)],
                           z = old[static_cast<size_t>((k + 2) % 3)];
       mesh.triangles[s] = {x, mid, z};
       const std::uint32_t t2 = static_cast<std::uint32_t>(mesh.triangles.size());
@@ -481,14 +495,16 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
   const auto& P0 = mesh.positions;
   double edge_sum = 0;
   for (const auto& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k) edge_sum += (P0[t[static_cast<size_t>(k)]] - P0[t[static_cast<size_t>((k + 1) % 3)]]).norm();
+    for (int k = 0; k < 3; ++k)
+      edge_sum += (P0[t[static_cast<size_t>(k)]] - P0[t[static_cast<size_t>((k + 1) % 3)]]).norm();
   const double mean_edge = edge_sum / (3.0 * static_cast<double>(mesh.triangles.size()));
   const double spacing = options.spacing_edges * mean_edge;
 
   SingularSetOptions so;
   so.cells = options.search_cells > 0
                  ? options.search_cells
-                 : std::clamp(static_cast<int>(surface.bounds().size().maxCoeff() / cell_size / 2), 48, 96);
+                 : std::clamp(static_cast<int>(surface.bounds().size().maxCoeff() / cell_size / 2),
+                              48, 96);
   so.spacing = spacing;
   SingularSet set = find_singular_set(surface, so, stop);
   if (set_out) *set_out = set;
@@ -499,7 +515,8 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
   if (stop.stop_requested() || set.has_singular_sheet) return finish();
 
   Network net = build_network(set, spacing, options.isolated_curves);
-  for (const auto& c : net.curves) (c.kind == CurveKind::kCrossing ? stats.crossing_curves : stats.isolated_curves)++;
+  for (const auto& c : net.curves)
+    (c.kind == CurveKind::kCrossing ? stats.crossing_curves : stats.isolated_curves)++;
   if (net.curves.empty()) return finish();
 
   auto on_clip = [&](const Vec3& p) -> std::uint8_t {
@@ -536,7 +553,9 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
     for (const auto& t : mesh.triangles) {
       if (near[t[0]] || near[t[1]] || near[t[2]]) {
         ++stats.removed_triangles;
-        for (int k = 0; k < 3; ++k) removed_edges.insert(edge_key(t[static_cast<size_t>(k)], t[static_cast<size_t>((k + 1) % 3)]));
+        for (int k = 0; k < 3; ++k)
+          removed_edges.insert(
+              edge_key(t[static_cast<size_t>(k)], t[static_cast<size_t>((k + 1) % 3)]));
       } else {
         kept.push_back(t);
       }
@@ -559,7 +578,8 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
     // Only triangles with a corner within the index's reach of a curve can be on the cut.
     std::vector<size_t> candidates;
     for (size_t i = 0; i < kept.size(); ++i)
-      if (std::any_of(kept[i].begin(), kept[i].end(), [&](std::uint32_t v) { return reachable[v]; }))
+      if (std::any_of(kept[i].begin(), kept[i].end(),
+                      [&](std::uint32_t v) { return reachable[v]; }))
         candidates.push_back(i);
     std::vector<std::uint8_t> cut(kept.size(), 0);
     for (int pass = 0; pass < 16; ++pass) {
@@ -569,7 +589,8 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
         const auto& t = kept[i];
         int on_rim = 0;
         for (int k = 0; k < 3; ++k)
-          on_rim += removed_edges.count(edge_key(t[static_cast<size_t>((k + 1) % 3)], t[static_cast<size_t>(k)])) > 0;
+          on_rim += removed_edges.count(edge_key(t[static_cast<size_t>((k + 1) % 3)],
+                                                 t[static_cast<size_t>(k)])) > 0;
         if (on_rim >= 2 && !near_free_end(t)) tips.push_back(i);
       }
       if (tips.empty()) break;
@@ -577,7 +598,9 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
         cut[i] = 1;
         ++stats.removed_triangles;
         const auto& t = kept[i];
-        for (int k = 0; k < 3; ++k) removed_edges.insert(edge_key(t[static_cast<size_t>(k)], t[static_cast<size_t>((k + 1) % 3)]));
+        for (int k = 0; k < 3; ++k)
+          removed_edges.insert(
+              edge_key(t[static_cast<size_t>(k)], t[static_cast<size_t>((k + 1) % 3)]));
       }
     }
     {
@@ -603,8 +626,9 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
       for (std::uint32_t v : ch.verts) {
         anchors.push_back(anchor_of(net, index, curve_of, mesh.positions[v], reach));
         if (!anchors.back().ok()) {
-          stats.failure = fmt::format("a vertex of the cut at ({:.4g}, {:.4g}, {:.4g}) is far from every crossing curve",
-                                      mesh.positions[v].x(), mesh.positions[v].y(), mesh.positions[v].z());
+          stats.failure = fmt::format(
+              "a vertex of the cut at ({:.4g}, {:.4g}, {:.4g}) is far from every crossing curve",
+              mesh.positions[v].x(), mesh.positions[v].y(), mesh.positions[v].z());
           break;
         }
       }
@@ -621,16 +645,20 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
         const size_t j = (e + 1) % verts.size();
         const std::uint32_t u = verts[e], v = verts[j];
         if (!graph_path(net, target[e], target[j], 512, path)) {
-          stats.failure = fmt::format("the cut near ({:.4g}, {:.4g}, {:.4g}) could not be joined to a curve",
-                                      mesh.positions[u].x(), mesh.positions[u].y(), mesh.positions[u].z());
+          stats.failure =
+              fmt::format("the cut near ({:.4g}, {:.4g}, {:.4g}) could not be joined to a curve",
+                          mesh.positions[u].x(), mesh.positions[u].y(), mesh.positions[u].z());
           break;
         }
         size_t m = 0;  // path[0 .. m] fan from u, path[m .. k] from v
         for (size_t i = 1; i < path.size(); ++i)
-          if ((net.pos[path[i]] - mesh.positions[u]).norm() < (net.pos[path[i]] - mesh.positions[v]).norm()) m = i;
+          if ((net.pos[path[i]] - mesh.positions[u]).norm() <
+              (net.pos[path[i]] - mesh.positions[v]).norm())
+            m = i;
         for (size_t i = 0; i < m; ++i) added.push_back({u, base + path[i], base + path[i + 1]});
         added.push_back({u, base + path[m], v});
-        for (size_t i = m; i + 1 < path.size(); ++i) added.push_back({v, base + path[i], base + path[i + 1]});
+        for (size_t i = m; i + 1 < path.size(); ++i)
+          added.push_back({v, base + path[i], base + path[i + 1]});
       }
       if (!stats.failure.empty()) break;
     }
@@ -647,8 +675,8 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
         for (size_t i = 0; i + 1 < c.verts.size(); ++i)
           curve_edges.insert(edge_key(std::min(c.verts[i], c.verts[i + 1]) + base,
                                       std::max(c.verts[i], c.verts[i + 1]) + base));
-      stats.strip_vertices = refine_strips(mesh, first_added, options.split_edges * mean_edge,
-                                           surface, curve_edges);
+      stats.strip_vertices =
+          refine_strips(mesh, first_added, options.split_edges * mean_edge, surface, curve_edges);
       stats.added_triangles = static_cast<long long>(mesh.triangles.size() - first_added);
     } else {
       stats.removed_triangles = 0;

@@ -35,7 +35,9 @@ namespace {
 
 // Cell layers per slab: kSlabLayers, fewer on small grids so that they still make eight slabs
 // for the workers to share (never fewer than 8 layers: each slab samples two extra layers).
-long long slab_layers(const Grid& g) { return std::clamp<long long>(g.cells[2] / 8, 8, kSlabLayers); }
+long long slab_layers(const Grid& g) {
+  return std::clamp<long long>(g.cells[2] / 8, 8, kSlabLayers);
+}
 
 // Per cube corner: which of the cell's four node rows holds it ((dy, dz) = (0,0), (1,0),
 // (0,1), (1,1)); per cube edge: the row and x offset of its lower corner.
@@ -86,7 +88,8 @@ struct CellWord {
   int row_bits(int b) const {
     int bits = 0;
     for (int q = 0; q < 4; ++q)
-      bits |= static_cast<int>((lo[q] >> b) & 1) << q | static_cast<int>((hi[q] >> b) & 1) << (4 + q);
+      bits |= static_cast<int>((lo[q] >> b) & 1) << q | static_cast<int>((hi[q] >> b) & 1)
+                                                            << (4 + q);
     return bits;
   }
 #endif
@@ -123,7 +126,7 @@ constexpr std::ptrdiff_t kMaxCellTriangles = 10;
 struct Slab {
   std::vector<Vec3> positions;  // the vertices of the slab's own node layers
   ScratchVector<Triangle> triangles;
-  std::uint64_t numbered = 0;   // vertices numbered, including the next slab's first layer
+  std::uint64_t numbered = 0;  // vertices numbered, including the next slab's first layer
   long long active_cells = 0, ambiguous = 0, samples = 0, nan_samples = 0, evaluations = 0;
   long long poles = 0;  // sign changes refused as poles or jumps (VertexPlacer::place)
   double seconds_sampling = 0, seconds_refinement = 0;
@@ -149,11 +152,11 @@ void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratc
                   long long k0, long long layers, Slab& slab) {
   const long long nx = g.nx(), ny = g.ny(), nz = g.nz();
   const long long W = (nx + 63) / 64;
-  const long long k_cells = std::min(k0 + layers, nz - 1);  // cell layers [k0, k_cells)
-  const long long k_own = k_cells == nz - 1 ? nz : k_cells;      // own node layers [k0, k_own)
-  const long long k_num = std::min(k_own + 1, nz);               // numbered node layers
-  const long long k_end = std::min(k_own + 2, nz);               // sampled node layers
-  const long long rows = ny * (k_end - k0);                      // slab-local rows j + ny·(k − k0)
+  const long long k_cells = std::min(k0 + layers, nz - 1);   // cell layers [k0, k_cells)
+  const long long k_own = k_cells == nz - 1 ? nz : k_cells;  // own node layers [k0, k_own)
+  const long long k_num = std::min(k_own + 1, nz);           // numbered node layers
+  const long long k_end = std::min(k_own + 2, nz);           // sampled node layers
+  const long long rows = ny * (k_end - k0);                  // slab-local rows j + ny·(k − k0)
   const long long num_rows = ny * (k_num - k0);
   const long long own_rows = ny * (k_own - k0);
 
@@ -186,7 +189,8 @@ void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratc
     double* layer = layer_values(k);
     for (long long j = 0; j < ny; ++j) {
       const long long r = j + ny * (k - k0);
-      const long long nans = sampler.sample(0, nx, j, k, layer + j * nx, &P[static_cast<size_t>(r * W)]);
+      const long long nans =
+          sampler.sample(0, nx, j, k, layer + j * nx, &P[static_cast<size_t>(r * W)]);
       if (r < own_rows) slab.nan_samples += nans;
     }
     slab.samples += nx * ny;
@@ -206,8 +210,10 @@ void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratc
       for (long long w = 0; w < W; ++w) {
         const std::uint64_t next = w + 1 < W ? p[w + 1] : 0;
         std::uint64_t xb = p[w] ^ ((p[w] >> 1) | (next << 63));
-        if (w >= edge_words) xb = 0;
-        else if (w == edge_words - 1) xb &= last_edge_mask;
+        if (w >= edge_words)
+          xb = 0;
+        else if (w == edge_words - 1)
+          xb &= last_edge_mask;
         std::uint64_t yb = j + 1 < ny ? p[w] ^ p[w + W] : 0;
         std::uint64_t zb = k + 1 < nz ? p[w] ^ p[w + W * ny] : 0;
         if (w == W - 1) yb &= last_node_mask, zb &= last_node_mask;
@@ -253,8 +259,10 @@ void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratc
             const long long i = w * 64 + std::countr_zero(b);
             const double fa = row[i], fb = end[i];
             linear[n] = linear_point(grid, i, j, k, a, fa, fb);
-            if (refine_own) crossings.push_back({i, j, k, a, fa, fb});
-            else if (!refine && !finite_ends(fa, fb)) scratch.undefined.push_back(n);
+            if (refine_own)
+              crossings.push_back({i, j, k, a, fa, fb});
+            else if (!refine && !finite_ends(fa, fb))
+              scratch.undefined.push_back(n);
           }
       };
       along(std::integral_constant<int, 0>{});
@@ -329,8 +337,8 @@ void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratc
           for (unsigned m = kCrossingEdges[static_cast<size_t>(cube_case)]; m; m &= m - 1) {
             const int e = std::countr_zero(m);
             const long long at = edge_word[e];
-            ids[e] = first_id_word[at] +
-                     static_cast<std::uint32_t>(std::popcount(crossing_word[at] & before[kEdgeDx[e]]));
+            ids[e] = first_id_word[at] + static_cast<std::uint32_t>(
+                                             std::popcount(crossing_word[at] & before[kEdgeDx[e]]));
           }
           if (tri_end - out < kMaxCellTriangles) {
             const size_t used = static_cast<size_t>(out - tris.data());
@@ -339,7 +347,9 @@ void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratc
           }
           triangulate_cell(
               polys, [&](int e) -> const Vec3& { return lin[ids[e]]; },
-              [&](int e0, int e1, int e2) { *out++ = {ids[e0], ids[e1], ids[e2]}; });
+              [&](int e0, int e1, int e2) {
+                *out++ = {ids[e0], ids[e1], ids[e2]};
+              });
         }
       }
     }
@@ -369,7 +379,8 @@ void extract_slab(RowSampler& sampler, VertexPlacer& placer, SlabScratch& scratc
   if (refine) {
     placer.place(crossings, slab.positions.data(), slab.evaluations, slab.poles);
   } else {
-    std::copy(linear.begin(), linear.begin() + static_cast<long>(own_count), slab.positions.begin());
+    std::copy(linear.begin(), linear.begin() + static_cast<long>(own_count),
+              slab.positions.begin());
     for (size_t n : scratch.undefined)
       if (n < own_count) slab.positions[n] = no_vertex();
   }
@@ -394,15 +405,17 @@ ExtractedMesh extract_dense(const Surface& surface, const Grid& g, const Polygon
     std::vector<std::unique_ptr<RowSampler>> samplers(static_cast<size_t>(workers));
     for (auto& s : samplers) s = std::make_unique<RowSampler>(surface.field, g, poly);
     std::vector<std::unique_ptr<VertexPlacer>> placers(static_cast<size_t>(workers));
-    for (auto& p : placers) p = std::make_unique<VertexPlacer>(surface.field, g, poly, o.refine_steps);
+    for (auto& p : placers)
+      p = std::make_unique<VertexPlacer>(surface.field, g, poly, o.refine_steps);
     std::vector<SlabScratch> scratch(static_cast<size_t>(workers));
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
-    for (long long s = 0; s < slabs; ++s) trap.run([&] {
-      if (stop.stop_requested()) return;
-      const auto w = static_cast<size_t>(worker_index());
-      extract_slab(*samplers[w], *placers[w], scratch[w], g, s * layers, layers,
-                   out[static_cast<size_t>(s)]);
-    });
+    for (long long s = 0; s < slabs; ++s)
+      trap.run([&] {
+        if (stop.stop_requested()) return;
+        const auto w = static_cast<size_t>(worker_index());
+        extract_slab(*samplers[w], *placers[w], scratch[w], g, s * layers, layers,
+                     out[static_cast<size_t>(s)]);
+      });
     trap.rethrow();
   }
   if (stop.stop_requested()) return {};
@@ -410,8 +423,10 @@ ExtractedMesh extract_dense(const Surface& surface, const Grid& g, const Polygon
   // First global id of each slab; then slab-local ids become global.
   std::vector<std::uint64_t> base(static_cast<size_t>(slabs) + 1, 0);
   for (size_t s = 0; s < out.size(); ++s) {
-    if (out[s].numbered > kMaxVertices) base[s + 1] = kMaxVertices + 1;
-    else base[s + 1] = base[s] + out[s].positions.size();
+    if (out[s].numbered > kMaxVertices)
+      base[s + 1] = kMaxVertices + 1;
+    else
+      base[s + 1] = base[s] + out[s].positions.size();
   }
   if (base.back() > kMaxVertices)
     throw Error("the mesh would have more than 2^32 vertices; lower the resolution");
@@ -421,16 +436,17 @@ ExtractedMesh extract_dense(const Surface& surface, const Grid& g, const Polygon
   res.positions.resize(base.back());
   res.triangles.resize(tri_base.back());
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
-  for (long long s = 0; s < slabs; ++s) trap.run([&] {
-    Slab& slab = out[static_cast<size_t>(s)];
-    const auto b = static_cast<std::uint32_t>(base[static_cast<size_t>(s)]);
-    std::copy(slab.positions.begin(), slab.positions.end(),
-              res.positions.begin() + static_cast<long>(base[static_cast<size_t>(s)]));
-    Triangle* dst = res.triangles.data() + tri_base[static_cast<size_t>(s)];  // may be empty
-    for (const Triangle& t : slab.triangles) *dst++ = {t[0] + b, t[1] + b, t[2] + b};
-    std::vector<Vec3>().swap(slab.positions);
-    ScratchVector<Triangle>().swap(slab.triangles);
-  });
+  for (long long s = 0; s < slabs; ++s)
+    trap.run([&] {
+      Slab& slab = out[static_cast<size_t>(s)];
+      const auto b = static_cast<std::uint32_t>(base[static_cast<size_t>(s)]);
+      std::copy(slab.positions.begin(), slab.positions.end(),
+                res.positions.begin() + static_cast<long>(base[static_cast<size_t>(s)]));
+      Triangle* dst = res.triangles.data() + tri_base[static_cast<size_t>(s)];  // may be empty
+      for (const Triangle& t : slab.triangles) *dst++ = {t[0] + b, t[1] + b, t[2] + b};
+      std::vector<Vec3>().swap(slab.positions);
+      ScratchVector<Triangle>().swap(slab.triangles);
+    });
   trap.rethrow();
 
   // The slabs ran on all workers: count their sampling and refinement shares of the wall time.

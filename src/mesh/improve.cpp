@@ -46,7 +46,7 @@ struct MeshImprover::State {
 
   // Connectivity with fixed capacity per vertex, kept up to date by edge flips.
   int cap = 0;
-  std::vector<std::uint32_t> nbr, nbr_count;  // neighbours
+  std::vector<std::uint32_t> nbr, nbr_count;    // neighbours
   std::vector<std::uint32_t> vtri, vtri_count;  // incident triangles
 
   std::vector<std::uint8_t> mode;
@@ -62,12 +62,19 @@ struct MeshImprover::State {
   double mean_edge = 0;
 
   State(Mesh m, const Surface& s, const ImproveOptions& o)
-      : mesh(std::move(m)), surface(s), opt(o),
-        workers(detail::improver_workers(o.threads, mesh.positions.size())), pool(s.field, workers) {}
+      : mesh(std::move(m)),
+        surface(s),
+        opt(o),
+        workers(detail::improver_workers(o.threads, mesh.positions.size())),
+        pool(s.field, workers) {}
 
   size_t nv() const { return mesh.positions.size(); }
-  std::uint32_t* nb(std::uint32_t v) { return &nbr[static_cast<size_t>(v) * static_cast<size_t>(cap)]; }
-  std::uint32_t* vt(std::uint32_t v) { return &vtri[static_cast<size_t>(v) * static_cast<size_t>(cap)]; }
+  std::uint32_t* nb(std::uint32_t v) {
+    return &nbr[static_cast<size_t>(v) * static_cast<size_t>(cap)];
+  }
+  std::uint32_t* vt(std::uint32_t v) {
+    return &vtri[static_cast<size_t>(v) * static_cast<size_t>(cap)];
+  }
 
   void build_connectivity() {
     const MeshAdjacency adj = build_adjacency(mesh);
@@ -100,8 +107,8 @@ struct MeshImprover::State {
     for (size_t v = 0; v < nv(); ++v) {
       if (!mesh.is_boundary[v]) continue;
       const Vec3& p = mesh.positions[v];
-      const bool on_clip = !surface.clip.is_empty_spec() &&
-                           std::abs(surface.clip.value(p)) <= 1e-7 * (1 + p.norm());
+      const bool on_clip =
+          !surface.clip.is_empty_spec() && std::abs(surface.clip.value(p)) <= 1e-7 * (1 + p.norm());
       mode[v] = opt.boundary == BoundaryMode::kConstrained && on_clip ? kOnCurve : kHeld;
     }
     // Vertices on singular curves lie on them already (mesh_crossings) and stay there.
@@ -176,12 +183,15 @@ struct MeshImprover::State {
     const double gamma = opt.singularity_scale * mean_edge;
     detail::ExceptionTrap trap;
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 256)
-    for (long long v = 0; v < n; ++v) trap.run([&] {
-      const FieldSample s = pool.local().sample(mesh.positions[static_cast<size_t>(v)], true, false);
-      const double r = pseudo_inverse_step(s.gradient, s.hessian).norm();
-      step_to_critical[static_cast<size_t>(v)] = r;
-      beta[static_cast<size_t>(v)] = gamma > 0 && std::isfinite(r) ? std::min(r / gamma, 1.0) : 1.0;
-    });
+    for (long long v = 0; v < n; ++v)
+      trap.run([&] {
+        const FieldSample s =
+            pool.local().sample(mesh.positions[static_cast<size_t>(v)], true, false);
+        const double r = pseudo_inverse_step(s.gradient, s.hessian).norm();
+        step_to_critical[static_cast<size_t>(v)] = r;
+        beta[static_cast<size_t>(v)] =
+            gamma > 0 && std::isfinite(r) ? std::min(r / gamma, 1.0) : 1.0;
+      });
     trap.rethrow();
   }
 
@@ -189,25 +199,27 @@ struct MeshImprover::State {
   void find_singular_points() {
     std::vector<std::uint32_t> cand;
     for (size_t v = 0; v < nv(); ++v)
-      if (mode[v] == kFree && !near_curve[v] && step_to_critical[v] < mean_edge) cand.push_back(static_cast<std::uint32_t>(v));
+      if (mode[v] == kFree && !near_curve[v] && step_to_critical[v] < mean_edge)
+        cand.push_back(static_cast<std::uint32_t>(v));
     const long long nc = static_cast<long long>(cand.size());
     std::vector<Vec3> found(cand.size());
     std::vector<std::uint8_t> ok(cand.size(), 0);
     detail::ExceptionTrap trap;
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 4)
-    for (long long c = 0; c < nc; ++c) trap.run([&] {
-      // Any critical point, singular curves too (min_conditioning 0).
-      const auto x = find_critical_point(
-          pool.local(), mesh.positions[cand[static_cast<size_t>(c)]],
-          {.iterations = 30, .reach = 2 * mean_edge, .tolerance = 1e-13, .length = 1});
-      if (!x) return;
-      if (x->gradient.norm() <= 1e-8 * grad_ref &&
-          std::abs(x->value) <= 1e-8 * grad_ref * mean_edge &&
-          (surface.clip.is_empty_spec() || surface.clip.contains(x->point))) {
-        found[static_cast<size_t>(c)] = x->point;
-        ok[static_cast<size_t>(c)] = 1;
-      }
-    });
+    for (long long c = 0; c < nc; ++c)
+      trap.run([&] {
+        // Any critical point, singular curves too (min_conditioning 0).
+        const auto x = find_critical_point(
+            pool.local(), mesh.positions[cand[static_cast<size_t>(c)]],
+            {.iterations = 30, .reach = 2 * mean_edge, .tolerance = 1e-13, .length = 1});
+        if (!x) return;
+        if (x->gradient.norm() <= 1e-8 * grad_ref &&
+            std::abs(x->value) <= 1e-8 * grad_ref * mean_edge &&
+            (surface.clip.is_empty_spec() || surface.clip.contains(x->point))) {
+          found[static_cast<size_t>(c)] = x->point;
+          ok[static_cast<size_t>(c)] = 1;
+        }
+      });
     trap.rethrow();
     const double same = 1e-3 * mean_edge;
     for (size_t c = 0; c < cand.size(); ++c) {
@@ -313,12 +325,13 @@ struct MeshImprover::State {
       {
         std::vector<std::uint32_t> local;
 #pragma omp for schedule(static) nowait
-        for (long long c = 0; c < nc; ++c) trap.run([&] {
-          const std::uint32_t t = check[static_cast<size_t>(c)];
-          const auto& tri = mesh.triangles[t];
-          const Vec3 to[3] = {dest[tri[0]], dest[tri[1]], dest[tri[2]]};
-          if (triangle_bad(t, to)) local.push_back(t);
-        });
+        for (long long c = 0; c < nc; ++c)
+          trap.run([&] {
+            const std::uint32_t t = check[static_cast<size_t>(c)];
+            const auto& tri = mesh.triangles[t];
+            const Vec3 to[3] = {dest[tri[0]], dest[tri[1]], dest[tri[2]]};
+            if (triangle_bad(t, to)) local.push_back(t);
+          });
 #pragma omp critical
         trap.run([&] { bad.insert(bad.end(), local.begin(), local.end()); });
       }
@@ -354,14 +367,15 @@ struct MeshImprover::State {
     std::vector<Vec3> next(nv());
 #pragma omp parallel for num_threads(workers) schedule(static) reduction(max : max_move) \
     reduction(+ : outside)
-    for (long long v = 0; v < n; ++v) trap.run([&] {
-      const std::uint32_t u = static_cast<std::uint32_t>(v);
-      const Vec3& p = mesh.positions[u];
-      bool go = scale[u] > 0;
-      if (go && move[u].squaredNorm() > 0 && !stays_inside(p, dest[u])) go = false, ++outside;
-      next[u] = go ? dest[u] : p;
-      max_move = std::max(max_move, (next[u] - p).norm());
-    });
+    for (long long v = 0; v < n; ++v)
+      trap.run([&] {
+        const std::uint32_t u = static_cast<std::uint32_t>(v);
+        const Vec3& p = mesh.positions[u];
+        bool go = scale[u] > 0;
+        if (go && move[u].squaredNorm() > 0 && !stays_inside(p, dest[u])) go = false, ++outside;
+        next[u] = go ? dest[u] : p;
+        max_move = std::max(max_move, (next[u] - p).norm());
+      });
     trap.rethrow();
     stats.refused_moves += outside;
     previous = std::move(mesh.positions);
@@ -378,73 +392,74 @@ struct MeshImprover::State {
     const double phi = opt.feedback;
     detail::ExceptionTrap trap;
 #pragma omp parallel for num_threads(workers) schedule(static)
-    for (long long vv = 0; vv < n; ++vv) trap.run([&] {
-      const std::uint32_t v = static_cast<std::uint32_t>(vv);
-      if (mode[v] == kHeld || nbr_count[v] == 0) return;
-      const Vec3& p = mesh.positions[v];
-      double wsum = 0, stiffest = 0, shortest = std::numeric_limits<double>::infinity();
-      Vec3 wp = Vec3::Zero();
-      // A vertex on the clip curve is pulled by its neighbours along the curve only: the
-      // interior's pull would turn the whole mesh about the clip's axis wherever that is a
-      // motion of zero energy (a disk in a sphere), a drift the springs never stop.
-      int along = 0;
-      if (mode[v] == kOnCurve)
-        for (std::uint32_t k = 0; k < nbr_count[v]; ++k) along += mode[nb(v)[k]] == kOnCurve;
-      for (std::uint32_t k = 0; k < nbr_count[v]; ++k) {
-        const std::uint32_t w = nb(v)[k];
-        if (along >= 2 && mode[w] != kOnCurve) {
+    for (long long vv = 0; vv < n; ++vv)
+      trap.run([&] {
+        const std::uint32_t v = static_cast<std::uint32_t>(vv);
+        if (mode[v] == kHeld || nbr_count[v] == 0) return;
+        const Vec3& p = mesh.positions[v];
+        double wsum = 0, stiffest = 0, shortest = std::numeric_limits<double>::infinity();
+        Vec3 wp = Vec3::Zero();
+        // A vertex on the clip curve is pulled by its neighbours along the curve only: the
+        // interior's pull would turn the whole mesh about the clip's axis wherever that is a
+        // motion of zero energy (a disk in a sphere), a drift the springs never stop.
+        int along = 0;
+        if (mode[v] == kOnCurve)
+          for (std::uint32_t k = 0; k < nbr_count[v]; ++k) along += mode[nb(v)[k]] == kOnCurve;
+        for (std::uint32_t k = 0; k < nbr_count[v]; ++k) {
+          const std::uint32_t w = nb(v)[k];
+          if (along >= 2 && mode[w] != kOnCurve) {
+            shortest = std::min(shortest, (mesh.positions[w] - p).norm());
+            continue;
+          }
+          double kappa = opt.spring_base;
+          // A singular curve's vertices are placed already at the mesh's spacing: no estimator
+          // pulls the sheets' vertices into it (∇F = 0 there, and its sheets turn every way).
+          const bool by_curve = near_curve[v] || near_curve[w];
+          if (opt.use_curvature && !(by_curve && (unit[v].isZero() || unit[w].isZero())))
+            kappa += opt.curvature_weight * (1 - unit[v].dot(unit[w]));
+          if (opt.use_singularity && !beta.empty() && !by_curve)
+            kappa += opt.singularity_weight * (1 - std::min(beta[v], beta[w]));
+          wsum += kappa;
+          stiffest = std::max(stiffest, kappa);
+          wp += kappa * mesh.positions[w];
           shortest = std::min(shortest, (mesh.positions[w] - p).norm());
-          continue;
         }
-        double kappa = opt.spring_base;
-        // A singular curve's vertices are placed already at the mesh's spacing: no estimator
-        // pulls the sheets' vertices into it (∇F = 0 there, and its sheets turn every way).
-        const bool by_curve = near_curve[v] || near_curve[w];
-        if (opt.use_curvature && !(by_curve && (unit[v].isZero() || unit[w].isZero())))
-          kappa += opt.curvature_weight * (1 - unit[v].dot(unit[w]));
-        if (opt.use_singularity && !beta.empty() && !by_curve)
-          kappa += opt.singularity_weight * (1 - std::min(beta[v], beta[w]));
-        wsum += kappa;
-        stiffest = std::max(stiffest, kappa);
-        wp += kappa * mesh.positions[w];
-        shortest = std::min(shortest, (mesh.positions[w] - p).norm());
-      }
-      const Vec3 P = opt.relaxation * (wp / wsum - p);
-      const Vec3& g = grad[v];
-      Vec3 vel;
-      if (!std::isfinite(f[v]) || !g.allFinite()) return;
-      // A sheet's vertex that has come onto a singular curve (∇F all but zero, as at a pinch
-      // point, where the sheets close up on the curve) has no tangent plane to slide in: the
-      // springs alone would push it to and fro along the curve. It stays where it is.
-      if (near_curve[v] && g.squaredNorm() < kOnSingularCurve * grad_ref * grad_ref) return;
-      if (mode[v] == kFree && coast && !near_curve[v] &&
-          stiffest <= kFlatSpring * opt.spring_base) {
-        // Heavy-ball momentum on the tangential part only (docs/algorithms.md, C.2): the last
-        // move, made tangent, carried over; the Newton part towards F = 0 stays as it is.
-        const double gg = g.dot(g) + eps2;
-        Vec3 last = p - previous[v];
-        last -= (g.dot(last) / gg) * g;
-        vel = P - (g.dot(P) / gg) * g + opt.inertia * last - (phi * f[v] / gg) * g;
-      } else if (mode[v] == kFree) {
-        vel = P - ((g.dot(P) + phi * f[v]) / (g.dot(g) + eps2)) * g;
-      } else {  // on the clip curve: both constraints (paper §4.2)
-        Vec3 gg;
-        const double gv = surface.clip.value_gradient(p, gg);
-        double a = g.dot(g) + eps2, b = g.dot(gg), d = gg.dot(gg);
-        d += 1e-12 * d + 1e-300;
-        const double r0 = g.dot(P) + phi * f[v], r1 = gg.dot(P) + phi * gv;
-        const double det = a * d - b * b;
-        if (det > 1e-9 * a * d) {
-          const double l0 = (d * r0 - b * r1) / det, l1 = (a * r1 - b * r0) / det;
-          vel = P - l0 * g - l1 * gg;
-        } else {  // F = 0 touches the clip: keep only the clip constraint
-          vel = P - (r1 / d) * gg;
+        const Vec3 P = opt.relaxation * (wp / wsum - p);
+        const Vec3& g = grad[v];
+        Vec3 vel;
+        if (!std::isfinite(f[v]) || !g.allFinite()) return;
+        // A sheet's vertex that has come onto a singular curve (∇F all but zero, as at a pinch
+        // point, where the sheets close up on the curve) has no tangent plane to slide in: the
+        // springs alone would push it to and fro along the curve. It stays where it is.
+        if (near_curve[v] && g.squaredNorm() < kOnSingularCurve * grad_ref * grad_ref) return;
+        if (mode[v] == kFree && coast && !near_curve[v] &&
+            stiffest <= kFlatSpring * opt.spring_base) {
+          // Heavy-ball momentum on the tangential part only (docs/algorithms.md, C.2): the last
+          // move, made tangent, carried over; the Newton part towards F = 0 stays as it is.
+          const double gg = g.dot(g) + eps2;
+          Vec3 last = p - previous[v];
+          last -= (g.dot(last) / gg) * g;
+          vel = P - (g.dot(P) / gg) * g + opt.inertia * last - (phi * f[v] / gg) * g;
+        } else if (mode[v] == kFree) {
+          vel = P - ((g.dot(P) + phi * f[v]) / (g.dot(g) + eps2)) * g;
+        } else {  // on the clip curve: both constraints (paper §4.2)
+          Vec3 gg;
+          const double gv = surface.clip.value_gradient(p, gg);
+          double a = g.dot(g) + eps2, b = g.dot(gg), d = gg.dot(gg);
+          d += 1e-12 * d + 1e-300;
+          const double r0 = g.dot(P) + phi * f[v], r1 = gg.dot(P) + phi * gv;
+          const double det = a * d - b * b;
+          if (det > 1e-9 * a * d) {
+            const double l0 = (d * r0 - b * r1) / det, l1 = (a * r1 - b * r0) / det;
+            vel = P - l0 * g - l1 * gg;
+          } else {  // F = 0 touches the clip: keep only the clip constraint
+            vel = P - (r1 / d) * gg;
+          }
         }
-      }
-      const double len = vel.norm(), limit = opt.max_move_fraction * shortest;
-      if (len > limit) vel *= limit / len;
-      if (vel.allFinite()) move[v] = vel;
-    });
+        const double len = vel.norm(), limit = opt.max_move_fraction * shortest;
+        if (len > limit) vel *= limit / len;
+        if (vel.allFinite()) move[v] = vel;
+      });
     trap.rethrow();
   }
 
@@ -476,7 +491,8 @@ struct MeshImprover::State {
             const std::uint32_t t = vt(u)[q];
             const auto& tri = T[t];
             for (int c = 0; c < 3; ++c) {
-              const std::uint32_t x = tri[static_cast<size_t>(c)], y = tri[static_cast<size_t>((c + 1) % 3)],
+              const std::uint32_t x = tri[static_cast<size_t>(c)],
+                                  y = tri[static_cast<size_t>((c + 1) % 3)],
                                   z = tri[static_cast<size_t>((c + 2) % 3)];
               if (x == u && y == v) t1 = t, a = z, ++found;
               if (x == v && y == u) t2 = t, b = z, ++found;
@@ -486,7 +502,9 @@ struct MeshImprover::State {
           if (nbr_count[u] <= 3 || nbr_count[v] <= 3) continue;
           // A vertex of a singular curve has more triangles than neighbours: both lists count.
           const std::uint32_t full = static_cast<std::uint32_t>(cap) - 1;
-          if (nbr_count[a] >= full || nbr_count[b] >= full || vtri_count[a] >= full || vtri_count[b] >= full) continue;
+          if (nbr_count[a] >= full || nbr_count[b] >= full || vtri_count[a] >= full ||
+              vtri_count[b] >= full)
+            continue;
           if (std::find(nb(a), nb(a) + nbr_count[a], b) != nb(a) + nbr_count[a]) continue;
           // Hysteresis: a flip must win clearly, or moving vertices would flip edges back and
           // forth. sin(α + β) ≥ 0 rejects most edges (α + β ≤ π) before any atan2.
@@ -499,8 +517,10 @@ struct MeshImprover::State {
           if (detail::corner_angle(P[a], P[u], P[v]) + detail::corner_angle(P[b], P[v], P[u]) <=
               std::numbers::pi + kFlipMargin)
             continue;
-          const Vec3 n1 = detail::area_normal(P[u], P[v], P[a]), n2 = detail::area_normal(P[v], P[u], P[b]);
-          const Vec3 m1 = detail::area_normal(P[u], P[b], P[a]), m2 = detail::area_normal(P[b], P[v], P[a]);
+          const Vec3 n1 = detail::area_normal(P[u], P[v], P[a]),
+                     n2 = detail::area_normal(P[v], P[u], P[b]);
+          const Vec3 m1 = detail::area_normal(P[u], P[b], P[a]),
+                     m2 = detail::area_normal(P[b], P[v], P[a]);
           if (m1.norm() < min_area2 || m2.norm() < min_area2) continue;
           if (n1.dot(n2) < cos_max * n1.norm() * n2.norm()) continue;
           if (m1.dot(m2) < cos_max * m1.norm() * m2.norm()) continue;
@@ -510,8 +530,10 @@ struct MeshImprover::State {
           if ((n1.dot(unit[u] + unit[v] + unit[a]) > 0 && !(m1.dot(r1) > 0)) ||
               (n2.dot(unit[v] + unit[u] + unit[b]) > 0 && !(m2.dot(r2) > 0)))
             continue;
-          const double q_old = std::min(detail::mean_ratio(P[u], P[v], P[a]), detail::mean_ratio(P[v], P[u], P[b]));
-          const double q_new = std::min(detail::mean_ratio(P[u], P[b], P[a]), detail::mean_ratio(P[b], P[v], P[a]));
+          const double q_old =
+              std::min(detail::mean_ratio(P[u], P[v], P[a]), detail::mean_ratio(P[v], P[u], P[b]));
+          const double q_new =
+              std::min(detail::mean_ratio(P[u], P[b], P[a]), detail::mean_ratio(P[b], P[v], P[a]));
           if (!(q_new > q_old + kFlipMargin)) continue;
           T[t1] = {u, b, a};
           T[t2] = {b, v, a};
@@ -538,12 +560,14 @@ struct MeshImprover::State {
     const long long nt = static_cast<long long>(mesh.triangles.size());
     detail::ExceptionTrap trap;
 #pragma omp parallel for num_threads(workers) schedule(static) reduction(+ : flipped)
-    for (long long t = 0; t < nt; ++t) trap.run([&] {
-      const auto& tri = mesh.triangles[static_cast<size_t>(t)];
-      const Vec3 n = detail::area_normal(mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]]);
-      const Vec3 ref = unit[tri[0]] + unit[tri[1]] + unit[tri[2]];
-      if (ref.squaredNorm() > 0 && n.dot(ref) < 0) ++flipped;
-    });
+    for (long long t = 0; t < nt; ++t)
+      trap.run([&] {
+        const auto& tri = mesh.triangles[static_cast<size_t>(t)];
+        const Vec3 n = detail::area_normal(mesh.positions[tri[0]], mesh.positions[tri[1]],
+                                           mesh.positions[tri[2]]);
+        const Vec3 ref = unit[tri[0]] + unit[tri[1]] + unit[tri[2]];
+        if (ref.squaredNorm() > 0 && n.dot(ref) < 0) ++flipped;
+      });
     trap.rethrow();
     stats.flipped_triangles = flipped;
   }
@@ -609,25 +633,28 @@ void MeshImprover::finish() {
     const double tiny = 1e-6 * s.grad_ref;
     detail::ExceptionTrap trap;
 #pragma omp parallel for num_threads(s.workers) schedule(static)
-    for (long long vv = 0; vv < n; ++vv) trap.run([&] {
-      const std::uint32_t v = static_cast<std::uint32_t>(vv);
-      if (s.mode[v] == kHeld || !std::isfinite(s.f[v])) return;
-      double shortest = std::numeric_limits<double>::infinity();
-      for (std::uint32_t k = 0; k < s.nbr_count[v]; ++k)
-        shortest = std::min(shortest, (s.mesh.positions[s.nb(v)[k]] - s.mesh.positions[v]).norm());
-      Vec3 d;
-      if (s.mode[v] == kOnCurve) {
-        d = project_onto_clip_curve(s.pool.local(), s.surface.clip, s.mesh.positions[v],
-                                            0.5 * shortest) - s.mesh.positions[v];
-      } else {
-        const Vec3& g = s.grad[v];
-        if (!(g.norm() > tiny)) return;
-        d = surface_newton_step(s.f[v], g);
-      }
-      const double len = d.norm(), limit = 0.25 * shortest;
-      if (len > limit) d *= limit / len;
-      if (d.allFinite()) s.move[v] = d;
-    });
+    for (long long vv = 0; vv < n; ++vv)
+      trap.run([&] {
+        const std::uint32_t v = static_cast<std::uint32_t>(vv);
+        if (s.mode[v] == kHeld || !std::isfinite(s.f[v])) return;
+        double shortest = std::numeric_limits<double>::infinity();
+        for (std::uint32_t k = 0; k < s.nbr_count[v]; ++k)
+          shortest =
+              std::min(shortest, (s.mesh.positions[s.nb(v)[k]] - s.mesh.positions[v]).norm());
+        Vec3 d;
+        if (s.mode[v] == kOnCurve) {
+          d = project_onto_clip_curve(s.pool.local(), s.surface.clip, s.mesh.positions[v],
+                                      0.5 * shortest) -
+              s.mesh.positions[v];
+        } else {
+          const Vec3& g = s.grad[v];
+          if (!(g.norm() > tiny)) return;
+          d = surface_newton_step(s.f[v], g);
+        }
+        const double len = d.norm(), limit = 0.25 * shortest;
+        if (len > limit) d *= limit / len;
+        if (d.allFinite()) s.move[v] = d;
+      });
     trap.rethrow();
     s.apply_moves();
   }

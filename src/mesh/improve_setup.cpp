@@ -18,17 +18,20 @@ void check_improve_options(const ImproveOptions& o) {
     throw InvalidArgument(name, fmt::format("{}", v), why);
   };
   if (o.max_steps < 0) bad("max_steps", o.max_steps, "must be ≥ 0");
-  if (!(o.relaxation > 0 && o.relaxation <= 1)) bad("relaxation", o.relaxation, "must be in (0, 1]");
+  if (!(o.relaxation > 0 && o.relaxation <= 1))
+    bad("relaxation", o.relaxation, "must be in (0, 1]");
   if (!(o.inertia >= 0 && o.inertia < 1)) bad("inertia", o.inertia, "must be in [0, 1)");
   if (!(o.feedback >= 0 && o.feedback <= 1)) bad("feedback", o.feedback, "must be in [0, 1]");
-  if (!(o.spring_base > 0 && std::isfinite(o.spring_base))) bad("spring_base", o.spring_base, "must be > 0");
+  if (!(o.spring_base > 0 && std::isfinite(o.spring_base)))
+    bad("spring_base", o.spring_base, "must be > 0");
   if (!(o.curvature_weight >= 0 && std::isfinite(o.curvature_weight)))
     bad("curvature_weight", o.curvature_weight, "must be ≥ 0");
   if (!(o.singularity_weight >= 0 && std::isfinite(o.singularity_weight)))
     bad("singularity_weight", o.singularity_weight, "must be ≥ 0");
   if (!(o.singularity_scale > 0)) bad("singularity_scale", o.singularity_scale, "must be > 0");
   if (o.flip_steps < 0) bad("flip_steps", o.flip_steps, "must be ≥ 0");
-  if (o.singularity_interval < 1) bad("singularity_interval", o.singularity_interval, "must be ≥ 1");
+  if (o.singularity_interval < 1)
+    bad("singularity_interval", o.singularity_interval, "must be ≥ 1");
   if (!(o.flip_max_dihedral_deg >= 0 && o.flip_max_dihedral_deg < 90))
     bad("flip_max_dihedral_deg", o.flip_max_dihedral_deg, "must be in [0, 90)");
   if (!(o.speed_threshold > 0)) bad("speed_threshold", o.speed_threshold, "must be > 0");
@@ -38,7 +41,6 @@ void check_improve_options(const ImproveOptions& o) {
     bad("min_area_fraction", o.min_area_fraction, "must be in [0, 1)");
   if (o.threads < 0) bad("threads", o.threads, "must be ≥ 0");
 }
-
 
 // A step is a dozen short parallel loops over the vertices, about a millisecond each for
 // 50 000 vertices on one core. On a busy machine a fork-join then costs more than it saves:
@@ -65,20 +67,21 @@ double improver_mean_edge(const std::vector<Vec3>& positions, const std::vector<
   std::vector<long long> block_count(static_cast<size_t>(blocks), 0);
   ExceptionTrap trap;
 #pragma omp parallel for num_threads(workers) schedule(static)
-  for (long long b = 0; b < blocks; ++b) trap.run([&] {
-    double sum = 0;
-    long long count = 0;
-    for (long long v = b * kBlock; v < std::min(n, (b + 1) * kBlock); ++v) {
-      const std::uint32_t* q = &nbr[static_cast<size_t>(v) * static_cast<size_t>(cap)];
-      for (std::uint32_t k = 0; k < nbr_count[static_cast<size_t>(v)]; ++k)
-        if (q[k] > v) {
-          sum += (positions[q[k]] - positions[static_cast<size_t>(v)]).norm();
-          ++count;
-        }
-    }
-    block_sum[static_cast<size_t>(b)] = sum;
-    block_count[static_cast<size_t>(b)] = count;
-  });
+  for (long long b = 0; b < blocks; ++b)
+    trap.run([&] {
+      double sum = 0;
+      long long count = 0;
+      for (long long v = b * kBlock; v < std::min(n, (b + 1) * kBlock); ++v) {
+        const std::uint32_t* q = &nbr[static_cast<size_t>(v) * static_cast<size_t>(cap)];
+        for (std::uint32_t k = 0; k < nbr_count[static_cast<size_t>(v)]; ++k)
+          if (q[k] > v) {
+            sum += (positions[q[k]] - positions[static_cast<size_t>(v)]).norm();
+            ++count;
+          }
+      }
+      block_sum[static_cast<size_t>(b)] = sum;
+      block_count[static_cast<size_t>(b)] = count;
+    });
   trap.rethrow();
   double sum = 0;
   long long count = 0;

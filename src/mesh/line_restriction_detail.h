@@ -79,7 +79,8 @@ class LineRestriction {
     for (size_t m = 0; m < n; ++m) {
       const double* d = &in_u_[m * n];
       __m256d sum = _mm256_broadcast_sd(&d[n - 1 - m]);
-      for (size_t a = n - 1 - m; a-- > 0;) sum = _mm256_fmadd_pd(sum, u, _mm256_broadcast_sd(&d[a]));
+      for (size_t a = n - 1 - m; a-- > 0;)
+        sum = _mm256_fmadd_pd(sum, u, _mm256_broadcast_sd(&d[a]));
       _mm256_storeu_pd(c + m * stride, sum);
     }
   }
@@ -99,7 +100,7 @@ class LineRestriction {
   int degree_;
   long long mid_;
   std::vector<Term> terms_;
-  std::vector<double> in_u_;     // [m · (degree + 1) + a]: coefficient of t^m u^a at v_
+  std::vector<double> in_u_;  // [m · (degree + 1) + a]: coefficient of t^m u^a at v_
   std::vector<double> v_powers_;
   double v_ = 0;
   bool have_v_ = false;

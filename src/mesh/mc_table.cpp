@@ -26,7 +26,8 @@ constexpr int edge_between(int a, int b) {
 constexpr std::array<std::array<int, 4>, 6> kFaceEdges = [] {
   std::array<std::array<int, 4>, 6> edges{};
   for (int f = 0; f < 6; ++f)
-    for (int k = 0; k < 4; ++k) edges[f][k] = edge_between(kFaceCcw[f][k], kFaceCcw[f][(k + 1) % 4]);
+    for (int k = 0; k < 4; ++k)
+      edges[f][k] = edge_between(kFaceCcw[f][k], kFaceCcw[f][(k + 1) % 4]);
   return edges;
 }();
 
@@ -54,8 +55,8 @@ constexpr CellPolygons build_cell(int cube_case, int connected) {
       const bool joined = ((connected >> f) & 1) != 0;
       for (int k = 0; k < 4; ++k) {
         const int before = edge[(k + 3) % 4], after = edge[k];  // edges into and out of q[k]
-        if (joined && !positive(q[k])) link(before, after);    // cut off each negative corner
-        if (!joined && positive(q[k])) link(after, before);    // cut off each positive corner
+        if (joined && !positive(q[k])) link(before, after);     // cut off each negative corner
+        if (!joined && positive(q[k])) link(after, before);     // cut off each positive corner
       }
     }
   }

@@ -13,9 +13,18 @@ namespace zeroset::detail {
 inline constexpr std::array<std::array<int, 3>, 8> kCorner = {
     {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}}};
 // Each edge from its lower corner (the one owning it on the grid) to the upper one.
-inline constexpr std::array<std::array<int, 2>, 12> kEdgeCorners = {
-    {{0, 1}, {1, 2}, {3, 2}, {0, 3}, {4, 5}, {5, 6}, {7, 6}, {4, 7}, {0, 4}, {1, 5}, {2, 6},
-     {3, 7}}};
+inline constexpr std::array<std::array<int, 2>, 12> kEdgeCorners = {{{0, 1},
+                                                                     {1, 2},
+                                                                     {3, 2},
+                                                                     {0, 3},
+                                                                     {4, 5},
+                                                                     {5, 6},
+                                                                     {7, 6},
+                                                                     {4, 7},
+                                                                     {0, 4},
+                                                                     {1, 5},
+                                                                     {2, 6},
+                                                                     {3, 7}}};
 inline constexpr std::array<int, 12> kEdgeAxis = {0, 1, 0, 1, 0, 1, 0, 1, 2, 2, 2, 2};
 // Faces -x, +x, -y, +y, -z, +z: corners counter-clockwise seen from outside the cube.
 inline constexpr std::array<std::array<int, 4>, 6> kFaceCcw = {
@@ -44,7 +53,8 @@ inline constexpr std::array<std::uint8_t, 256> kAmbiguousFaces = [] {
   for (int c = 0; c < 256; ++c)
     for (int f = 0; f < 6; ++f) {
       const auto& q = kFaceCcw[static_cast<std::size_t>(f)];
-      const int s0 = (c >> q[0]) & 1, s1 = (c >> q[1]) & 1, s2 = (c >> q[2]) & 1, s3 = (c >> q[3]) & 1;
+      const int s0 = (c >> q[0]) & 1, s1 = (c >> q[1]) & 1, s2 = (c >> q[2]) & 1,
+                s3 = (c >> q[3]) & 1;
       if (s0 == s2 && s1 == s3 && s0 != s1)
         amb[static_cast<std::size_t>(c)] |= static_cast<std::uint8_t>(1 << f);
     }
@@ -59,7 +69,8 @@ inline constexpr std::array<std::uint16_t, 256> kCrossingEdges = [] {
   for (int c = 0; c < 256; ++c)
     for (int e = 0; e < 12; ++e)
       if (((c >> kEdgeCorners[e][0]) & 1) != ((c >> kEdgeCorners[e][1]) & 1))
-        mask[static_cast<std::size_t>(c)] = static_cast<std::uint16_t>(mask[static_cast<std::size_t>(c)] | 1u << e);
+        mask[static_cast<std::size_t>(c)] =
+            static_cast<std::uint16_t>(mask[static_cast<std::size_t>(c)] | 1u << e);
   return mask;
 }();
 // The table holds, for each case, one entry per resolution of its ambiguous faces (656 in

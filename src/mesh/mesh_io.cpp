@@ -3,14 +3,14 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <limits>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <string_view>
 
-#include <Eigen/Geometry>
 #include <fmt/format.h>
+#include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
 #include "zeroset/error.h"
@@ -25,7 +25,9 @@ namespace {
 class Bytes {
  public:
   void u8(std::uint8_t v) { data_.push_back(static_cast<char>(v)); }
-  void u16(std::uint16_t v) { u8(static_cast<std::uint8_t>(v)), u8(static_cast<std::uint8_t>(v >> 8)); }
+  void u16(std::uint16_t v) {
+    u8(static_cast<std::uint8_t>(v)), u8(static_cast<std::uint8_t>(v >> 8));
+  }
   void u32(std::uint32_t v) {
     for (int k = 0; k < 4; ++k) u8(static_cast<std::uint8_t>(v >> (8 * k)));
   }
@@ -42,10 +44,13 @@ class Bytes {
   std::string data_;
 };
 
-bool has_normals(const Mesh& m) { return !m.normals.empty() && m.normals.size() == m.positions.size(); }
+bool has_normals(const Mesh& m) {
+  return !m.normals.empty() && m.normals.size() == m.positions.size();
+}
 
 Vec3 face_normal(const Mesh& m, const std::array<std::uint32_t, 3>& t) {
-  const Vec3 n = (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]);
+  const Vec3 n =
+      (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]);
   const double len = n.norm();
   return len > 0 ? Vec3(n / len) : Vec3::Zero();
 }
@@ -54,13 +59,16 @@ std::string obj_bytes(const Mesh& m) {
   fmt::memory_buffer out;
   fmt::format_to(std::back_inserter(out), "# zeroset mesh: {} vertices, {} triangles\n",
                  m.positions.size(), m.triangles.size());
-  for (const Vec3& p : m.positions) fmt::format_to(std::back_inserter(out), "v {} {} {}\n", p.x(), p.y(), p.z());
+  for (const Vec3& p : m.positions)
+    fmt::format_to(std::back_inserter(out), "v {} {} {}\n", p.x(), p.y(), p.z());
   const bool normals = has_normals(m);
   if (normals)
-    for (const Vec3& n : m.normals) fmt::format_to(std::back_inserter(out), "vn {:.6g} {:.6g} {:.6g}\n", n.x(), n.y(), n.z());
+    for (const Vec3& n : m.normals)
+      fmt::format_to(std::back_inserter(out), "vn {:.6g} {:.6g} {:.6g}\n", n.x(), n.y(), n.z());
   for (const auto& t : m.triangles) {
     if (normals)
-      fmt::format_to(std::back_inserter(out), "f {0}//{0} {1}//{1} {2}//{2}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+      fmt::format_to(std::back_inserter(out), "f {0}//{0} {1}//{1} {2}//{2}\n", t[0] + 1, t[1] + 1,
+                     t[2] + 1);
     else
       fmt::format_to(std::back_inserter(out), "f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
   }
@@ -140,9 +148,10 @@ std::string glb_container(const nlohmann::json& doc, const Bytes& bin) {
 /// A glTF binary file with an empty scene and no BIN chunk: glTF allows no accessor with a
 /// count of 0 nor an empty buffer, so a mesh without triangles has no mesh at all.
 std::string empty_glb_bytes() {
-  const nlohmann::json doc = {{"asset", {{"version", "2.0"}, {"generator", "zeroset"}}},
-                              {"scene", 0},
-                              {"scenes", nlohmann::json::array({{{"nodes", nlohmann::json::array()}}})}};
+  const nlohmann::json doc = {
+      {"asset", {{"version", "2.0"}, {"generator", "zeroset"}}},
+      {"scene", 0},
+      {"scenes", nlohmann::json::array({{{"nodes", nlohmann::json::array()}}})}};
   return glb_container(doc, Bytes{});
 }
 
@@ -170,27 +179,36 @@ std::string glb_bytes(const Mesh& m) {
   bin.pad(4, '\0');
   using nlohmann::json;
   json attributes = {{"POSITION", 0}};
-  json views = json::array({{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", pos_bytes}, {"target", 34962}}});
+  json views = json::array(
+      {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", pos_bytes}, {"target", 34962}}});
   json accessors = json::array();
   json position = {{"bufferView", 0}, {"componentType", 5126}, {"count", nv}, {"type", "VEC3"}};
-  if (nv > 0) position["min"] = {lo.x(), lo.y(), lo.z()}, position["max"] = {hi.x(), hi.y(), hi.z()};
+  if (nv > 0)
+    position["min"] = {lo.x(), lo.y(), lo.z()}, position["max"] = {hi.x(), hi.y(), hi.z()};
   accessors.push_back(position);
   if (normals) {
     attributes["NORMAL"] = 1;
-    views.push_back({{"buffer", 0}, {"byteOffset", pos_bytes}, {"byteLength", nrm_bytes}, {"target", 34962}});
-    accessors.push_back({{"bufferView", 1}, {"componentType", 5126}, {"count", nv}, {"type", "VEC3"}});
+    views.push_back(
+        {{"buffer", 0}, {"byteOffset", pos_bytes}, {"byteLength", nrm_bytes}, {"target", 34962}});
+    accessors.push_back(
+        {{"bufferView", 1}, {"componentType", 5126}, {"count", nv}, {"type", "VEC3"}});
   }
   const int index_view = normals ? 2 : 1;
-  views.push_back({{"buffer", 0}, {"byteOffset", pos_bytes + nrm_bytes}, {"byteLength", idx_bytes}, {"target", 34963}});
-  accessors.push_back({{"bufferView", index_view}, {"componentType", 5125}, {"count", 3 * nt}, {"type", "SCALAR"}});
+  views.push_back({{"buffer", 0},
+                   {"byteOffset", pos_bytes + nrm_bytes},
+                   {"byteLength", idx_bytes},
+                   {"target", 34963}});
+  accessors.push_back(
+      {{"bufferView", index_view}, {"componentType", 5125}, {"count", 3 * nt}, {"type", "SCALAR"}});
   const json doc = {
       {"asset", {{"version", "2.0"}, {"generator", "zeroset"}}},
       {"scene", 0},
       {"scenes", json::array({{{"nodes", json::array({0})}}})},
       {"nodes", json::array({{{"mesh", 0}}})},
-      {"meshes", json::array({{{"primitives", json::array({{{"attributes", attributes},
-                                                             {"indices", static_cast<int>(accessors.size()) - 1},
-                                                             {"mode", 4}}})}}})},
+      {"meshes", json::array({{{"primitives",
+                                json::array({{{"attributes", attributes},
+                                              {"indices", static_cast<int>(accessors.size()) - 1},
+                                              {"mode", 4}}})}}})},
       {"buffers", json::array({{{"byteLength", bin.size()}}})},
       {"bufferViews", views},
       {"accessors", accessors},
@@ -208,10 +226,10 @@ std::string checked_extension(const std::string& path) {
   const std::string ext = file_extension(path);
   const auto& known = mesh_file_extensions();
   if (std::find(known.begin(), known.end(), ext) == known.end())
-    throw InvalidArgument("output file", "'" + path + "'",
-                          (ext.empty() ? std::string("has no extension")
-                                       : "unknown mesh format '." + ext + "'") +
-                              "; known formats: " + known_list());
+    throw InvalidArgument(
+        "output file", "'" + path + "'",
+        (ext.empty() ? std::string("has no extension") : "unknown mesh format '." + ext + "'") +
+            "; known formats: " + known_list());
   return ext;
 }
 
@@ -229,7 +247,10 @@ class Reader {
   std::uint32_t u32(size_t at) const {
     need(at, 4);
     std::uint32_t v = 0;
-    for (int k = 0; k < 4; ++k) v |= static_cast<std::uint32_t>(static_cast<unsigned char>(data_[at + static_cast<size_t>(k)])) << (8 * k);
+    for (int k = 0; k < 4; ++k)
+      v |=
+          static_cast<std::uint32_t>(static_cast<unsigned char>(data_[at + static_cast<size_t>(k)]))
+          << (8 * k);
     return v;
   }
   std::uint16_t u16(size_t at) const {
@@ -251,7 +272,8 @@ class Reader {
 void check_indices(const Reader& r, const Mesh& m) {
   for (const auto& t : m.triangles)
     for (std::uint32_t v : t)
-      if (v >= m.positions.size()) r.fail(fmt::format("a face refers to vertex {} of {}", v, m.positions.size()));
+      if (v >= m.positions.size())
+        r.fail(fmt::format("a face refers to vertex {} of {}", v, m.positions.size()));
 }
 
 Mesh read_obj(const Reader& r) {
@@ -267,7 +289,8 @@ Mesh read_obj(const Reader& r) {
     ls >> tag;
     if (tag == "v" || tag == "vn") {
       Vec3 p;
-      if (!(ls >> p.x() >> p.y() >> p.z())) r.fail(fmt::format("line {}: expected three numbers", line_no));
+      if (!(ls >> p.x() >> p.y() >> p.z()))
+        r.fail(fmt::format("line {}: expected three numbers", line_no));
       (tag == "v" ? m.positions : normals).push_back(p);
     } else if (tag == "f") {
       std::vector<std::uint32_t> idx;
@@ -284,7 +307,8 @@ Mesh read_obj(const Reader& r) {
         idx.push_back(static_cast<std::uint32_t>(i - 1));
       }
       if (idx.size() < 3) r.fail(fmt::format("line {}: a face needs three vertices", line_no));
-      for (size_t k = 1; k + 1 < idx.size(); ++k) m.triangles.push_back({idx[0], idx[k], idx[k + 1]});
+      for (size_t k = 1; k + 1 < idx.size(); ++k)
+        m.triangles.push_back({idx[0], idx[k], idx[k + 1]});
     }
   }
   if (normals.size() == m.positions.size()) m.normals = std::move(normals);
@@ -306,7 +330,8 @@ Mesh read_ply_mesh(const std::string& path) {
 Mesh read_stl(const Reader& r) {
   if (r.size() < 84) r.fail("too short for a binary STL file");
   const std::uint32_t n = r.u32(80);
-  if (r.size() != 84 + 50ull * n) r.fail("not a binary STL file (its size does not match its triangle count)");
+  if (r.size() != 84 + 50ull * n)
+    r.fail("not a binary STL file (its size does not match its triangle count)");
   Mesh m;
   std::map<std::array<std::uint32_t, 3>, std::uint32_t> index;
   for (std::uint32_t t = 0; t < n; ++t) {
@@ -338,8 +363,7 @@ Mesh read_glb(const Reader& r) {
   }
   const size_t bin_at = 20 + json_len;
   // A file with no mesh (as an empty mesh is written) needs no BIN chunk.
-  if (!doc.contains("meshes") || (doc["meshes"].is_array() && doc["meshes"].empty()))
-    return Mesh{};
+  if (!doc.contains("meshes") || (doc["meshes"].is_array() && doc["meshes"].empty())) return Mesh{};
   const std::uint32_t bin_len = r.u32(bin_at);
   if (r.u32(bin_at + 4) != 0x004E4942u) r.fail("the second chunk is not BIN");
   r.need(bin_at + 8, bin_len);
@@ -350,25 +374,31 @@ Mesh read_glb(const Reader& r) {
     auto accessor = [&](int i, auto&& read_one) {
       const auto& acc = doc.at("accessors").at(static_cast<size_t>(i));
       const auto& view = doc.at("bufferViews").at(acc.at("bufferView").get<size_t>());
-      const size_t off = base + view.value("byteOffset", size_t{0}) + acc.value("byteOffset", size_t{0});
+      const size_t off =
+          base + view.value("byteOffset", size_t{0}) + acc.value("byteOffset", size_t{0});
       const size_t count = acc.at("count").get<size_t>();
       read_one(off, count, acc.at("componentType").get<int>());
     };
-    accessor(prim.at("attributes").at("POSITION").get<int>(), [&](size_t off, size_t count, int type) {
-      if (type != 5126) r.fail("positions must be floats");
-      for (size_t v = 0; v < count; ++v)
-        m.positions.emplace_back(r.f32(off + 12 * v), r.f32(off + 12 * v + 4), r.f32(off + 12 * v + 8));
-    });
+    accessor(prim.at("attributes").at("POSITION").get<int>(),
+             [&](size_t off, size_t count, int type) {
+               if (type != 5126) r.fail("positions must be floats");
+               for (size_t v = 0; v < count; ++v)
+                 m.positions.emplace_back(r.f32(off + 12 * v), r.f32(off + 12 * v + 4),
+                                          r.f32(off + 12 * v + 8));
+             });
     if (prim.at("attributes").contains("NORMAL"))
       accessor(prim.at("attributes").at("NORMAL").get<int>(), [&](size_t off, size_t count, int) {
         for (size_t v = 0; v < count; ++v)
-          m.normals.emplace_back(r.f32(off + 12 * v), r.f32(off + 12 * v + 4), r.f32(off + 12 * v + 8));
+          m.normals.emplace_back(r.f32(off + 12 * v), r.f32(off + 12 * v + 4),
+                                 r.f32(off + 12 * v + 8));
       });
     accessor(prim.at("indices").get<int>(), [&](size_t off, size_t count, int type) {
       const size_t s = type == 5125 ? 4 : type == 5123 ? 2 : 1;
       std::vector<std::uint32_t> idx(count);
-      for (size_t k = 0; k < count; ++k) idx[k] = s == 4 ? r.u32(off + 4 * k) : s == 2 ? r.u16(off + 2 * k) : r.u8(off + k);
-      for (size_t k = 0; k + 2 < count; k += 3) m.triangles.push_back({idx[k], idx[k + 1], idx[k + 2]});
+      for (size_t k = 0; k < count; ++k)
+        idx[k] = s == 4 ? r.u32(off + 4 * k) : s == 2 ? r.u16(off + 2 * k) : r.u8(off + k);
+      for (size_t k = 0; k + 2 < count; k += 3)
+        m.triangles.push_back({idx[k], idx[k + 1], idx[k + 2]});
     });
   } catch (const nlohmann::json::exception& e) {
     r.fail(std::string("unexpected glTF structure: ") + e.what());
@@ -394,7 +424,9 @@ void write_mesh(const Mesh& mesh, const std::string& path) {
   for (const auto& t : mesh.triangles)
     for (std::uint32_t v : t)
       if (v >= mesh.positions.size())
-        throw InvalidArgument("mesh", path, fmt::format("a triangle refers to vertex {} of {}", v, mesh.positions.size()));
+        throw InvalidArgument(
+            "mesh", path,
+            fmt::format("a triangle refers to vertex {} of {}", v, mesh.positions.size()));
   // Readers cannot parse nan or inf, and STL, glb and PLY hold floats: a mesh with a number
   // that is not finite or beyond a float's range is refused, not written.
   auto fits = [](const Vec3& p) {
@@ -402,8 +434,10 @@ void write_mesh(const Mesh& mesh, const std::string& path) {
   };
   for (size_t v = 0; v < mesh.positions.size(); ++v)
     if (!fits(mesh.positions[v]) || (v < mesh.normals.size() && !fits(mesh.normals[v])))
-      throw BadInput(fmt::format("{}: vertex {} of the mesh has a coordinate or normal that is "
-                                 "not finite or beyond a float's range; nothing written", path, v));
+      throw BadInput(
+          fmt::format("{}: vertex {} of the mesh has a coordinate or normal that is "
+                      "not finite or beyond a float's range; nothing written",
+                      path, v));
   if (ext == "ply") {
     write_ply_mesh(mesh, path);
     return;

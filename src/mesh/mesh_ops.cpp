@@ -88,8 +88,10 @@ size_t collapse_short_edges(Mesh& mesh, double min_length) {
         const std::uint32_t w = mapped(t, k);
         if (w == u) continue;
         auto it = std::find_if(out.begin(), out.end(), [&](const auto& p) { return p.first == w; });
-        if (it == out.end()) out.push_back({w, 1});
-        else ++it->second;
+        if (it == out.end())
+          out.push_back({w, 1});
+        else
+          ++it->second;
       }
   };
   std::vector<std::uint32_t> ring_u, ring_v, shared;
@@ -116,11 +118,14 @@ size_t collapse_short_edges(Mesh& mesh, double min_length) {
       if (std::none_of(nb_v.begin(), nb_v.end(), [&](const auto& p) { return p.first == w; }))
         continue;
       ++common;
-      link_ok &= std::any_of(shared.begin(), shared.end(), [&](std::uint32_t t) { return contains(t, w); });
+      link_ok &= std::any_of(shared.begin(), shared.end(),
+                             [&](std::uint32_t t) { return contains(t, w); });
     }
     if (!link_ok || common != shared.size()) continue;
-    const bool border_u = std::any_of(nb_u.begin(), nb_u.end(), [](const auto& p) { return p.second == 1; });
-    const bool border_v = std::any_of(nb_v.begin(), nb_v.end(), [](const auto& p) { return p.second == 1; });
+    const bool border_u =
+        std::any_of(nb_u.begin(), nb_u.end(), [](const auto& p) { return p.second == 1; });
+    const bool border_v =
+        std::any_of(nb_v.begin(), nb_v.end(), [](const auto& p) { return p.second == 1; });
     if (border_u && border_v && !border_edge) continue;
     const bool hold_u = fixed[u] || border_u, hold_v = fixed[v] || border_v;
     if (hold_u && hold_v && !border_edge) continue;  // would pinch the mesh
@@ -159,11 +164,14 @@ size_t collapse_short_edges(Mesh& mesh, double min_length) {
   std::vector<std::array<std::uint32_t, 3>> out;
   out.reserve(nt);
   for (size_t t = 0; t < nt; ++t)
-    if (alive[t]) out.push_back({mapped(static_cast<std::uint32_t>(t), 0), mapped(static_cast<std::uint32_t>(t), 1),
-                                 mapped(static_cast<std::uint32_t>(t), 2)});
+    if (alive[t])
+      out.push_back({mapped(static_cast<std::uint32_t>(t), 0),
+                     mapped(static_cast<std::uint32_t>(t), 1),
+                     mapped(static_cast<std::uint32_t>(t), 2)});
   tris = std::move(out);
   if (mesh.is_boundary.size() == nv)
-    for (size_t v = 0; v < nv; ++v) mesh.is_boundary[v] = fixed[find(static_cast<std::uint32_t>(v))];
+    for (size_t v = 0; v < nv; ++v)
+      mesh.is_boundary[v] = fixed[find(static_cast<std::uint32_t>(v))];
   return collapsed;
 }
 
@@ -178,13 +186,16 @@ void compute_field_normals(Mesh& mesh, const Surface& surface, int threads) {
   long long missing = 0;
   for (long long v = 0; v < nv; ++v) {
     const double len = g[static_cast<size_t>(v)].norm();
-    if (len > 0 && std::isfinite(len)) mesh.normals[static_cast<size_t>(v)] = g[static_cast<size_t>(v)] / len;
-    else ++missing;
+    if (len > 0 && std::isfinite(len))
+      mesh.normals[static_cast<size_t>(v)] = g[static_cast<size_t>(v)] / len;
+    else
+      ++missing;
   }
   if (missing == 0) return;
   std::vector<Vec3> face_sum(static_cast<size_t>(nv), Vec3::Zero());
   for (const auto& t : mesh.triangles) {
-    const Vec3 n = detail::area_normal(mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]]);
+    const Vec3 n =
+        detail::area_normal(mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]]);
     for (std::uint32_t v : t) face_sum[v] += n;
   }
   for (long long v = 0; v < nv; ++v) {

@@ -84,11 +84,11 @@ json quality_json(const MeshQuality& q) {
                    {"max_abs_clip_value", q.max_boundary_clip_value}};
   json sing = json::array();
   for (size_t k = 0; k < q.singular_points.size(); ++k)
-    sing.push_back({{"point", json_read::from_vec3(q.singular_points[k])},
-                    {"nearest_vertex_distance", q.singular_point_distance[k]},
-                    {"in_mean_edge_lengths", q.mean_edge_length > 0
-                                                 ? q.singular_point_distance[k] / q.mean_edge_length
-                                                 : 0.0}});
+    sing.push_back(
+        {{"point", json_read::from_vec3(q.singular_points[k])},
+         {"nearest_vertex_distance", q.singular_point_distance[k]},
+         {"in_mean_edge_lengths",
+          q.mean_edge_length > 0 ? q.singular_point_distance[k] / q.mean_edge_length : 0.0}});
   j["singular_points"] = sing;
   return j;
 }

@@ -47,10 +47,10 @@ void check_result(MeshResult& r, const MeshRun& run) {
                 fmt::format("{}: the mesh has {} triangles of zero area and {} vertices on top "
                             "of others; please report this surface and these options",
                             r.surface.label(), d.zero_area_triangles, d.coincident_vertices));
-  const long long undefined =
-      r.quality_after ? static_cast<long long>(r.quality_after->undefined_vertices)
-      : r.improvement ? r.improvement->summary().undefined_vertices
-                      : 0;
+  const long long undefined = r.quality_after
+                                  ? static_cast<long long>(r.quality_after->undefined_vertices)
+                              : r.improvement ? r.improvement->summary().undefined_vertices
+                                              : 0;
   if (undefined > 0)
     say_warning(r, run,
                 fmt::format("{}: {} vertices lie where F is undefined (NaN or infinite); please "

@@ -45,7 +45,8 @@ long long weld_grid_nodes(Mesh& mesh, const detail::Grid& g) {
   for (auto& t : mesh.triangles)
     for (std::uint32_t& v : t)
       if (remap[v] != kNone) v = remap[v];
-  std::erase_if(mesh.triangles, [](const auto& t) { return t[0] == t[1] || t[1] == t[2] || t[2] == t[0]; });
+  std::erase_if(mesh.triangles,
+                [](const auto& t) { return t[0] == t[1] || t[1] == t[2] || t[2] == t[0]; });
   // Triangles on the same three vertices, in either orientation, come in pairs that cancel.
   std::unordered_map<std::uint64_t, std::vector<size_t>> by_corners;
   auto corners_key = [](std::array<std::uint32_t, 3> t) {
@@ -108,7 +109,8 @@ Mesh polygonize(const Surface& surface, const PolygonizeOptions& options, Polygo
   PolygonizeStats st;
   st.grid_bounds.lo = g.lo;
   st.grid_bounds.hi = g.node(g.cells[0], g.cells[1], g.cells[2]);
-  for (int a = 0; a < 3; ++a) st.cells[static_cast<size_t>(a)] = static_cast<int>(g.cells[static_cast<size_t>(a)]);
+  for (int a = 0; a < 3; ++a)
+    st.cells[static_cast<size_t>(a)] = static_cast<int>(g.cells[static_cast<size_t>(a)]);
   st.cell_size = g.h;
   st.sparse = detail::use_sparse(g, options);
   surface.field.require_parameters();
@@ -118,9 +120,9 @@ Mesh polygonize(const Surface& surface, const PolygonizeOptions& options, Polygo
   if (options.polynomial_rows && surface.field.is_expandable()) poly = surface.field.polynomial();
 
   const Polynomial* p = poly ? &*poly : nullptr;
-  detail::ExtractedMesh r =
-      st.sparse ? detail::extract_sparse(surface, g, options, p, workers, st, stop)
-                : detail::extract_dense(surface, g, options, p, workers, st, stop);
+  detail::ExtractedMesh r = st.sparse
+                                ? detail::extract_sparse(surface, g, options, p, workers, st, stop)
+                                : detail::extract_dense(surface, g, options, p, workers, st, stop);
   if (stop.stop_requested()) return {};
 
   const auto t_clean = Clock::now();
@@ -139,7 +141,8 @@ Mesh polygonize(const Surface& surface, const PolygonizeOptions& options, Polygo
     st.clip_snapped = cs.snapped;
   }
   if (stop.stop_requested()) return {};
-  st.collapsed_edges = static_cast<long long>(collapse_short_edges(mesh, options.collapse_fraction * g.h));
+  st.collapsed_edges =
+      static_cast<long long>(collapse_short_edges(mesh, options.collapse_fraction * g.h));
   remove_unreferenced_vertices(mesh);
   detail::flag_open_boundary(mesh);
   if (options.compute_normals) compute_field_normals(mesh, surface, options.threads);

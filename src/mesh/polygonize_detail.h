@@ -88,8 +88,8 @@ inline double linear_fraction(double fa, double fb) {
 // The linear interpolation of the crossing on the edge from node (i, j, k) along `axis`. The
 // triangulation of each cube uses these points (not the refined ones) so that the dense and
 // the sparse path, which refines later, triangulate alike.
-inline Vec3 linear_point(const Grid& g, long long i, long long j, long long k, int axis,
-                         double fa, double fb) {
+inline Vec3 linear_point(const Grid& g, long long i, long long j, long long k, int axis, double fa,
+                         double fb) {
   Vec3 p = g.node(i, j, k);
   p[axis] += linear_fraction(fa, fb) * g.h;
   return p;

@@ -52,9 +52,9 @@ Grid make_grid(const Surface& surface, const PolygonizeOptions& o) {
   check_options(o);
   const Box3 box = o.bounds ? *o.bounds : surface.bounds();
   if (!box.lo.allFinite() || !box.hi.allFinite() || box.is_empty() || box.size().maxCoeff() <= 0)
-    throw InvalidArgument("bounds", fmt::format("[{}, {}, {}] .. [{}, {}, {}]", box.lo.x(),
-                                                box.lo.y(), box.lo.z(), box.hi.x(), box.hi.y(),
-                                                box.hi.z()),
+    throw InvalidArgument("bounds",
+                          fmt::format("[{}, {}, {}] .. [{}, {}, {}]", box.lo.x(), box.lo.y(),
+                                      box.lo.z(), box.hi.x(), box.hi.y(), box.hi.z()),
                           "the box must be finite and have a positive size");
   Grid g;
   const Vec3 size = box.size();
@@ -126,9 +126,9 @@ void check_grid_memory(const Surface& surface, PolygonizeOptions options,
     const int mid = lo + (hi - lo) / 2;
     (need(mid) <= limit ? lo : hi) = mid;
   }
-  throw InvalidArgument(option, std::to_string(cells),
-                        fmt::format("{}; use {} {} or less", memory_shortfall(needed, have),
-                                    option, lo));
+  throw InvalidArgument(
+      option, std::to_string(cells),
+      fmt::format("{}; use {} {} or less", memory_shortfall(needed, have), option, lo));
 }
 
 }  // namespace zeroset

@@ -50,7 +50,8 @@ double triangle_radius_ratio(const Vec3& a, const Vec3& b, const Vec3& c) {
   return den > 0 ? 16 * area * area / den : 0.0;
 }
 
-MeshQuality measure_quality(const Mesh& mesh, const Surface& surface, const QualityOptions& options) {
+MeshQuality measure_quality(const Mesh& mesh, const Surface& surface,
+                            const QualityOptions& options) {
   const int workers = detail::worker_count(options.threads);
   MeshQuality q;
   q.vertices = mesh.positions.size();
@@ -67,18 +68,19 @@ MeshQuality measure_quality(const Mesh& mesh, const Surface& surface, const Qual
     std::array<long long, 12> local{};
 #pragma omp for schedule(static) reduction(+ : edge_sum, angle_sum, ratio_sum) \
     reduction(min : smallest, min_ratio)
-    for (long long t = 0; t < nt; ++t) trap.run([&] {
-      const auto& tri = mesh.triangles[static_cast<size_t>(t)];
-      const Vec3 &a = P[tri[0]], &b = P[tri[1]], &c = P[tri[2]];
-      edge_sum += (b - a).norm() + (c - b).norm() + (a - c).norm();
-      const double ang = triangle_min_angle_deg(a, b, c);
-      const double ratio = triangle_radius_ratio(a, b, c);
-      angle_sum += ang;
-      ratio_sum += ratio;
-      smallest = std::min(smallest, ang);
-      min_ratio = std::min(min_ratio, ratio);
-      ++local[static_cast<size_t>(std::clamp(static_cast<int>(ang / 5), 0, 11))];
-    });
+    for (long long t = 0; t < nt; ++t)
+      trap.run([&] {
+        const auto& tri = mesh.triangles[static_cast<size_t>(t)];
+        const Vec3 &a = P[tri[0]], &b = P[tri[1]], &c = P[tri[2]];
+        edge_sum += (b - a).norm() + (c - b).norm() + (a - c).norm();
+        const double ang = triangle_min_angle_deg(a, b, c);
+        const double ratio = triangle_radius_ratio(a, b, c);
+        angle_sum += ang;
+        ratio_sum += ratio;
+        smallest = std::min(smallest, ang);
+        min_ratio = std::min(min_ratio, ratio);
+        ++local[static_cast<size_t>(std::clamp(static_cast<int>(ang / 5), 0, 11))];
+      });
 #pragma omp critical
     for (size_t k = 0; k < 12; ++k) hist[k] += local[k];
   }
@@ -102,7 +104,8 @@ MeshQuality measure_quality(const Mesh& mesh, const Surface& surface, const Qual
   }
 
   q.singular_points = surface.singular_points();
-  q.singular_radius = options.singular_radius > 0 ? options.singular_radius : 2 * q.mean_edge_length;
+  q.singular_radius =
+      options.singular_radius > 0 ? options.singular_radius : 2 * q.mean_edge_length;
   auto near_singular = [&](const Vec3& p) {
     for (const Vec3& s : q.singular_points)
       if ((p - s).norm() < q.singular_radius) return true;
@@ -133,7 +136,8 @@ MeshQuality measure_quality(const Mesh& mesh, const Surface& surface, const Qual
     sq += r * r;
     ++q.residual_vertices;
   }
-  if (q.residual_vertices > 0) q.rms_residual = std::sqrt(sq / static_cast<double>(q.residual_vertices));
+  if (q.residual_vertices > 0)
+    q.rms_residual = std::sqrt(sq / static_cast<double>(q.residual_vertices));
 
   // Face normals against ∇F at the centroids.
   std::vector<Vec3> centroids(mesh.triangles.size());
@@ -163,7 +167,8 @@ MeshQuality measure_quality(const Mesh& mesh, const Surface& surface, const Qual
       if (mesh.is_boundary[v]) {
         ++q.boundary_vertices;
         if (!surface.clip.is_empty_spec())
-          q.max_boundary_clip_value = std::max(q.max_boundary_clip_value, std::abs(surface.clip.value(P[v])));
+          q.max_boundary_clip_value =
+              std::max(q.max_boundary_clip_value, std::abs(surface.clip.value(P[v])));
       }
   return q;
 }

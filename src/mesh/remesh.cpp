@@ -38,8 +38,8 @@ void Remesher::setup() {
   for (size_t v = 0; v < nv; ++v) {
     if (!mesh.is_boundary[v]) continue;
     const Vec3& p = mesh.positions[v];
-    const bool on_clip = !surface.clip.is_empty_spec() &&
-                         std::abs(surface.clip.value(p)) <= 1e-7 * (1 + p.norm());
+    const bool on_clip =
+        !surface.clip.is_empty_spec() && std::abs(surface.clip.value(p)) <= 1e-7 * (1 + p.norm());
     kind[v] = opt.boundary == BoundaryMode::kConstrained && on_clip ? kClip : kLocked;
   }
   for (const MeshCurve& c : mesh.curves) {
@@ -82,9 +82,8 @@ void Remesher::find_singular_points(const SingularSet& set) {
     if (surface.clip.contains(q)) pending.push_back(q);
   for (const SingularPoint& sp : set.points) {
     if (sp.kind == SingularPointKind::kClipEnd) continue;
-    if (std::none_of(pending.begin(), pending.end(), [&](const Vec3& q) {
-          return (q - sp.position).norm() < 1e-6 * L;
-        }))
+    if (std::none_of(pending.begin(), pending.end(),
+                     [&](const Vec3& q) { return (q - sp.position).norm() < 1e-6 * L; }))
       pending.push_back(sp.position);
   }
 }
@@ -102,8 +101,8 @@ void Remesher::hold_pending_points() {
     }
     std::sort(near.begin(), near.end());
     // A vertex there already (on a singular curve, say): it holds the point.
-    if (!near.empty() && (near[0].first == 0 || (on_curve[near[0].second] &&
-                                                 near[0].first < 1e-9 * L))) {
+    if (!near.empty() &&
+        (near[0].first == 0 || (on_curve[near[0].second] && near[0].first < 1e-9 * L))) {
       kind[near[0].second] = kLocked, on_curve[near[0].second] = 1;
       rings_stale = true;  // the border chains may end there now
       stats.singular_points.push_back(mesh.positions[near[0].second]);
@@ -409,7 +408,7 @@ long long Remesher::flip_pass(MayWant may_want, Wanted wanted) {
       for (int i = 0; i < 3; ++i)
         if (o[i] == b && o[(i + 1) % 3] == a) d = o[(i + 2) % 3];
       if (d == kNone || d == c) continue;  // misoriented pair, or a doubled triangle
-      if (!wanted(a, b, c, d)) continue;  // first: the cheapest test that rules most out
+      if (!wanted(a, b, c, d)) continue;   // first: the cheapest test that rules most out
       std::uint32_t cd[2];
       if (edge_tris(c, d, cd) != 0) continue;
       const auto& p = mesh.positions;
@@ -482,8 +481,9 @@ long long Remesher::delaunay_flips() {
   return flip_pass([&](std::uint32_t a, std::uint32_t b,
                        std::uint32_t c) { return (p[a] - p[c]).dot(p[b] - p[c]) < 0; },
                    [&](std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d) {
-    return corner_angle(p[c], p[a], p[b]) + corner_angle(p[d], p[a], p[b]) > M_PI + 1e-3;
-  });
+                     return corner_angle(p[c], p[a], p[b]) + corner_angle(p[d], p[a], p[b]) >
+                            M_PI + 1e-3;
+                   });
 }
 
 }  // namespace zeroset::detail
@@ -604,8 +604,8 @@ RemeshStats remesh(Mesh& mesh, const Surface& surface, const RemeshOptions& opti
   }
   r.step_repeats = 0;
   st.missed_singular_points = static_cast<long long>(r.pending.size());
-  st.converged = topology_at_rest && flips_at_rest && moves_at_rest &&
-                 (!pinch.improved || pinch.converged);
+  st.converged =
+      topology_at_rest && flips_at_rest && moves_at_rest && (!pinch.improved || pinch.converged);
   r.final_projection();
   r.compact();
   r.measure_residual();

@@ -69,8 +69,7 @@ inline std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
 }
 
 inline double min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
-  return std::min({corner_angle(a, b, c), corner_angle(b, c, a),
-                   corner_angle(c, a, b)});
+  return std::min({corner_angle(a, b, c), corner_angle(b, c, a), corner_angle(c, a, b)});
 }
 
 struct PinchStep {
@@ -107,7 +106,7 @@ struct Remesher {
   double L = 0, lo = 0, hi = 0, min_area = 0;
   double hi_collapse = 0;
   std::vector<Vec3> pending;  // singular points no vertex holds yet
-  std::vector<int> valence;  // during valence_flips: neighbours per vertex, kept up to date
+  std::vector<int> valence;   // during valence_flips: neighbours per vertex, kept up to date
 
   // Relaxation's view of the connectivity, rebuilt when a topology pass has changed it: the
   // live triangles packed, and each vertex's among them in CSR form (ring_tri[ring_start[v] ..
@@ -132,10 +131,14 @@ struct Remesher {
   std::vector<Vec3> grad_at, grad;
 
   Remesher(Mesh& m, const Surface& s, const RemeshOptions& o)
-      : mesh(m), surface(s), opt(o),
-        workers(o.threads > 0 ? worker_count(o.threads)
-                : m.positions.size() >= kMeasuredWorkersVertices ? worker_count(0) : 1),
-        measure_workers(o.threads == 0 && workers > 1), worker_choice(workers),
+      : mesh(m),
+        surface(s),
+        opt(o),
+        workers(o.threads > 0                                    ? worker_count(o.threads)
+                : m.positions.size() >= kMeasuredWorkersVertices ? worker_count(0)
+                                                                 : 1),
+        measure_workers(o.threads == 0 && workers > 1),
+        worker_choice(workers),
         pool(s.field, workers) {}
 
   Evaluator& ev() { return pool.at(0); }
@@ -214,7 +217,8 @@ struct Remesher {
   // Flips edge (a, b) of triangles t1 = (a, b, c), t2 = (b, a, d) into (a, d, c), (d, b, c)
   // when `wanted` says so and the geometry allows it; `may_want(a, b, c)` rules edges out
   // before the other triangle is looked up.
-  template <class MayWant, class Wanted> long long flip_pass(MayWant may_want, Wanted wanted);
+  template <class MayWant, class Wanted>
+  long long flip_pass(MayWant may_want, Wanted wanted);
   long long valence_flips();
   long long delaunay_flips();
 

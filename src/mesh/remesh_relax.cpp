@@ -84,8 +84,7 @@ void Remesher::build_border_chains() {
     if (!alive_vertex[v] || kind[v] != kLocked || vt[v].empty()) continue;
     for (std::uint32_t t : vt[v])
       for (std::uint32_t w : mesh.triangles[t])
-        if (w != v && kind[w] == kClip && !done[w] &&
-            (nb[w][0] == v || nb[w][1] == v)) {
+        if (w != v && kind[w] == kClip && !done[w] && (nb[w][0] == v || nb[w][1] == v)) {
           done[w] = 1;
           walk(v, w);
         }
@@ -224,12 +223,13 @@ double Remesher::relax_step() {
   }
   ExceptionTrap trap;
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 16)
-  for (long long i = 0; i < static_cast<long long>(clip_vs.size()); ++i) trap.run([&] {
-    const std::uint32_t v = clip_vs[i];
-    if (!has_target[v]) return;
-    Vec3 q = border_target[v];
-    if (project(true, q, 0.5 * L) && surface.clip.contains(q, 1e-9 * L)) next[v] = q;
-  });
+  for (long long i = 0; i < static_cast<long long>(clip_vs.size()); ++i)
+    trap.run([&] {
+      const std::uint32_t v = clip_vs[i];
+      if (!has_target[v]) return;
+      Vec3 q = border_target[v];
+      if (project(true, q, 0.5 * L) && surface.clip.contains(q, 1e-9 * L)) next[v] = q;
+    });
   trap.rethrow();
   // Newton's method onto F = 0 for the free vertices, in chunks of kNewtonChunk (each chunk's
   // points evaluated together in structure-of-arrays batches, its data staying in the cache),
@@ -241,80 +241,82 @@ double Remesher::relax_step() {
     std::vector<std::uint32_t> live;
     GradientBatch batch;
 #pragma omp for schedule(dynamic, 1)
-    for (long long c = 0; c < chunks; ++c) trap.run([&] {
-      const long long e = std::min(nf, (c + 1) * kNewtonChunk);
-      live.clear();
-      for (long long i = c * kNewtonChunk; i < e; ++i)
-        if (state[i] == 1) live.push_back(static_cast<std::uint32_t>(i));
-      for (int it = 0; it < kBatchNewtonSteps + 1 && !live.empty(); ++it) {
-        const size_t m = live.size();
-        batch.evaluate(pool.local(), m, [&](size_t k) -> const Vec3& { return at[live[k]]; });
-        const std::vector<double>& f = batch.f;
-        const bool last = it == kBatchNewtonSteps;
-        size_t kept = 0;
-        for (size_t k = 0; k < m; ++k) {
-          const std::uint32_t i = live[k];
-          const Vec3 g = batch.gradient(k);
-          const double gn = g.norm();
-          if (!has_residual(f[k], gn)) {
-            state[i] = 0;
-            continue;
-          }
-          if (residual(f[k], gn) <= 1e-14 * (1 + at[i].norm())) {
-            state[i] = 2;
-            // ∇F there is what the next step's tangent plane needs if the vertex stays there.
-            const std::uint32_t v = free_vs[i];
-            grad_at[v] = at[i], grad[v] = g;
-            continue;
-          }
-          if (last) {
+    for (long long c = 0; c < chunks; ++c)
+      trap.run([&] {
+        const long long e = std::min(nf, (c + 1) * kNewtonChunk);
+        live.clear();
+        for (long long i = c * kNewtonChunk; i < e; ++i)
+          if (state[i] == 1) live.push_back(static_cast<std::uint32_t>(i));
+        for (int it = 0; it < kBatchNewtonSteps + 1 && !live.empty(); ++it) {
+          const size_t m = live.size();
+          batch.evaluate(pool.local(), m, [&](size_t k) -> const Vec3& { return at[live[k]]; });
+          const std::vector<double>& f = batch.f;
+          const bool last = it == kBatchNewtonSteps;
+          size_t kept = 0;
+          for (size_t k = 0; k < m; ++k) {
+            const std::uint32_t i = live[k];
+            const Vec3 g = batch.gradient(k);
+            const double gn = g.norm();
+            if (!has_residual(f[k], gn)) {
+              state[i] = 0;
+              continue;
+            }
+            if (residual(f[k], gn) <= 1e-14 * (1 + at[i].norm())) {
+              state[i] = 2;
+              // ∇F there is what the next step's tangent plane needs if the vertex stays there.
+              const std::uint32_t v = free_vs[i];
+              grad_at[v] = at[i], grad[v] = g;
+              continue;
+            }
+            if (last) {
+              live[kept++] = i;
+              continue;
+            }
+            const Vec3 step = surface_newton_step(f[k], g);
+            at[i] += step;
+            if (it == 0 && step.norm() <= kShortNewtonStep * L) {
+              // Left about the curvature times the step squared off F = 0 (1e-6 L), with ∇F from
+              // where the step began as its tangent plane's: no second evaluation.
+              state[i] = 2;
+              const std::uint32_t v = free_vs[i];
+              grad_at[v] = at[i], grad[v] = g;
+              continue;
+            }
             live[kept++] = i;
-            continue;
           }
-          const Vec3 step = surface_newton_step(f[k], g);
-          at[i] += step;
-          if (it == 0 && step.norm() <= kShortNewtonStep * L) {
-            // Left about the curvature times the step squared off F = 0 (1e-6 L), with ∇F from
-            // where the step began as its tangent plane's: no second evaluation.
-            state[i] = 2;
-            const std::uint32_t v = free_vs[i];
-            grad_at[v] = at[i], grad[v] = g;
-            continue;
-          }
-          live[kept++] = i;
+          live.resize(kept);
         }
-        live.resize(kept);
-      }
-    });
+      });
   }
   trap.rethrow();
   auto inside = [&](const Vec3& q) {
     return surface.clip.is_empty_spec() || surface.clip.contains(q, 1e-9 * L);
   };
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 256)
-  for (long long i = 0; i < nf; ++i) trap.run([&] {
-    if (state[i] == 0) return;
-    // Not there yet after the batched steps (rare): one at a time from the start.
-    if (state[i] == 1) {
-      Vec3 q = start[i];
-      if (project(false, q, 0.5 * L)) at[i] = q, state[i] = 2;
-    }
-    const bool ok = state[i] == 2 && (at[i] - start[i]).norm() <= 0.5 * L && inside(at[i]);
-    if (!ok) return;
-    const Vec3& p = mesh.positions[free_vs[i]];
-    for (int k = 0; k < step_repeats && (at[i] - p).norm() >= opt.rest_move * L; ++k) {
-      Vec3 g;
-      pool.local().value_gradient(at[i], g);
-      if (!(g.norm() > 0) || !g.allFinite()) break;
-      const Vec3 u = g.normalized();
-      Vec3 d = centroid[i] - at[i];
-      d -= d.dot(u) * u;
-      Vec3 q = at[i] + d;
-      if (!project(false, q, 0.5 * L) || !inside(q)) break;
-      at[i] = q;
-    }
-    next[free_vs[i]] = at[i];
-  });
+  for (long long i = 0; i < nf; ++i)
+    trap.run([&] {
+      if (state[i] == 0) return;
+      // Not there yet after the batched steps (rare): one at a time from the start.
+      if (state[i] == 1) {
+        Vec3 q = start[i];
+        if (project(false, q, 0.5 * L)) at[i] = q, state[i] = 2;
+      }
+      const bool ok = state[i] == 2 && (at[i] - start[i]).norm() <= 0.5 * L && inside(at[i]);
+      if (!ok) return;
+      const Vec3& p = mesh.positions[free_vs[i]];
+      for (int k = 0; k < step_repeats && (at[i] - p).norm() >= opt.rest_move * L; ++k) {
+        Vec3 g;
+        pool.local().value_gradient(at[i], g);
+        if (!(g.norm() > 0) || !g.allFinite()) break;
+        const Vec3 u = g.normalized();
+        Vec3 d = centroid[i] - at[i];
+        d -= d.dot(u) * u;
+        Vec3 q = at[i] + d;
+        if (!project(false, q, 0.5 * L) || !inside(q)) break;
+        at[i] = q;
+      }
+      next[free_vs[i]] = at[i];
+    });
   trap.rethrow();
   return apply_guarded(next);
 }
@@ -427,11 +429,12 @@ void Remesher::final_projection() {
     const long long n = static_cast<long long>(todo.size());
     ExceptionTrap trap;
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 256)
-    for (long long k = 0; k < n; ++k) trap.run([&] {
-      const std::uint32_t v = todo[k];
-      Vec3 q = mesh.positions[v];
-      if (project(kind[v] == kClip, q, 0.25 * L)) next[v] = q;
-    });
+    for (long long k = 0; k < n; ++k)
+      trap.run([&] {
+        const std::uint32_t v = todo[k];
+        Vec3 q = mesh.positions[v];
+        if (project(kind[v] == kClip, q, 0.25 * L)) next[v] = q;
+      });
     trap.rethrow();
     triangle_normals();
     apply_guarded(next);
@@ -463,9 +466,8 @@ void Remesher::measure_residual() {
       continue;
     }
     if (!moving[v]) continue;
-    const bool at_point =
-        std::any_of(stats.singular_points.begin(), stats.singular_points.end(),
-                    [&](const Vec3& q) { return q == mesh.positions[v]; });
+    const bool at_point = std::any_of(stats.singular_points.begin(), stats.singular_points.end(),
+                                      [&](const Vec3& q) { return q == mesh.positions[v]; });
     if (at_point || !has_residual(f[v], g[v].norm())) continue;
     stats.max_residual = std::max(stats.max_residual, residual(f[v], g[v].norm()));
   }

@@ -17,7 +17,8 @@ namespace zeroset::detail {
 namespace {
 
 // Bit i of bits[i / 64] set where values[i] counts as positive (is_positive); returns how many
-// values are not finite (NaN or infinite: v − v is NaN for both). Four (AVX) or two (SSE2) values per compare where available.
+// values are not finite (NaN or infinite: v − v is NaN for both). Four (AVX) or two (SSE2) values
+// per compare where available.
 long long sign_bits(const double* values, long long n, std::uint64_t* bits) {
   long long nans = 0;
   for (long long b = 0; b < n; b += 64) {
@@ -29,8 +30,8 @@ long long sign_bits(const double* values, long long n, std::uint64_t* bits) {
     for (; i + 4 <= e; i += 4) {
       const __m256d v = _mm256_loadu_pd(values + i);
       // not (v < 0), true for NaN: NaN counts as positive
-      const auto positive =
-          static_cast<std::uint64_t>(_mm256_movemask_pd(_mm256_cmp_pd(v, _mm256_setzero_pd(), _CMP_NLT_UQ)));
+      const auto positive = static_cast<std::uint64_t>(
+          _mm256_movemask_pd(_mm256_cmp_pd(v, _mm256_setzero_pd(), _CMP_NLT_UQ)));
       word |= positive << (i - b);
       const __m256d d = _mm256_sub_pd(v, v);
       unordered = _mm256_or_pd(unordered, _mm256_cmp_pd(d, d, _CMP_UNORD_Q));
@@ -62,8 +63,7 @@ long long sign_bits(const double* values, long long n, std::uint64_t* bits) {
 
 }  // namespace
 
-RowSampler::RowSampler(const Field& field, const Grid& grid, const Polynomial* poly)
-    : grid_(grid) {
+RowSampler::RowSampler(const Field& field, const Grid& grid, const Polynomial* poly) : grid_(grid) {
   if (!poly) {
     eval_.emplace(field);
     return;
@@ -74,8 +74,8 @@ RowSampler::RowSampler(const Field& field, const Grid& grid, const Polynomial* p
   for (long long i = 0; i < grid_.nx(); ++i) t_[static_cast<size_t>(i)] = line_->t_of(i);
 }
 
-long long RowSampler::sample(long long i0, long long count, long long j, long long k,
-                             double* out, std::uint64_t* bits) {
+long long RowSampler::sample(long long i0, long long count, long long j, long long k, double* out,
+                             std::uint64_t* bits) {
   if (line_ && line_->degree() >= 0) {
     line_->coefficients(grid_.coord(1, j), grid_.coord(2, k), coeffs_.data());
     // Horner's rule on blocks of nodes held in registers; every node sees the same
@@ -92,7 +92,8 @@ long long RowSampler::sample(long long i0, long long count, long long j, long lo
     // Four independent chains of four nodes hide the latency of the multiply-adds.
     for (; n + 16 <= count; n += 16) {
       __m256d acc[4], tt[4];
-      for (int q = 0; q < 4; ++q) acc[q] = _mm256_set1_pd(c[degree]), tt[q] = _mm256_loadu_pd(t + n + 4 * q);
+      for (int q = 0; q < 4; ++q)
+        acc[q] = _mm256_set1_pd(c[degree]), tt[q] = _mm256_loadu_pd(t + n + 4 * q);
       for (int m = degree - 1; m >= 0; --m) {
         const __m256d cm = _mm256_set1_pd(c[m]);
         for (int q = 0; q < 4; ++q) acc[q] = _mm256_fmadd_pd(acc[q], tt[q], cm);
@@ -103,8 +104,8 @@ long long RowSampler::sample(long long i0, long long count, long long j, long lo
       __m256d unordered = _mm256_setzero_pd();
       for (int q = 0; q < 4; ++q) {
         // not (v < 0), true for NaN: NaN counts as positive
-        positive |= static_cast<std::uint64_t>(_mm256_movemask_pd(
-                        _mm256_cmp_pd(acc[q], _mm256_setzero_pd(), _CMP_NLT_UQ)))
+        positive |= static_cast<std::uint64_t>(
+                        _mm256_movemask_pd(_mm256_cmp_pd(acc[q], _mm256_setzero_pd(), _CMP_NLT_UQ)))
                     << (4 * q);
         const __m256d d = _mm256_sub_pd(acc[q], acc[q]);  // NaN where not finite
         unordered = _mm256_or_pd(unordered, _mm256_cmp_pd(d, d, _CMP_UNORD_Q));

@@ -115,9 +115,12 @@ GridMode parse_grid(std::string_view text) {
 
 std::string_view to_string(GridMode mode) {
   switch (mode) {
-    case GridMode::kDense: return "dense";
-    case GridMode::kSparse: return "sparse";
-    case GridMode::kAuto: break;
+    case GridMode::kDense:
+      return "dense";
+    case GridMode::kSparse:
+      return "sparse";
+    case GridMode::kAuto:
+      break;
   }
   return "auto";
 }
@@ -125,11 +128,11 @@ std::string_view to_string(GridMode mode) {
 void apply_mesh_settings(const json& mesh, MeshSettings& settings, const std::string& origin) {
   const std::string base = "/mesh";
   if (!mesh.is_object()) json_read::fail(origin, base, "expected an object");
-  json_read::known_keys(mesh,
-                        {"cells", "improve", "boundary", "grid", "refine_steps", "curvature",
-                         "curvature_weight", "singularity", "flips", "find_singular", "crossings",
-                         "curves", "improver"},
-                        origin, base);
+  json_read::known_keys(
+      mesh,
+      {"cells", "improve", "boundary", "grid", "refine_steps", "curvature", "curvature_weight",
+       "singularity", "flips", "find_singular", "crossings", "curves", "improver"},
+      origin, base);
   MeshSettings m = settings;
   try {
     // The types here; the ranges are validate_settings' (the same for every entry point).
@@ -155,22 +158,19 @@ void apply_mesh_settings(const json& mesh, MeshSettings& settings, const std::st
                         "expected true, false, \"auto\", \"off\" or a number of steps");
     }
     if (mesh.contains("boundary"))
-      m.boundary =
-          parse_boundary(json_read::string(mesh["boundary"], origin, base + "/boundary"));
+      m.boundary = parse_boundary(json_read::string(mesh["boundary"], origin, base + "/boundary"));
     if (mesh.contains("improver"))
-      m.improver =
-          parse_improver(json_read::string(mesh["improver"], origin, base + "/improver"));
+      m.improver = parse_improver(json_read::string(mesh["improver"], origin, base + "/improver"));
     if (mesh.contains("grid"))
       m.grid = parse_grid(json_read::string(mesh["grid"], origin, base + "/grid"));
-    if (mesh.contains("refine_steps"))
-      m.refine_steps = whole_number("refine_steps");
+    if (mesh.contains("refine_steps")) m.refine_steps = whole_number("refine_steps");
     if (mesh.contains("curvature_weight"))
       m.curvature_weight =
           json_read::number(mesh["curvature_weight"], origin, base + "/curvature_weight");
-    for (auto [key, flag] : {std::pair{"curvature", &m.curvature},
-                             std::pair{"singularity", &m.singularity}, std::pair{"flips", &m.flips},
-                             std::pair{"find_singular", &m.find_singular},
-                             std::pair{"crossings", &m.crossings}, std::pair{"curves", &m.curves}})
+    for (auto [key, flag] :
+         {std::pair{"curvature", &m.curvature}, std::pair{"singularity", &m.singularity},
+          std::pair{"flips", &m.flips}, std::pair{"find_singular", &m.find_singular},
+          std::pair{"crossings", &m.crossings}, std::pair{"curves", &m.curves}})
       if (mesh.contains(key)) *flag = json_read::boolean(mesh[key], origin, base + "/" + key);
     validate_settings(m);
   } catch (const SettingError& e) {

@@ -50,32 +50,39 @@ ExtractedMesh extract_sparse(const Surface& surface, const Grid& g, const Polygo
     std::vector<double> x, y, z, f, gx, gy, gz;
     Evaluator& ev = pool.local();
 #pragma omp for schedule(static)
-    for (long long r = 0; r < nc[1] * nc[2]; ++r) trap.run([&] {
-      const long long bj = r % nc[1], bk = r / nc[1];
-      const size_t n = static_cast<size_t>(nc[0]);
-      x.resize(n), y.assign(n, g.coord(1, corner_index(1, bj))),
-          z.assign(n, g.coord(2, corner_index(2, bk))), f.resize(n);
-      for (long long bi = 0; bi < nc[0]; ++bi) x[static_cast<size_t>(bi)] = g.coord(0, corner_index(0, bi));
-      ev.values(x, y, z, f);
-      std::copy(f.begin(), f.end(), corner_value.begin() + r * nc[0]);
-    });
+    for (long long r = 0; r < nc[1] * nc[2]; ++r)
+      trap.run([&] {
+        const long long bj = r % nc[1], bk = r / nc[1];
+        const size_t n = static_cast<size_t>(nc[0]);
+        x.resize(n), y.assign(n, g.coord(1, corner_index(1, bj))),
+            z.assign(n, g.coord(2, corner_index(2, bk))), f.resize(n);
+        for (long long bi = 0; bi < nc[0]; ++bi)
+          x[static_cast<size_t>(bi)] = g.coord(0, corner_index(0, bi));
+        ev.values(x, y, z, f);
+        std::copy(f.begin(), f.end(), corner_value.begin() + r * nc[0]);
+      });
 #pragma omp for schedule(static)
-    for (long long r = 0; r < nb[1] * nb[2]; ++r) trap.run([&] {
-      const long long bj = r % nb[1], bk = r / nb[1];
-      const size_t n = static_cast<size_t>(nb[0]);
-      x.resize(n), y.resize(n), z.resize(n), f.resize(n), gx.resize(n), gy.resize(n), gz.resize(n);
-      for (long long bi = 0; bi < nb[0]; ++bi) {
-        x[static_cast<size_t>(bi)] = 0.5 * (g.coord(0, corner_index(0, bi)) + g.coord(0, corner_index(0, bi + 1)));
-        y[static_cast<size_t>(bi)] = 0.5 * (g.coord(1, corner_index(1, bj)) + g.coord(1, corner_index(1, bj + 1)));
-        z[static_cast<size_t>(bi)] = 0.5 * (g.coord(2, corner_index(2, bk)) + g.coord(2, corner_index(2, bk + 1)));
-      }
-      ev.values_gradients(x, y, z, f, gx, gy, gz);
-      for (size_t bi = 0; bi < n; ++bi) {
-        centre_value[static_cast<size_t>(r * nb[0]) + bi] = f[bi];
-        centre_slope[static_cast<size_t>(r * nb[0]) + bi] =
-            std::sqrt(gx[bi] * gx[bi] + gy[bi] * gy[bi] + gz[bi] * gz[bi]);
-      }
-    });
+    for (long long r = 0; r < nb[1] * nb[2]; ++r)
+      trap.run([&] {
+        const long long bj = r % nb[1], bk = r / nb[1];
+        const size_t n = static_cast<size_t>(nb[0]);
+        x.resize(n), y.resize(n), z.resize(n), f.resize(n), gx.resize(n), gy.resize(n),
+            gz.resize(n);
+        for (long long bi = 0; bi < nb[0]; ++bi) {
+          x[static_cast<size_t>(bi)] =
+              0.5 * (g.coord(0, corner_index(0, bi)) + g.coord(0, corner_index(0, bi + 1)));
+          y[static_cast<size_t>(bi)] =
+              0.5 * (g.coord(1, corner_index(1, bj)) + g.coord(1, corner_index(1, bj + 1)));
+          z[static_cast<size_t>(bi)] =
+              0.5 * (g.coord(2, corner_index(2, bk)) + g.coord(2, corner_index(2, bk + 1)));
+        }
+        ev.values_gradients(x, y, z, f, gx, gy, gz);
+        for (size_t bi = 0; bi < n; ++bi) {
+          centre_value[static_cast<size_t>(r * nb[0]) + bi] = f[bi];
+          centre_slope[static_cast<size_t>(r * nb[0]) + bi] =
+              std::sqrt(gx[bi] * gx[bi] + gy[bi] * gy[bi] + gz[bi] * gz[bi]);
+        }
+      });
   }
   trap.rethrow();
   st.grid_samples += static_cast<long long>(corner_value.size() + centre_value.size());
@@ -86,7 +93,8 @@ ExtractedMesh extract_sparse(const Surface& surface, const Grid& g, const Polygo
     f[8] = centre_value[static_cast<size_t>(b)];
     for (int c = 0; c < 8; ++c) {
       const auto& d = kCorner[c];
-      f[c] = corner_value[static_cast<size_t>(((bk + d[2]) * nc[1] + bj + d[1]) * nc[0] + bi + d[0])];
+      f[c] =
+          corner_value[static_cast<size_t>(((bk + d[2]) * nc[1] + bj + d[1]) * nc[0] + bi + d[0])];
       fmin = std::min(fmin, std::abs(f[c]));
     }
     Vec3 size;
@@ -123,63 +131,66 @@ ExtractedMesh extract_sparse(const Surface& surface, const Grid& g, const Polygo
     for (auto& s : samplers) s = std::make_unique<RowSampler>(surface.field, g, poly);
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 8) \
     reduction(+ : active_cells, ambiguous, samples, nan_count, sampling_seconds)
-    for (long long q = 0; q < static_cast<long long>(kept.size()); ++q) trap.run([&] {
-      if (stop.stop_requested()) return;
-      const long long b = kept[static_cast<size_t>(q)];
-      const long long bi = b % nb[0], bj = (b / nb[0]) % nb[1], bk = b / (nb[0] * nb[1]);
-      const long long i0 = bi * B, j0 = bj * B, k0 = bk * B;
-      const long long mx = corner_index(0, bi + 1) - i0, my = corner_index(1, bj + 1) - j0,
-                      mz = corner_index(2, bk + 1) - k0;  // cells in this brick
-      const long long sx = mx + 1, sy = my + 1;
-      std::vector<double> v((mx + 1) * (my + 1) * (mz + 1));
-      RowSampler& sampler = *samplers[static_cast<size_t>(worker_index())];
-      const auto ts = Clock::now();
-      for (long long kk = 0; kk <= mz; ++kk)
-        for (long long jj = 0; jj <= my; ++jj)
-          sampler.sample(i0, sx, j0 + jj, k0 + kk, &v[static_cast<size_t>((kk * sy + jj) * sx)]);
-      sampling_seconds += seconds_since(ts);
-      samples += static_cast<long long>(v.size());
-      for (double val : v) nan_count += std::isfinite(val) ? 0 : 1;
-      auto& out_t = tris[static_cast<size_t>(q)];
-      auto& out_c = cross[static_cast<size_t>(q)];
-      for (long long kk = 0; kk < mz; ++kk)
-        for (long long jj = 0; jj < my; ++jj)
-          for (long long ii = 0; ii < mx; ++ii) {
-            double cv[8];
-            for (int c = 0; c < 8; ++c) {
-              const auto& d = kCorner[c];
-              cv[c] = v[static_cast<size_t>(((kk + d[2]) * sy + jj + d[1]) * sx + ii + d[0])];
+    for (long long q = 0; q < static_cast<long long>(kept.size()); ++q)
+      trap.run([&] {
+        if (stop.stop_requested()) return;
+        const long long b = kept[static_cast<size_t>(q)];
+        const long long bi = b % nb[0], bj = (b / nb[0]) % nb[1], bk = b / (nb[0] * nb[1]);
+        const long long i0 = bi * B, j0 = bj * B, k0 = bk * B;
+        const long long mx = corner_index(0, bi + 1) - i0, my = corner_index(1, bj + 1) - j0,
+                        mz = corner_index(2, bk + 1) - k0;  // cells in this brick
+        const long long sx = mx + 1, sy = my + 1;
+        std::vector<double> v((mx + 1) * (my + 1) * (mz + 1));
+        RowSampler& sampler = *samplers[static_cast<size_t>(worker_index())];
+        const auto ts = Clock::now();
+        for (long long kk = 0; kk <= mz; ++kk)
+          for (long long jj = 0; jj <= my; ++jj)
+            sampler.sample(i0, sx, j0 + jj, k0 + kk, &v[static_cast<size_t>((kk * sy + jj) * sx)]);
+        sampling_seconds += seconds_since(ts);
+        samples += static_cast<long long>(v.size());
+        for (double val : v) nan_count += std::isfinite(val) ? 0 : 1;
+        auto& out_t = tris[static_cast<size_t>(q)];
+        auto& out_c = cross[static_cast<size_t>(q)];
+        for (long long kk = 0; kk < mz; ++kk)
+          for (long long jj = 0; jj < my; ++jj)
+            for (long long ii = 0; ii < mx; ++ii) {
+              double cv[8];
+              for (int c = 0; c < 8; ++c) {
+                const auto& d = kCorner[c];
+                cv[c] = v[static_cast<size_t>(((kk + d[2]) * sy + jj + d[1]) * sx + ii + d[0])];
+              }
+              int cube_case = 0;
+              for (int c = 0; c < 8; ++c) cube_case |= static_cast<int>(is_positive(cv[c])) << c;
+              if (cube_case == 0 || cube_case == 255) continue;
+              ++active_cells;
+              const CellPolygons& polys = cell_entry(
+                  table, cube_case, [&](int c) { return cv[c]; }, ambiguous);
+              std::uint64_t key[12];
+              Vec3 pos[12];
+              for (unsigned m = kCrossingEdges[static_cast<size_t>(cube_case)]; m; m &= m - 1) {
+                const int e = std::countr_zero(m);
+                const int c0 = kEdgeCorners[e][0], c1 = kEdgeCorners[e][1];
+                const auto& d = kCorner[c0];
+                const int a = kEdgeAxis[e];
+                const long long gi = i0 + ii + d[0], gj = j0 + jj + d[1], gk = k0 + kk + d[2];
+                key[e] = key_of(gi, gj, gk, a);
+                pos[e] = linear_point(g, gi, gj, gk, a, cv[c0], cv[c1]);
+                out_c.push_back({key[e], {gi, gj, gk, a, cv[c0], cv[c1]}});
+              }
+              triangulate_cell(
+                  polys, [&](int e) -> const Vec3& { return pos[e]; },
+                  [&](int e0, int e1, int e2) {
+                    out_t.push_back({key[e0], key[e1], key[e2]});
+                  });
             }
-            int cube_case = 0;
-            for (int c = 0; c < 8; ++c) cube_case |= static_cast<int>(is_positive(cv[c])) << c;
-            if (cube_case == 0 || cube_case == 255) continue;
-            ++active_cells;
-            const CellPolygons& polys =
-                cell_entry(table, cube_case, [&](int c) { return cv[c]; }, ambiguous);
-            std::uint64_t key[12];
-            Vec3 pos[12];
-            for (unsigned m = kCrossingEdges[static_cast<size_t>(cube_case)]; m; m &= m - 1) {
-              const int e = std::countr_zero(m);
-              const int c0 = kEdgeCorners[e][0], c1 = kEdgeCorners[e][1];
-              const auto& d = kCorner[c0];
-              const int a = kEdgeAxis[e];
-              const long long gi = i0 + ii + d[0], gj = j0 + jj + d[1], gk = k0 + kk + d[2];
-              key[e] = key_of(gi, gj, gk, a);
-              pos[e] = linear_point(g, gi, gj, gk, a, cv[c0], cv[c1]);
-              out_c.push_back({key[e], {gi, gj, gk, a, cv[c0], cv[c1]}});
-            }
-            triangulate_cell(
-                polys, [&](int e) -> const Vec3& { return pos[e]; },
-                [&](int e0, int e1, int e2) { out_t.push_back({key[e0], key[e1], key[e2]}); });
-          }
-      std::sort(out_c.begin(), out_c.end(),
-                [](const KeyedCrossing& l, const KeyedCrossing& r) { return l.key < r.key; });
-      out_c.erase(std::unique(out_c.begin(), out_c.end(),
-                              [](const KeyedCrossing& l, const KeyedCrossing& r) {
-                                return l.key == r.key;
-                              }),
-                  out_c.end());
-    });
+        std::sort(out_c.begin(), out_c.end(),
+                  [](const KeyedCrossing& l, const KeyedCrossing& r) { return l.key < r.key; });
+        out_c.erase(std::unique(out_c.begin(), out_c.end(),
+                                [](const KeyedCrossing& l, const KeyedCrossing& r) {
+                                  return l.key == r.key;
+                                }),
+                    out_c.end());
+      });
     trap.rethrow();
   }
   if (stop.stop_requested()) return {};
@@ -201,12 +212,15 @@ ExtractedMesh extract_sparse(const Surface& surface, const Grid& g, const Polygo
   }
   std::sort(all.begin(), all.end(),
             [](const KeyedCrossing& l, const KeyedCrossing& r) { return l.key < r.key; });
-  all.erase(std::unique(all.begin(), all.end(),
-                        [](const KeyedCrossing& l, const KeyedCrossing& r) { return l.key == r.key; }),
-            all.end());
+  all.erase(
+      std::unique(all.begin(), all.end(),
+                  [](const KeyedCrossing& l, const KeyedCrossing& r) { return l.key == r.key; }),
+      all.end());
   if (all.size() > kMaxVertices)
-    throw Error(fmt::format("the mesh would have {} vertices, more than 2^32; lower the "
-                            "resolution", all.size()));
+    throw Error(
+        fmt::format("the mesh would have {} vertices, more than 2^32; lower the "
+                    "resolution",
+                    all.size()));
   std::vector<std::uint64_t> keys(all.size());
   std::vector<Crossing> crossings(all.size());
   for (size_t n = 0; n < all.size(); ++n) keys[n] = all[n].key, crossings[n] = all[n].c;
@@ -216,7 +230,8 @@ ExtractedMesh extract_sparse(const Surface& surface, const Grid& g, const Polygo
   res.positions.resize(crossings.size());
   {
     std::vector<std::unique_ptr<VertexPlacer>> placers(static_cast<size_t>(workers));
-    for (auto& p : placers) p = std::make_unique<VertexPlacer>(surface.field, g, poly, o.refine_steps);
+    for (auto& p : placers)
+      p = std::make_unique<VertexPlacer>(surface.field, g, poly, o.refine_steps);
     place_vertices_parallel(placers, workers, crossings, res.positions.data(),
                             st.refine_evaluations, st.pole_edges, stop);
   }
@@ -229,15 +244,17 @@ ExtractedMesh extract_sparse(const Surface& surface, const Grid& g, const Polygo
   total = start.back();
   res.triangles.resize(total);
   auto id_of = [&](std::uint64_t key) {
-    return static_cast<std::uint32_t>(std::lower_bound(keys.begin(), keys.end(), key) - keys.begin());
+    return static_cast<std::uint32_t>(std::lower_bound(keys.begin(), keys.end(), key) -
+                                      keys.begin());
   };
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 16)
-  for (long long q = 0; q < static_cast<long long>(tris.size()); ++q) trap.run([&] {
-    const auto& src = tris[static_cast<size_t>(q)];
-    for (size_t t = 0; t < src.size(); ++t)
-      res.triangles[start[static_cast<size_t>(q)] + t] = {id_of(src[t][0]), id_of(src[t][1]),
-                                                          id_of(src[t][2])};
-  });
+  for (long long q = 0; q < static_cast<long long>(tris.size()); ++q)
+    trap.run([&] {
+      const auto& src = tris[static_cast<size_t>(q)];
+      for (size_t t = 0; t < src.size(); ++t)
+        res.triangles[start[static_cast<size_t>(q)] + t] = {id_of(src[t][0]), id_of(src[t][1]),
+                                                            id_of(src[t][2])};
+    });
   trap.rethrow();
   st.active_cells += active_cells;
   st.ambiguous_faces += ambiguous;

@@ -26,8 +26,10 @@ void VertexPlacer::place_polynomial(std::span<const Crossing> in, Vec3* out,
   long long j_hi = std::numeric_limits<long long>::min();
   size_t z_count = 0;
   for (size_t n = 0; n < in.size(); ++n)
-    if (in[n].axis < 2) order_.push_back(static_cast<std::uint32_t>(n));
-    else ++z_count, j_lo = std::min(j_lo, in[n].j), j_hi = std::max(j_hi, in[n].j);
+    if (in[n].axis < 2)
+      order_.push_back(static_cast<std::uint32_t>(n));
+    else
+      ++z_count, j_lo = std::min(j_lo, in[n].j), j_hi = std::max(j_hi, in[n].j);
   if (z_count > 0) {  // the z edges after them, by j (a stable counting sort)
     bucket_.assign(static_cast<size_t>(j_hi - j_lo + 2), 0);
     for (size_t n = 0; n < in.size(); ++n)
@@ -37,7 +39,8 @@ void VertexPlacer::place_polynomial(std::span<const Crossing> in, Vec3* out,
     order_.resize(first + z_count);
     for (size_t n = 0; n < in.size(); ++n)
       if (in[n].axis == 2)
-        order_[first + bucket_[static_cast<size_t>(in[n].j - j_lo)]++] = static_cast<std::uint32_t>(n);
+        order_[first + bucket_[static_cast<size_t>(in[n].j - j_lo)]++] =
+            static_cast<std::uint32_t>(n);
   }
   // The fractions come back in that order; the points go out in the crossings' order.
   fraction_.resize(in.size());
@@ -53,8 +56,7 @@ void VertexPlacer::place_polynomial(std::span<const Crossing> in, Vec3* out,
 }
 
 // Coefficients, t at the lower node, end values and the linear start of edges[0..len).
-void VertexPlacer::fill_chunk(std::span<const Crossing> in, const std::uint32_t* edge,
-                              size_t len) {
+void VertexPlacer::fill_chunk(std::span<const Crossing> in, const std::uint32_t* edge, size_t len) {
   double* C = coeffs_.data();
   for (size_t e = 0; e < len;) {
     // A run of edges along one axis whose lines share v.
@@ -73,8 +75,9 @@ void VertexPlacer::fill_chunk(std::span<const Crossing> in, const std::uint32_t*
     // Four lines at a time; a last group short of four repeats its last edge into columns
     // that the next run overwrites (or past the chunk's end).
     for (size_t f = e; f < end; f += 4) {
-      const __m256d u = _mm256_setr_pd(u_of(f), u_of(std::min(f + 1, end - 1)),
-                                       u_of(std::min(f + 2, end - 1)), u_of(std::min(f + 3, end - 1)));
+      const __m256d u =
+          _mm256_setr_pd(u_of(f), u_of(std::min(f + 1, end - 1)), u_of(std::min(f + 2, end - 1)),
+                         u_of(std::min(f + 3, end - 1)));
       line.coefficients_at(u, C + f, kStride);
     }
 #else
@@ -121,7 +124,8 @@ long long VertexPlacer::refine_block(size_t b, int lanes) {
     // Active: a lane in use whose end values are finite.
     const __m256d in_use =
         _mm256_cmp_pd(_mm256_setr_pd(0, 1, 2, 3), _mm256_set1_pd(lanes - 4 * g), _CMP_LT_OQ);
-    act[g] = steps_ > 0 ? _mm256_and_pd(in_use, _mm256_and_pd(finite(flo[g]), finite(fhi[g]))) : zero;
+    act[g] =
+        steps_ > 0 ? _mm256_and_pd(in_use, _mm256_and_pd(finite(flo[g]), finite(fhi[g]))) : zero;
   }
   for (int it = 0; it < steps_; ++it) {
     int mask = 0;
@@ -132,7 +136,8 @@ long long VertexPlacer::refine_block(size_t b, int lanes) {
     __m256d t[kGroups], f[kGroups], df[kGroups];
     for (int g = 0; g < kGroups; ++g) {
       t[g] = _mm256_add_pd(tg[g], sv[g]);
-      f[g] = _mm256_loadu_pd(C + static_cast<size_t>(degree) * kStride + 4 * static_cast<size_t>(g));
+      f[g] =
+          _mm256_loadu_pd(C + static_cast<size_t>(degree) * kStride + 4 * static_cast<size_t>(g));
       df[g] = zero;
     }
     for (int m = degree - 1; m >= 0; --m)
@@ -222,8 +227,8 @@ long long VertexPlacer::refine_block(size_t b, int lanes) {
 }
 #endif
 
-void VertexPlacer::place_batched(std::span<const Crossing> in, Vec3* out,
-                                 long long& evaluations, long long& poles) {
+void VertexPlacer::place_batched(std::span<const Crossing> in, Vec3* out, long long& evaluations,
+                                 long long& poles) {
   const size_t n = in.size();
   brackets_.clear();
   t_.resize(n);
@@ -280,12 +285,13 @@ void place_vertices_parallel(std::vector<std::unique_ptr<VertexPlacer>>& placers
   long long evals = 0, refused = 0;
   detail::ExceptionTrap trap;
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 1) reduction(+ : evals, refused)
-  for (long long c = 0; c < chunks; ++c) trap.run([&] {
-    if (stop.stop_requested()) return;
-    const size_t b = static_cast<size_t>(c) * kChunk, e = std::min(in.size(), b + kChunk);
-    placers[static_cast<size_t>(worker_index())]->place(
-        std::span<const Crossing>(in.data() + b, e - b), out + b, evals, refused);
-  });
+  for (long long c = 0; c < chunks; ++c)
+    trap.run([&] {
+      if (stop.stop_requested()) return;
+      const size_t b = static_cast<size_t>(c) * kChunk, e = std::min(in.size(), b + kChunk);
+      placers[static_cast<size_t>(worker_index())]->place(
+          std::span<const Crossing>(in.data() + b, e - b), out + b, evals, refused);
+    });
   trap.rethrow();
   evaluations += evals;
   poles += refused;

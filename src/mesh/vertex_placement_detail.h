@@ -46,8 +46,10 @@ class VertexPlacer {
   /// F is not finite, or a pole: see clearly_refined) gets no_vertex(). Counts the refinement
   /// evaluations, and the crossings refused for a pole or a jump in `poles`.
   void place(std::span<const Crossing> in, Vec3* out, long long& evaluations, long long& poles) {
-    if (lines_[0]) place_polynomial(in, out, evaluations);
-    else place_batched(in, out, evaluations, poles);
+    if (lines_[0])
+      place_polynomial(in, out, evaluations);
+    else
+      place_batched(in, out, evaluations, poles);
     for (size_t n = 0; n < in.size(); ++n)
       if (!finite_ends(in[n].fa, in[n].fb)) out[n] = no_vertex();
   }

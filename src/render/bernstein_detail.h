@@ -15,7 +15,8 @@ inline constexpr auto kInverseBinomials = [] {
   std::array<std::array<double, n>, n> binomial{}, inverse{};
   for (std::size_t d = 0; d < n; ++d) {
     binomial[d][0] = binomial[d][d] = 1;
-    for (std::size_t k = 1; k < d; ++k) binomial[d][k] = binomial[d - 1][k - 1] + binomial[d - 1][k];
+    for (std::size_t k = 1; k < d; ++k)
+      binomial[d][k] = binomial[d - 1][k - 1] + binomial[d - 1][k];
     for (std::size_t k = 0; k <= d; ++k) inverse[d][k] = 1 / binomial[d][k];
   }
   return inverse;

@@ -25,8 +25,7 @@ std::vector<PlacedLight> world_lights(std::span<const Light> lights, const View&
   return placed;
 }
 
-std::vector<PlacedLight> camera_lights(std::span<const Light> lights,
-                                       const Mat3& world_to_camera) {
+std::vector<PlacedLight> camera_lights(std::span<const Light> lights, const Mat3& world_to_camera) {
   std::vector<PlacedLight> placed;
   for (const Light& l : lights) {
     if (!shines(l)) continue;

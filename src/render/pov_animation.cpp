@@ -69,11 +69,11 @@ std::string pov_identifier(const std::string& name, size_t index) {
 /// The coefficients of F as polynomials in the animated parameters' scaled values
 /// u = (q − centre) / half ∈ [−1, 1]: c_ijk(u) = Σ_b fit(b, term) · u^basis[b].
 struct CoefficientFit {
-  std::vector<std::vector<int>> basis;       // exponents of u, one per basis monomial
+  std::vector<std::vector<int>> basis;           // exponents of u, one per basis monomial
   std::vector<std::tuple<int, int, int>> terms;  // (i, j, k) of x^i y^j z^k
-  Eigen::MatrixXd fit;                       // basis × terms
-  double scale = 0;                          // the largest coefficient seen
-  int degree = 0;                            // in x, y, z
+  Eigen::MatrixXd fit;                           // basis × terms
+  double scale = 0;                              // the largest coefficient seen
+  int degree = 0;                                // in x, y, z
 };
 
 void monomials_up_to(int m, int d, std::vector<int>& e, size_t var,
@@ -170,9 +170,12 @@ std::string pov_camera_and_lights(const Surface& surface, const RenderOptions& o
   const Camera& base = detail::camera_of(surface, options);
   std::string out = "// The camera at clock (degrees and distances as zeroset's Camera).\n";
   const std::vector<std::pair<std::string, double>> fields = {
-      {"azimuth_deg", base.azimuth_deg}, {"elevation_deg", base.elevation_deg},
-      {"distance", base.distance},       {"roll_deg", base.roll_deg},
-      {"fov_deg", base.fov_deg}, {"ortho_height", base.view_height(surface.scene_radius())}};
+      {"azimuth_deg", base.azimuth_deg},
+      {"elevation_deg", base.elevation_deg},
+      {"distance", base.distance},
+      {"roll_deg", base.roll_deg},
+      {"fov_deg", base.fov_deg},
+      {"ortho_height", base.view_height(surface.scene_radius())}};
   // The projection at clock: the surface's, or switched at keyframes (the last switch at or
   // before clock, the first one's before it; frame times are at least 1/65535 apart).
   const bool switches = !keys.projections.empty();
@@ -334,21 +337,20 @@ std::string pov_animation_ini(const std::string& pov_file, const std::string& ou
                               const RenderOptions& options, const PovFrames& frames) {
   if (frames.frames < 1 || frames.first < 0 || frames.first > frames.last ||
       frames.last >= frames.frames)
-    throw InvalidArgument("frames", fmt::format("{}-{} of {}", frames.first, frames.last,
-                                                frames.frames),
+    throw InvalidArgument("frames",
+                          fmt::format("{}-{} of {}", frames.first, frames.last, frames.frames),
                           "expected 0 ≤ first ≤ last < frames");
   std::string out = "; Renders the animation's frames: povray THIS_FILE.ini (written by zeroset)\n";
   out += fmt::format("Input_File_Name={}\nOutput_File_Name={}\nOutput_File_Type=N\n", pov_file,
                      output_prefix);
-  out += fmt::format("Width={}\nHeight={}\nAntialias=On\nAntialias_Threshold=0.1\n",
-                     options.width, options.height);
+  out += fmt::format("Width={}\nHeight={}\nAntialias=On\nAntialias_Threshold=0.1\n", options.width,
+                     options.height);
   // Frame f at clock f / (frames − 1), numbered from 0 as zeroset animate's frames.
   out += fmt::format("Initial_Frame=0\nFinal_Frame={}\nInitial_Clock=0\nFinal_Clock=1\n",
                      frames.frames - 1);
   out += "Cyclic_Animation=Off\n";
   if (frames.first != 0 || frames.last != frames.frames - 1)
-    out += fmt::format("Subset_Start_Frame={}\nSubset_End_Frame={}\n", frames.first,
-                       frames.last);
+    out += fmt::format("Subset_Start_Frame={}\nSubset_End_Frame={}\n", frames.first, frames.last);
   return out;
 }
 
@@ -360,8 +362,8 @@ void write_pov_animation(const Surface& surface, const RenderOptions& options,
   ini.replace_extension(".ini");
   // Both texts before either file: an error leaves no file behind.
   const std::string scene = pov_animation_scene(surface, options, keys);
-  const std::string settings = pov_animation_ini(pov.filename().string(),
-                                                 pov.stem().string() + "_", options, frames);
+  const std::string settings =
+      pov_animation_ini(pov.filename().string(), pov.stem().string() + "_", options, frames);
   write_file_atomically(pov_path, [&](std::ostream& o) { o << scene; });
   write_file_atomically(ini.string(), [&](std::ostream& o) { o << settings; });
 }

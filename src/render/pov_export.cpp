@@ -16,8 +16,10 @@ namespace detail {
 
 std::string pov_number(double v) {
   if (!std::isfinite(v))
-    throw BadInput(fmt::format("POV-Ray export: a number of the scene is not finite ({}); "
-                               "POV-Ray cannot read it", v));
+    throw BadInput(
+        fmt::format("POV-Ray export: a number of the scene is not finite ({}); "
+                    "POV-Ray cannot read it",
+                    v));
   return fmt::format("{:.17g}", v);
 }
 
@@ -68,13 +70,14 @@ Polynomial pov_polynomial(const Surface& surface) {
   for (const Monomial& m : poly.terms())
     if (!std::isfinite(m.c)) {
       std::string term;
-      for (const auto& [name, power] : {std::pair{"x", m.i}, std::pair{"y", m.j}, std::pair{"z", m.k}})
+      for (const auto& [name, power] :
+           {std::pair{"x", m.i}, std::pair{"y", m.j}, std::pair{"z", m.k}})
         if (power > 0) term += power > 1 ? fmt::format("{}^{}", name, power) : std::string(name);
-      throw BadInput(fmt::format("POV-Ray export: the {} of '{}' is not finite ({}); POV-Ray "
-                                 "cannot read it",
-                                 term.empty() ? std::string("constant term")
-                                              : "coefficient of " + term,
-                                 surface.label(), m.c));
+      throw BadInput(
+          fmt::format("POV-Ray export: the {} of '{}' is not finite ({}); POV-Ray "
+                      "cannot read it",
+                      term.empty() ? std::string("constant term") : "coefficient of " + term,
+                      surface.label(), m.c));
     }
   if (poly.degree() < 1)
     throw BadInput("POV-Ray export: '" + surface.label() + "' is a constant, there is no surface");
@@ -112,8 +115,8 @@ std::string pov_polynomial_object(int degree, const std::vector<PovTerm>& terms,
 std::string pov_scene(const Surface& surface, const RenderOptions& options) {
   detail::validate(options);
   const Polynomial poly = detail::pov_polynomial(surface);
-  const View view = View::from_camera(detail::camera_of(surface, options),
-                                      surface.scene_radius(), options.width, options.height);
+  const View view = View::from_camera(detail::camera_of(surface, options), surface.scene_radius(),
+                                      options.width, options.height);
   const detail::Shader shader(options, view);
 
   std::string out;
@@ -145,13 +148,12 @@ std::string pov_scene(const Surface& surface, const RenderOptions& options) {
   out += fmt::format("  look_at {}\n}}\n\n", pov_vec(view.target));
   const double far = 1000.0 * surface.scene_radius();
   for (const auto& l : shader.lights)
-    out += fmt::format(
-        "light_source {{ {} color rgb {} parallel point_at {} shadowless }}\n",
-        pov_vec(view.target + far * l.direction), pov_vec(l.color), pov_vec(view.target));
+    out += fmt::format("light_source {{ {} color rgb {} parallel point_at {} shadowless }}\n",
+                       pov_vec(view.target + far * l.direction), pov_vec(l.color),
+                       pov_vec(view.target));
 
   std::vector<detail::PovTerm> terms;
-  for (const Monomial& m : poly.terms())
-    terms.push_back({m.i, m.j, m.k, pov_number(m.c)});
+  for (const Monomial& m : poly.terms()) terms.push_back({m.i, m.j, m.k, pov_number(m.c)});
   out += detail::pov_polynomial_object(poly.degree(), terms, surface, options);
   return out;
 }

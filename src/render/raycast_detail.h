@@ -88,8 +88,8 @@ struct RayCaster {
   // surface, unlike the translated form), dense over the monomials of degree < degree.
   MonomialTable derivative_monomials{0};
   std::vector<GradientTerm> derivative;  // the monomials of the derivatives, in order
-  std::vector<double> gradient_bound;  // [k]: Σ |coefficient| over degree k of all three
-  std::vector<double> powers;          // scratch: monomials of a hit point
+  std::vector<double> gradient_bound;    // [k]: Σ |coefficient| over degree k of all three
+  std::vector<double> powers;            // scratch: monomials of a hit point
   // With bounds[k] the sum of the coefficients of degree k of |F| translated by |eye|,
   // bounds[k]·max|d_i|^k ≥ |G_k(d)| for every direction d and bounds the rounding error scale
   // of G_k. The rounding band of a ray is rounding_band(bounds, t1·max|d_i|), a polynomial in
@@ -114,15 +114,15 @@ struct RayCaster {
   bool parallel = false;
   // Exact path: G_k(base + s·step) = Σ_j row[k(k+1)/2 + j] s^j. By homogeneity G_k(t·base +
   // s·step) = Σ_j row[k(k+1)/2 + j] s^j t^(k−j), which a parallel row's rays use.
-  std::array<double, kN * (kN + 1) / 2> row{};
+  std::array<double, kN*(kN + 1) / 2> row{};
   // Normals along the row (see row_gradient): the derivative in s of row, ∂G_k/∂s =
   // Σ_j row_ds[k(k−1)/2 + j] s^j (k ≥ 1); the normal of the row's plane, n = base × step; and
   // the homogeneous parts of ∇G·n, (∇G·n)_k(base + s·step) = Σ_j normal_row[k(k+1)/2 + j] s^j.
-  std::array<double, kN * (kN + 1) / 2> row_ds{};
-  std::array<double, kN * (kN + 1) / 2> normal_row{};
+  std::array<double, kN*(kN + 1) / 2> row_ds{};
+  std::array<double, kN*(kN + 1) / 2> normal_row{};
   Vec3 row_normal = Vec3::Zero();
   double row_dot = 0, row_ss = 0, row_inverse_nn = 0;  // base·step, |step|², 1 / |n|²
-  bool has_row_normals = false;  // false for a row of one ray (step = 0)
+  bool has_row_normals = false;                        // false for a row of one ray (step = 0)
   // The clip along the row's rays.
   std::vector<SphereRow> sphere_rows;
   std::vector<PlaneRow> plane_rows;
@@ -145,14 +145,14 @@ struct RayCaster {
   std::array<double, 4> packet_s{};
   std::array<double, 4> packet_t0{}, packet_t1{}, packet_band{};
   std::array<bool, 4> packet_open{};
-  int packet_full_bits = 0;  // lanes whose f has a nonzero leading coefficient
-  int packet_size = 0;       // 4 after prepare_in_row, else 0
-  int packet_next = 0;       // the lane packet_lane tries first
+  int packet_full_bits = 0;   // lanes whose f has a nonzero leading coefficient
+  int packet_size = 0;        // 4 after prepare_in_row, else 0
+  int packet_next = 0;        // the lane packet_lane tries first
   bool packet_ready = false;  // the lanes are set up by prepare4
   alignas(32) double packet_g[4][kN];
   alignas(32) double packet_ck[kN][4];
   const double* ray_coeffs = coeffs.data();  // the current ray's f (see row_gradient)
-  int cast_lane = -1;  // the packet's lane the last cast took, or -1
+  int cast_lane = -1;                        // the packet's lane the last cast took, or -1
   // The row's coefficients that the packets use, each in all four lanes (loaded with the
   // multiply-adds rather than broadcast in each packet): row, row_ds, normal_row, the band's
   // and k·band_coeffs[k], gradient_bound.

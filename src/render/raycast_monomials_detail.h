@@ -51,12 +51,12 @@ void monomials_fixed(const double* v, double* mono) {
   mono[0] = 1;
   [&]<size_t... I>(std::index_sequence<I...>) {
     ((mono[I + 1] = mono[t.parent[I + 1]] * v[t.axis[I + 1]]), ...);
-  }(std::make_index_sequence<FixedMonomials<D>::kCount - 1>{});
+  }
+  (std::make_index_sequence<FixedMonomials<D>::kCount - 1>{});
 }
 
 /// coeffs[k] = Σ_j row[k(k+1)/2 + j] s^j for k ≤ d: each coefficient of the ray's
 /// polynomial from its polynomial in s (Horner), unrolled when D > 0. Returns the rounding
-
 
 /// A monomial of the partial derivatives of F: its position in a MonomialTable and its
 /// coefficients in ∂F/∂x, ∂F/∂y, ∂F/∂z and a zero, four lanes summed as one vector.
@@ -67,8 +67,7 @@ struct GradientTerm {
 
 /// g = (∂F/∂x, ∂F/∂y, ∂F/∂z) from the monomials of a point. Two sums, so that consecutive
 /// multiply-adds do not wait for each other.
-inline void sparse_gradient(const std::vector<GradientTerm>& terms, const double* mono,
-                            double* g) {
+inline void sparse_gradient(const std::vector<GradientTerm>& terms, const double* mono, double* g) {
   Eigen::Vector4d even = Eigen::Vector4d::Zero(), odd = Eigen::Vector4d::Zero();
   size_t i = 0;
   for (; i + 1 < terms.size(); i += 2) {
@@ -120,13 +119,20 @@ struct MonomialTable {
   void evaluate(const Vec3& v, double* mono) const {
     const double x[3] = {v.x(), v.y(), v.z()};
     switch (D) {
-      case 1: return monomials_fixed<1>(x, mono);
-      case 2: return monomials_fixed<2>(x, mono);
-      case 3: return monomials_fixed<3>(x, mono);
-      case 4: return monomials_fixed<4>(x, mono);
-      case 5: return monomials_fixed<5>(x, mono);
-      case 6: return monomials_fixed<6>(x, mono);
-      default: break;
+      case 1:
+        return monomials_fixed<1>(x, mono);
+      case 2:
+        return monomials_fixed<2>(x, mono);
+      case 3:
+        return monomials_fixed<3>(x, mono);
+      case 4:
+        return monomials_fixed<4>(x, mono);
+      case 5:
+        return monomials_fixed<5>(x, mono);
+      case 6:
+        return monomials_fixed<6>(x, mono);
+      default:
+        break;
     }
     // Local pointers: the stores to `mono` could otherwise alias the tables' storage.
     const int* par = parent.data();

@@ -59,13 +59,27 @@ bool row_gradient(const RayCaster& rc, double s, double t, Vec3& g, double& erro
   const double *f = rc.ray_coeffs, *ds_row = rc.row_ds.data(), *h = rc.normal_row.data(),
                *bc = rc.band_coeffs.data();
   switch (rc.degree) {
-    case 1: row_derivatives<1>(f, ds_row, h, bc, rc.degree, s, t, x, abce); break;
-    case 2: row_derivatives<2>(f, ds_row, h, bc, rc.degree, s, t, x, abce); break;
-    case 3: row_derivatives<3>(f, ds_row, h, bc, rc.degree, s, t, x, abce); break;
-    case 4: row_derivatives<4>(f, ds_row, h, bc, rc.degree, s, t, x, abce); break;
-    case 5: row_derivatives<5>(f, ds_row, h, bc, rc.degree, s, t, x, abce); break;
-    case 6: row_derivatives<6>(f, ds_row, h, bc, rc.degree, s, t, x, abce); break;
-    default: row_derivatives<0>(f, ds_row, h, bc, rc.degree, s, t, x, abce); break;
+    case 1:
+      row_derivatives<1>(f, ds_row, h, bc, rc.degree, s, t, x, abce);
+      break;
+    case 2:
+      row_derivatives<2>(f, ds_row, h, bc, rc.degree, s, t, x, abce);
+      break;
+    case 3:
+      row_derivatives<3>(f, ds_row, h, bc, rc.degree, s, t, x, abce);
+      break;
+    case 4:
+      row_derivatives<4>(f, ds_row, h, bc, rc.degree, s, t, x, abce);
+      break;
+    case 5:
+      row_derivatives<5>(f, ds_row, h, bc, rc.degree, s, t, x, abce);
+      break;
+    case 6:
+      row_derivatives<6>(f, ds_row, h, bc, rc.degree, s, t, x, abce);
+      break;
+    default:
+      row_derivatives<0>(f, ds_row, h, bc, rc.degree, s, t, x, abce);
+      break;
   }
   const double a = abce[0], b = abce[1], c = abce[2];
   // With the dual basis of (d, step, n): ∇ = [a (|step|² d − (d·step) step)
@@ -128,8 +142,8 @@ void complete(RayCaster& rc, double s, double t, int side, SurfaceHit& hit) {
   const double dx = dir.x(), dy = dir.y(), dz = dir.z();
   const Vec3 origin = ray_origin(rc, s);
   hit.t = t;
-  hit.point = Vec3(std::fma(t, dx, origin.x()), std::fma(t, dy, origin.y()),
-                   std::fma(t, dz, origin.z()));
+  hit.point =
+      Vec3(std::fma(t, dx, origin.x()), std::fma(t, dy, origin.y()), std::fma(t, dz, origin.z()));
   Vec3 g;
   if (rc.exact) {
     // ∇F lost to cancellation (a node, or a squared surface where ∇F = 2g∇g is tiny at the
@@ -141,9 +155,9 @@ void complete(RayCaster& rc, double s, double t, int side, SurfaceHit& hit) {
     // (near nodes, on squared surfaces, for single rays) ∇F comes from F's own terms.
     double error = 0;
     if (row_gradient(rc, s, t, g, error) &&
-        in_open_range(squared_norm(g.x(), g.y(), g.z()),
-                      std::max(square(kRowGradientMargin * floor),
-                               square(kRowGradientAccuracy * error)))) {
+        in_open_range(
+            squared_norm(g.x(), g.y(), g.z()),
+            std::max(square(kRowGradientMargin * floor), square(kRowGradientAccuracy * error)))) {
       hit.singular = false;
     } else {
       gradient(rc, hit.point, g);

@@ -25,8 +25,8 @@ namespace {
 /// `row` and `band_coeffs` are restrict_in_row's, each coefficient in four lanes.
 template <int D>
 inline __m256d restrict_and_shift4(const double (*row)[4], const double (*band_coeffs)[4],
-                                   __m256d s, __m256d x, __m256d t0, __m256d t1,
-                                   __m256d* coeffs, __m256d* g) {
+                                   __m256d s, __m256d x, __m256d t0, __m256d t1, __m256d* coeffs,
+                                   __m256d* g) {
   __m256d band = _mm256_load_pd(band_coeffs[D]);
   for (int k = 0, offset = 0; k <= D; offset += ++k) {
     __m256d v = _mm256_load_pd(row[offset + k]);
@@ -96,8 +96,7 @@ template <int D, int kLevels>
     }
     const int left_rootless = rootless4<D, kLevels - 1>(left, band, lower, open) & open;
     if (left_rootless == 0) return beyond;
-    return beyond |
-           (left_rootless & rootless4<D, kLevels - 1>(right, band, lower, left_rootless));
+    return beyond | (left_rootless & rootless4<D, kLevels - 1>(right, band, lower, left_rootless));
   }
 }
 
@@ -114,8 +113,8 @@ inline int hull_misses4(const __m256d* g, __m256d band, int lanes) {
   b[0] = g[0];
 #pragma GCC unroll 16
   for (int k = 1; k <= D; ++k)
-    b[k] = _mm256_mul_pd(g[k],
-                         _mm256_set1_pd(detail::kInverseBinomials[D][static_cast<size_t>(k)]));
+    b[k] =
+        _mm256_mul_pd(g[k], _mm256_set1_pd(detail::kInverseBinomials[D][static_cast<size_t>(k)]));
 #pragma GCC unroll 16
   for (int i = 0; i < D; ++i)
 #pragma GCC unroll 16
@@ -166,8 +165,7 @@ int prepare4(RayCaster& rc, const double* sv) {
     const __m256d qv = _mm256_xor_pd(sign, _mm256_add_pd(b, signed_sq));
     const __m256d r0 = _mm256_div_pd(qv, a);
     const __m256d r1 = _mm256_blendv_pd(_mm256_div_pd(_mm256_xor_pd(sign, b), a),
-                                        _mm256_div_pd(c, qv),
-                                        _mm256_cmp_pd(qv, zero, _CMP_NEQ_UQ));
+                                        _mm256_div_pd(c, qv), _mm256_cmp_pd(qv, zero, _CMP_NEQ_UQ));
     // As std::swap when r0 > r1 and std::max(t0, ·), std::min(t1, ·), NaNs included.
     t0 = _mm256_max_pd(_mm256_min_pd(r1, r0), t0);
     t1 = _mm256_min_pd(_mm256_max_pd(r0, r1), t1);
@@ -207,9 +205,8 @@ int prepare4(RayCaster& rc, const double* sv) {
   // scalar search splits the parts that hull_misses4 splits only when they are wider than
   // its tolerance: always, unless RootOptions::tolerance is raised to 2^(1 − kHullLevels).
   const bool same_splits = rc.options.roots.tolerance < 2.0 / (1 << kHullLevels);
-  const int open =
-      inside_bits &
-      ~(same_splits ? hull_misses4<D>(g, band, rc.packet_full_bits & inside_bits) : 0);
+  const int open = inside_bits &
+                   ~(same_splits ? hull_misses4<D>(g, band, rc.packet_full_bits & inside_bits) : 0);
   for (int i = 0; i < 4; ++i) rc.packet_open[static_cast<size_t>(i)] = (open >> i) & 1;
   return ~open & 0xf;
 }
@@ -227,18 +224,17 @@ int complete4(const RayCaster& rc, int bits, SurfaceHit (&hits)[4]) {
   const __m256d py = _mm256_fmadd_pd(T, dy, _mm256_set1_pd(rc.eye.y()));
   const __m256d pz = _mm256_fmadd_pd(T, dz, _mm256_set1_pd(rc.eye.z()));
   // gradient_scale and the floor of kRelativeGradientFloor.
-  const __m256d m = _mm256_max_pd(
-      _mm256_max_pd(_mm256_andnot_pd(sign, px), _mm256_andnot_pd(sign, py)),
-      _mm256_andnot_pd(sign, pz));
+  const __m256d m =
+      _mm256_max_pd(_mm256_max_pd(_mm256_andnot_pd(sign, px), _mm256_andnot_pd(sign, py)),
+                    _mm256_andnot_pd(sign, pz));
   __m256d bound = zero;
   for (size_t k = rc.gradient_bound.size(); k-- > 0;)
     bound = _mm256_fmadd_pd(bound, m, _mm256_load_pd(rc.gradient_bound4[k]));
   const __m256d floor = _mm256_mul_pd(_mm256_set1_pd(kRelativeGradientFloor), bound);
   // row_derivatives and row_gradient.
   const __m256d x = _mm256_mul_pd(
-      T, _mm256_max_pd(
-             _mm256_max_pd(_mm256_andnot_pd(sign, dx), _mm256_andnot_pd(sign, dy)),
-             _mm256_andnot_pd(sign, dz)));
+      T, _mm256_max_pd(_mm256_max_pd(_mm256_andnot_pd(sign, dx), _mm256_andnot_pd(sign, dy)),
+                       _mm256_andnot_pd(sign, dz)));
   __m256d a = zero, b = zero, c = zero, e = zero;
   for (int k = D; k >= 1; --k) {
     a = _mm256_fmadd_pd(a, T, _mm256_mul_pd(_mm256_set1_pd(k), _mm256_load_pd(rc.packet_ck[k])));
@@ -260,15 +256,15 @@ int complete4(const RayCaster& rc, int bits, SurfaceHit (&hits)[4]) {
   const __m256d p = _mm256_mul_pd(_mm256_fmsub_pd(a, ss, _mm256_mul_pd(b, ds)), inn);
   const __m256d q = _mm256_mul_pd(_mm256_fmsub_pd(b, dd, _mm256_mul_pd(a, ds)), inn);
   const __m256d r = _mm256_mul_pd(c, inn);
-  const __m256d gx = _mm256_fmadd_pd(r, _mm256_set1_pd(rc.row_normal.x()),
-                                     _mm256_fmadd_pd(q, _mm256_set1_pd(rc.step.x()),
-                                                     _mm256_mul_pd(p, dx)));
-  const __m256d gy = _mm256_fmadd_pd(r, _mm256_set1_pd(rc.row_normal.y()),
-                                     _mm256_fmadd_pd(q, _mm256_set1_pd(rc.step.y()),
-                                                     _mm256_mul_pd(p, dy)));
-  const __m256d gz = _mm256_fmadd_pd(r, _mm256_set1_pd(rc.row_normal.z()),
-                                     _mm256_fmadd_pd(q, _mm256_set1_pd(rc.step.z()),
-                                                     _mm256_mul_pd(p, dz)));
+  const __m256d gx =
+      _mm256_fmadd_pd(r, _mm256_set1_pd(rc.row_normal.x()),
+                      _mm256_fmadd_pd(q, _mm256_set1_pd(rc.step.x()), _mm256_mul_pd(p, dx)));
+  const __m256d gy =
+      _mm256_fmadd_pd(r, _mm256_set1_pd(rc.row_normal.y()),
+                      _mm256_fmadd_pd(q, _mm256_set1_pd(rc.step.y()), _mm256_mul_pd(p, dy)));
+  const __m256d gz =
+      _mm256_fmadd_pd(r, _mm256_set1_pd(rc.row_normal.z()),
+                      _mm256_fmadd_pd(q, _mm256_set1_pd(rc.step.z()), _mm256_mul_pd(p, dz)));
   const __m256d error = _mm256_mul_pd(
       _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(4.0), e), dd), ss), inn);
   // complete's test: in_open_range(|g|², max(square(margin·floor), square(accuracy·error))).
@@ -282,14 +278,13 @@ int complete4(const RayCaster& rc, int bits, SurfaceHit (&hits)[4]) {
   const int done = _mm256_movemask_pd(accept) & bits;
   if (done == 0) return 0;
   const __m256d gd = _mm256_fmadd_pd(gz, dz, _mm256_fmadd_pd(gy, dy, _mm256_mul_pd(gx, dx)));
-  const __m256d k = _mm256_div_pd(
-      _mm256_blendv_pd(_mm256_set1_pd(1.0), _mm256_set1_pd(-1.0),
-                       _mm256_cmp_pd(gd, zero, _CMP_GT_OQ)),
-      _mm256_sqrt_pd(g2));
+  const __m256d k = _mm256_div_pd(_mm256_blendv_pd(_mm256_set1_pd(1.0), _mm256_set1_pd(-1.0),
+                                                   _mm256_cmp_pd(gd, zero, _CMP_GT_OQ)),
+                                  _mm256_sqrt_pd(g2));
   const __m256d side = _mm256_load_pd(rc.packet_side.data());
-  const __m256d front = _mm256_blendv_pd(_mm256_cmp_pd(gd, zero, _CMP_LT_OQ),
-                                         _mm256_cmp_pd(side, zero, _CMP_GT_OQ),
-                                         _mm256_cmp_pd(side, zero, _CMP_NEQ_OQ));
+  const __m256d front =
+      _mm256_blendv_pd(_mm256_cmp_pd(gd, zero, _CMP_LT_OQ), _mm256_cmp_pd(side, zero, _CMP_GT_OQ),
+                       _mm256_cmp_pd(side, zero, _CMP_NEQ_OQ));
   const int front_bits = _mm256_movemask_pd(front);
   alignas(32) double out[6][4];
   _mm256_store_pd(out[0], px);
@@ -325,13 +320,20 @@ int prepare(RayCaster& rc, std::span<const double> s) {
 #if defined(__AVX2__) && defined(__FMA__)
   if (!rc.exact) return 0;
   switch (rc.degree) {
-    case 1: return prepare4<1>(rc, s.data());
-    case 2: return prepare4<2>(rc, s.data());
-    case 3: return prepare4<3>(rc, s.data());
-    case 4: return prepare4<4>(rc, s.data());
-    case 5: return prepare4<5>(rc, s.data());
-    case 6: return prepare4<6>(rc, s.data());
-    default: break;  // degrees above 6 are set up ray by ray
+    case 1:
+      return prepare4<1>(rc, s.data());
+    case 2:
+      return prepare4<2>(rc, s.data());
+    case 3:
+      return prepare4<3>(rc, s.data());
+    case 4:
+      return prepare4<4>(rc, s.data());
+    case 5:
+      return prepare4<5>(rc, s.data());
+    case 6:
+      return prepare4<6>(rc, s.data());
+    default:
+      break;  // degrees above 6 are set up ray by ray
   }
 #endif
   return 0;
@@ -343,13 +345,26 @@ int packet_hits(RayCaster& rc, SurfaceHit (&hits)[4]) {
 #if defined(__AVX2__) && defined(__FMA__)
   if (remaining != 0 && rc.packet_ready && rc.has_row_normals) {
     switch (rc.degree) {
-      case 1: remaining &= ~complete4<1>(rc, remaining, hits); break;
-      case 2: remaining &= ~complete4<2>(rc, remaining, hits); break;
-      case 3: remaining &= ~complete4<3>(rc, remaining, hits); break;
-      case 4: remaining &= ~complete4<4>(rc, remaining, hits); break;
-      case 5: remaining &= ~complete4<5>(rc, remaining, hits); break;
-      case 6: remaining &= ~complete4<6>(rc, remaining, hits); break;
-      default: break;
+      case 1:
+        remaining &= ~complete4<1>(rc, remaining, hits);
+        break;
+      case 2:
+        remaining &= ~complete4<2>(rc, remaining, hits);
+        break;
+      case 3:
+        remaining &= ~complete4<3>(rc, remaining, hits);
+        break;
+      case 4:
+        remaining &= ~complete4<4>(rc, remaining, hits);
+        break;
+      case 5:
+        remaining &= ~complete4<5>(rc, remaining, hits);
+        break;
+      case 6:
+        remaining &= ~complete4<6>(rc, remaining, hits);
+        break;
+      default:
+        break;
     }
   }
 #endif

@@ -144,12 +144,9 @@ void begin_row(RayCaster& rc, const Vec3& row_base, const Vec3& row_step) {
   for (size_t i = 0; i < rc.sphere_rows.size(); ++i) {
     const SphereClip& sphere = rc.surface.clip.spheres[i];
     const Vec3 oc = rc.eye - sphere.center;
-    rc.sphere_rows[i] = {rc.base.squaredNorm(),
-                         rc.base.dot(rc.step),
-                         rc.step.squaredNorm(),
-                         oc.dot(rc.base),
-                         oc.dot(rc.step),
-                         oc.squaredNorm() - sphere.radius * sphere.radius};
+    rc.sphere_rows[i] = {rc.base.squaredNorm(), rc.base.dot(rc.step),
+                         rc.step.squaredNorm(), oc.dot(rc.base),
+                         oc.dot(rc.step),       oc.squaredNorm() - sphere.radius * sphere.radius};
   }
   for (size_t i = 0; i < rc.plane_rows.size(); ++i) {
     const HalfSpaceClip& plane = rc.surface.clip.planes[i];
@@ -221,21 +218,35 @@ double exact_hit(RayCaster& rc, double s, double t0, double t1, const RootGuess&
     // |s||step_i| + t1|base_i|.
     const double x = (std::abs(s) * rc.step.cwiseAbs() + t1 * rc.base.cwiseAbs()).maxCoeff();
     band = restrict_in_parallel_row(r, b, rc.degree, s, x, c);
-    return rc.finder.find_first_root(
-        std::span<const double>(c, static_cast<size_t>(rc.degree + 1)), t0, t1, band, guess);
+    return rc.finder.find_first_root(std::span<const double>(c, static_cast<size_t>(rc.degree + 1)),
+                                     t0, t1, band, guess);
   }
   const double x = t1 * max_abs_direction(rc, s);
   switch (rc.degree) {
-    case 1: band = restrict_in_row<1>(r, b, rc.degree, s, x, c); break;
-    case 2: band = restrict_in_row<2>(r, b, rc.degree, s, x, c); break;
-    case 3: band = restrict_in_row<3>(r, b, rc.degree, s, x, c); break;
-    case 4: band = restrict_in_row<4>(r, b, rc.degree, s, x, c); break;
-    case 5: band = restrict_in_row<5>(r, b, rc.degree, s, x, c); break;
-    case 6: band = restrict_in_row<6>(r, b, rc.degree, s, x, c); break;
-    default: band = restrict_in_row<0>(r, b, rc.degree, s, x, c); break;
+    case 1:
+      band = restrict_in_row<1>(r, b, rc.degree, s, x, c);
+      break;
+    case 2:
+      band = restrict_in_row<2>(r, b, rc.degree, s, x, c);
+      break;
+    case 3:
+      band = restrict_in_row<3>(r, b, rc.degree, s, x, c);
+      break;
+    case 4:
+      band = restrict_in_row<4>(r, b, rc.degree, s, x, c);
+      break;
+    case 5:
+      band = restrict_in_row<5>(r, b, rc.degree, s, x, c);
+      break;
+    case 6:
+      band = restrict_in_row<6>(r, b, rc.degree, s, x, c);
+      break;
+    default:
+      band = restrict_in_row<0>(r, b, rc.degree, s, x, c);
+      break;
   }
-  return rc.finder.find_first_root(
-      std::span<const double>(c, static_cast<size_t>(rc.degree + 1)), t0, t1, band, guess);
+  return rc.finder.find_first_root(std::span<const double>(c, static_cast<size_t>(rc.degree + 1)),
+                                   t0, t1, band, guess);
 }
 
 }  // namespace zeroset::detail

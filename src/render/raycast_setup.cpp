@@ -58,12 +58,12 @@ RayCaster::RayCaster(const Surface& s, const Vec3& e, const RaycastOptions& o)
     : surface(s), eye(e), options(o), evaluator(s.field), finder(o.roots) {
   (void)surface.bounds();  // throws BadInput naming the surface when the clip is unbounded
   const Field& field = surface.field;
-  exact = !o.force_interval && field.is_expandable() &&
-          field.degree() <= RootFinder::kMaxDegree;
+  exact = !o.force_interval && field.is_expandable() && field.degree() <= RootFinder::kMaxDegree;
   if (exact) {
     polynomial = field.polynomial();
     const auto& terms = polynomial.terms();
-    exact = std::all_of(terms.begin(), terms.end(), [](const Monomial& m) { return std::isfinite(m.c); });
+    exact = std::all_of(terms.begin(), terms.end(),
+                        [](const Monomial& m) { return std::isfinite(m.c); });
   }
   if (exact) {
     degree = std::max(polynomial.degree(), 0);

@@ -92,8 +92,8 @@ inline Color Shader::shade(const Vec3& n, const Vec3& dir, bool is_front) const 
 }
 
 inline Color Shader::shade_ray(const Vec3& n, const Vec3& ray, bool is_front) const {
-  const double length = std::sqrt(std::fma(ray.z(), ray.z(), std::fma(ray.y(), ray.y(),
-                                                                      ray.x() * ray.x())));
+  const double length =
+      std::sqrt(std::fma(ray.z(), ray.z(), std::fma(ray.y(), ray.y(), ray.x() * ray.x())));
   return shade(n, Vec3(ray.x() / length, ray.y() / length, ray.z() / length), is_front);
 }
 

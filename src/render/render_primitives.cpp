@@ -122,8 +122,8 @@ Image render_points(const Surface& surface, std::span<const Vec3> positions,
     throw InvalidArgument("radii", std::to_string(radii.size()),
                           "need one per point (" + std::to_string(positions.size()) + ")");
   const double scene = surface.scene_radius();
-  const View view = View::from_camera(detail::camera_of(surface, options), scene,
-                                      options.width, options.height);
+  const View view =
+      View::from_camera(detail::camera_of(surface, options), scene, options.width, options.height);
   // Without radii: disks that roughly cover a surface of the scene's size.
   const double default_radius =
       2.0 * scene / std::sqrt(static_cast<double>(std::max<size_t>(positions.size(), 1)));
@@ -144,28 +144,30 @@ Image render_points(const Surface& surface, std::span<const Vec3> positions,
     bins.add(static_cast<std::uint32_t>(i), corners, 8, view);
   }
   const std::optional<detail::OverlayScene> overlay = detail::make_overlay(options, scene, view);
-  return render_binned(options, view, bins, [&](std::uint32_t id, const Vec3& eye,
-                                                 const Vec3& dir, SampleHit& hit) {
-    const Vec3 n = normal(id);
-    const double nd = n.dot(dir);
-    if (std::abs(nd) < 1e-12) return false;
-    const double t = n.dot(positions[id] - eye) / nd;
-    if (!(t > 0 && t < hit.t)) return false;
-    const double r = radius(id);
-    if ((eye + t * dir - positions[id]).squaredNorm() > r * r) return false;
-    hit.t = t;
-    hit.front = nd < 0;
-    hit.normal = hit.front ? n : Vec3(-n);
-    hit.edge = false;
-    return true;
-  }, overlay ? &*overlay : nullptr);
+  return render_binned(
+      options, view, bins,
+      [&](std::uint32_t id, const Vec3& eye, const Vec3& dir, SampleHit& hit) {
+        const Vec3 n = normal(id);
+        const double nd = n.dot(dir);
+        if (std::abs(nd) < 1e-12) return false;
+        const double t = n.dot(positions[id] - eye) / nd;
+        if (!(t > 0 && t < hit.t)) return false;
+        const double r = radius(id);
+        if ((eye + t * dir - positions[id]).squaredNorm() > r * r) return false;
+        hit.t = t;
+        hit.front = nd < 0;
+        hit.normal = hit.front ? n : Vec3(-n);
+        hit.edge = false;
+        return true;
+      },
+      overlay ? &*overlay : nullptr);
 }
 
 Image render_mesh(const Surface& surface, const Mesh& mesh, const RenderOptions& options,
                   bool wireframe) {
   detail::validate(options);
-  const View view = View::from_camera(detail::camera_of(surface, options),
-                                      surface.scene_radius(), options.width, options.height);
+  const View view = View::from_camera(detail::camera_of(surface, options), surface.scene_radius(),
+                                      options.width, options.height);
   const size_t nv = mesh.positions.size();
   for (const auto& tri : mesh.triangles)
     for (std::uint32_t v : tri)
@@ -201,44 +203,46 @@ Image render_mesh(const Surface& surface, const Mesh& mesh, const RenderOptions&
   const double pixel = view.orthographic ? view.pixel_size(1) : view.pixel_angle();
   const std::optional<detail::OverlayScene> overlay =
       detail::make_overlay(options, surface.scene_radius(), view);
-  return render_binned(options, view, bins, [&](std::uint32_t id, const Vec3& eye,
-                                                 const Vec3& dir, SampleHit& hit) {
-    // Möller–Trumbore.
-    const auto& tri = mesh.triangles[id];
-    const Vec3& a = mesh.positions[tri[0]];
-    const Vec3 e1 = mesh.positions[tri[1]] - a, e2 = mesh.positions[tri[2]] - a;
-    const Vec3 pv = dir.cross(e2);
-    const double det = e1.dot(pv);
-    if (std::abs(det) < 1e-300) return false;
-    const double inv = 1.0 / det;
-    const Vec3 tv = eye - a;
-    const double u = tv.dot(pv) * inv;
-    if (u < 0 || u > 1) return false;
-    const Vec3 qv = tv.cross(e1);
-    const double v = dir.dot(qv) * inv;
-    if (v < 0 || u + v > 1) return false;
-    const double t = e2.dot(qv) * inv;
-    if (!(t > 0 && t < hit.t)) return false;
-    const double w = 1 - u - v;
-    const Vec3 ng = e1.cross(e2);
-    Vec3 n = w * normals[tri[0]] + u * normals[tri[1]] + v * normals[tri[2]];
-    if (!(n.norm() > 1e-12)) n = ng;
-    n.normalize();
-    hit.t = t;
-    hit.front = ng.dot(dir) < 0;
-    hit.normal = n.dot(dir) > 0 ? Vec3(-n) : n;
-    hit.edge = false;
-    if (wireframe) {
-      // Distance to the nearest edge (barycentric coordinate × height over that edge),
-      // compared with the size of a pixel at this depth: lines about one pixel wide.
-      const double area2 = ng.norm();
-      const Vec3 e3 = mesh.positions[tri[2]] - mesh.positions[tri[1]];
-      const double d = std::min({w * area2 / e3.norm(), u * area2 / e2.norm(),
-                                 v * area2 / e1.norm()});
-      hit.edge = d < 0.7 * pixel * (view.orthographic ? 1.0 : t);
-    }
-    return true;
-  }, overlay ? &*overlay : nullptr);
+  return render_binned(
+      options, view, bins,
+      [&](std::uint32_t id, const Vec3& eye, const Vec3& dir, SampleHit& hit) {
+        // Möller–Trumbore.
+        const auto& tri = mesh.triangles[id];
+        const Vec3& a = mesh.positions[tri[0]];
+        const Vec3 e1 = mesh.positions[tri[1]] - a, e2 = mesh.positions[tri[2]] - a;
+        const Vec3 pv = dir.cross(e2);
+        const double det = e1.dot(pv);
+        if (std::abs(det) < 1e-300) return false;
+        const double inv = 1.0 / det;
+        const Vec3 tv = eye - a;
+        const double u = tv.dot(pv) * inv;
+        if (u < 0 || u > 1) return false;
+        const Vec3 qv = tv.cross(e1);
+        const double v = dir.dot(qv) * inv;
+        if (v < 0 || u + v > 1) return false;
+        const double t = e2.dot(qv) * inv;
+        if (!(t > 0 && t < hit.t)) return false;
+        const double w = 1 - u - v;
+        const Vec3 ng = e1.cross(e2);
+        Vec3 n = w * normals[tri[0]] + u * normals[tri[1]] + v * normals[tri[2]];
+        if (!(n.norm() > 1e-12)) n = ng;
+        n.normalize();
+        hit.t = t;
+        hit.front = ng.dot(dir) < 0;
+        hit.normal = n.dot(dir) > 0 ? Vec3(-n) : n;
+        hit.edge = false;
+        if (wireframe) {
+          // Distance to the nearest edge (barycentric coordinate × height over that edge),
+          // compared with the size of a pixel at this depth: lines about one pixel wide.
+          const double area2 = ng.norm();
+          const Vec3 e3 = mesh.positions[tri[2]] - mesh.positions[tri[1]];
+          const double d =
+              std::min({w * area2 / e3.norm(), u * area2 / e2.norm(), v * area2 / e1.norm()});
+          hit.edge = d < 0.7 * pixel * (view.orthographic ? 1.0 : t);
+        }
+        return true;
+      },
+      overlay ? &*overlay : nullptr);
 }
 
 }  // namespace zeroset

@@ -75,8 +75,8 @@ void composite_overlay(const detail::OverlayScene& overlay, int x0, int y0, int 
   };
   auto ray = [&](int x, int y, int s) {
     const size_t row = static_cast<size_t>((y - y0) * samples + s / samples);
-    return Vec3(base[row] + ray_s[static_cast<size_t>((x - x0) * samples + s % samples)] *
-                                step[row]);
+    return Vec3(base[row] +
+                ray_s[static_cast<size_t>((x - x0) * samples + s % samples)] * step[row]);
   };
   auto surface_t = [&](int x, int y, int s) {
     const double t = depth[ray_at(x, y, s)];
@@ -121,9 +121,8 @@ struct ClipBall {
 void cast_parallel_row(const View& view, double y, SurfaceRayCaster& caster, bool no_surface,
                        const ClipBall& ball, const std::vector<double>& ray_s,
                        const std::vector<int>& ray_pixel, const std::vector<double>& above,
-                       std::vector<double>& current, const detail::Shader& shader,
-                       int first_pixel, Color* sums, int* hit_samples, long long& hits,
-                       long long& singular) {
+                       std::vector<double>& current, const detail::Shader& shader, int first_pixel,
+                       Color* sums, int* hit_samples, long long& hits, long long& singular) {
   Vec3 origin_base, origin_step;
   view.row_origins(y, origin_base, origin_step);
   // The rays start just before the ball that holds the clip volume rather than at the eye's
@@ -143,8 +142,7 @@ void cast_parallel_row(const View& view, double y, SurfaceRayCaster& caster, boo
     const Vec3 across = to_centre - to_centre.dot(view.forward) * view.forward;
     if (across.squaredNorm() > ball.radius * ball.radius * (1 + 1e-9)) continue;
     SurfaceHit h;
-    if (!caster.intersect_in_row(s, h, guess_from_neighbours(t[c - 1], t[c - 2], up[c],
-                                                              up[c - 1])))
+    if (!caster.intersect_in_row(s, h, guess_from_neighbours(t[c - 1], t[c - 2], up[c], up[c - 1])))
       continue;
     t[c] = h.t;
     ++hits;
@@ -161,8 +159,8 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
                      std::stop_token stop) {
   const auto start = std::chrono::steady_clock::now();
   detail::validate(options);
-  const View view = View::from_camera(detail::camera_of(surface, options),
-                                      surface.scene_radius(), options.width, options.height);
+  const View view = View::from_camera(detail::camera_of(surface, options), surface.scene_radius(),
+                                      options.width, options.height);
   const detail::Shader shader(options, view);
   const int threads = detail::thread_count(options.threads);
   const std::optional<detail::OverlayScene> overlay =
@@ -238,9 +236,9 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
           const double row_y = y0 + row_of_pixels + offsets[static_cast<size_t>(r % samples)];
           view.row(row_y, base, step);
           if (view.orthographic) {
-            cast_parallel_row(view, row_y, caster, no_surface, clip_ball, ray_s, ray_pixel,
-                              w.above, w.current, shader, row_of_pixels * width,
-                              w.sums.data(), w.hit_samples.data(), w.hits, w.singular);
+            cast_parallel_row(view, row_y, caster, no_surface, clip_ball, ray_s, ray_pixel, w.above,
+                              w.current, shader, row_of_pixels * width, w.sums.data(),
+                              w.hit_samples.data(), w.hits, w.singular);
             w.rays += columns;
             std::swap(w.above, w.current);
             continue;
@@ -253,10 +251,10 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
           const int begin =
               static_cast<int>(std::lower_bound(first_ray, last_ray, s_min) - first_ray);
           const int end =
-              no_surface ? begin
-                         : std::max(begin, static_cast<int>(
-                                               std::upper_bound(first_ray, last_ray, s_max) -
-                                               first_ray));
+              no_surface
+                  ? begin
+                  : std::max(begin, static_cast<int>(std::upper_bound(first_ray, last_ray, s_max) -
+                                                     first_ray));
           double* t = w.current.data() + 2;
           const double* up = w.above.data() + 2;
           std::fill(t, t + begin, kNoHit);
@@ -324,8 +322,7 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
         }
         if (overlay) {
           composite_overlay(*overlay, x0, y0, x1, y1, samples, ray_s, options.background, w.depth,
-                            w.row_base, w.row_step, w.on_top, w.touched, w.sums,
-                            w.hit_samples);
+                            w.row_base, w.row_step, w.on_top, w.touched, w.sums, w.hit_samples);
           w.depth.clear();
           w.row_base.clear();
           w.row_step.clear();
@@ -335,8 +332,8 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
           for (int x = x0; x < x1; ++x, out += 3) {
             const size_t pixel = static_cast<size_t>((y - y0) * width + (x - x0));
             if (const int n = w.hit_samples[pixel]; n > 0) {
-              gamma.store(out, (w.sums[pixel] + (samples * samples - n) * options.background) *
-                                   weight);
+              gamma.store(out,
+                          (w.sums[pixel] + (samples * samples - n) * options.background) * weight);
             } else {
               // Byte by byte: a 3-byte copy compiles to a call of memcpy.
               out[0] = background[0];

@@ -258,12 +258,12 @@ ZS_NO_VECTORIZE double isolate(const double* g, int d_, double t0, double t1, do
         second = std::max(second, std::abs(iv.b[i + 2] - 2 * iv.b[i + 1] + iv.b[i]));
       const double curvature =
           std::min(curvature_bound<D>(g, d, c), d * (d - 1) * second / ((c - a) * (c - a)));
-      const Refined r = refine<D>(g, d, a, c, iv.b[0], iv.b[d], rtol, curvature,
-                                  stats.refinements, start);
-      const double u = r.slope == 0 ? r.u
-                                    : polish_even_root<D>(g, d, r.u, r.slope, band, leaf, rtol,
-                                                          curvature_bound<D>(g, d, 1),
-                                                          stats.refinements);
+      const Refined r =
+          refine<D>(g, d, a, c, iv.b[0], iv.b[d], rtol, curvature, stats.refinements, start);
+      const double u = r.slope == 0
+                           ? r.u
+                           : polish_even_root<D>(g, d, r.u, r.slope, band, leaf, rtol,
+                                                 curvature_bound<D>(g, d, 1), stats.refinements);
       return std::clamp(t0 + u * w, t0, t1);
     };
     // A root at u without a sign change around it, polished.
@@ -421,14 +421,22 @@ double RootFinder::find_first_root_on_unit(std::span<const double> g, double t0,
   start_value_ = g[0];
   const double* c = g.data();
   switch (d) {
-    case 1: return isolate<1>(c, d, t0, t1, band, guess, options_, stats_);
-    case 2: return isolate<2>(c, d, t0, t1, band, guess, options_, stats_);
-    case 3: return isolate<3>(c, d, t0, t1, band, guess, options_, stats_);
-    case 4: return isolate<4>(c, d, t0, t1, band, guess, options_, stats_);
-    case 5: return isolate<5>(c, d, t0, t1, band, guess, options_, stats_);
-    case 6: return isolate<6>(c, d, t0, t1, band, guess, options_, stats_);
-    case 8: return isolate<8>(c, d, t0, t1, band, guess, options_, stats_);
-    default: return isolate<0>(c, d, t0, t1, band, guess, options_, stats_);
+    case 1:
+      return isolate<1>(c, d, t0, t1, band, guess, options_, stats_);
+    case 2:
+      return isolate<2>(c, d, t0, t1, band, guess, options_, stats_);
+    case 3:
+      return isolate<3>(c, d, t0, t1, band, guess, options_, stats_);
+    case 4:
+      return isolate<4>(c, d, t0, t1, band, guess, options_, stats_);
+    case 5:
+      return isolate<5>(c, d, t0, t1, band, guess, options_, stats_);
+    case 6:
+      return isolate<6>(c, d, t0, t1, band, guess, options_, stats_);
+    case 8:
+      return isolate<8>(c, d, t0, t1, band, guess, options_, stats_);
+    default:
+      return isolate<0>(c, d, t0, t1, band, guess, options_, stats_);
   }
 }
 

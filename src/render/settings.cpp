@@ -136,8 +136,7 @@ Color parse_display_color(const std::string& text, const std::string& what) {
   return display.array().pow(2.2).matrix();
 }
 
-void apply_render_settings(const json& render, RenderOptions& options,
-                           const std::string& origin) {
+void apply_render_settings(const json& render, RenderOptions& options, const std::string& origin) {
   if (!render.is_object()) fail(origin, "/render", "expected an object");
   RenderOptions o = options;
   for (const auto& [key, value] : render.items()) {

@@ -1,8 +1,8 @@
 #include <algorithm>
 #include <array>
-#include <cstdint>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <exception>
 #include <limits>
 #include <mutex>
@@ -49,9 +49,8 @@ void Shader::shade_rays4(const double (&n)[3][4], const double (&ray)[3][4],
   // Lane by lane the operations of shade_ray, with the skipped terms masked out.
   if (lit_front_.exponent >= 0 && lit_back_.exponent >= 0) {
     const __m256d zero = _mm256_setzero_pd();
-    const __m256d front = _mm256_castsi256_pd(
-        _mm256_set_epi64x(is_front[3] ? -1 : 0, is_front[2] ? -1 : 0, is_front[1] ? -1 : 0,
-                          is_front[0] ? -1 : 0));
+    const __m256d front = _mm256_castsi256_pd(_mm256_set_epi64x(
+        is_front[3] ? -1 : 0, is_front[2] ? -1 : 0, is_front[1] ? -1 : 0, is_front[0] ? -1 : 0));
     auto pick = [&](double f, double b) {
       return _mm256_blendv_pd(_mm256_set1_pd(b), _mm256_set1_pd(f), front);
     };
@@ -80,28 +79,27 @@ void Shader::shade_rays4(const double (&n)[3][4], const double (&ray)[3][4],
       const Lit::Term &tf = lit_front_.terms[i], &tb = lit_back_.terms[i];
       const __m256d lx = pick(tf.l[0], tb.l[0]), ly = pick(tf.l[1], tb.l[1]),
                     lz = pick(tf.l[2], tb.l[2]);
-      const __m256d ndl =
-          _mm256_fmadd_pd(nz, lz, _mm256_fmadd_pd(ny, ly, _mm256_mul_pd(nx, lx)));
+      const __m256d ndl = _mm256_fmadd_pd(nz, lz, _mm256_fmadd_pd(ny, ly, _mm256_mul_pd(nx, lx)));
       // shade skips a term when ndl <= 0 (not for NaN): keep the lanes where that is false.
       const __m256d lit = _mm256_cmp_pd(ndl, zero, _CMP_NLE_UQ);
       if (_mm256_movemask_pd(lit) == 0) continue;
       r = _mm256_blendv_pd(r, _mm256_fmadd_pd(ndl, pick(tf.diffuse[0], tb.diffuse[0]), r), lit);
       g = _mm256_blendv_pd(g, _mm256_fmadd_pd(ndl, pick(tf.diffuse[1], tb.diffuse[1]), g), lit);
       b = _mm256_blendv_pd(b, _mm256_fmadd_pd(ndl, pick(tf.diffuse[2], tb.diffuse[2]), b), lit);
-      const __m256d rv = _mm256_fmadd_pd(
-          _mm256_mul_pd(_mm256_set1_pd(-2.0), ndl), nd,
-          _mm256_fmadd_pd(lz, dz, _mm256_fmadd_pd(ly, dy, _mm256_mul_pd(lx, dx))));
+      const __m256d rv =
+          _mm256_fmadd_pd(_mm256_mul_pd(_mm256_set1_pd(-2.0), ndl), nd,
+                          _mm256_fmadd_pd(lz, dz, _mm256_fmadd_pd(ly, dy, _mm256_mul_pd(lx, dx))));
       const __m256d shiny = _mm256_and_pd(lit, _mm256_cmp_pd(rv, zero, _CMP_NLE_UQ));
       if (_mm256_movemask_pd(shiny) == 0) continue;
       __m256d highlight = power(rv, lit_front_.exponent);
       if (lit_back_.exponent != lit_front_.exponent)
         highlight = _mm256_blendv_pd(power(rv, lit_back_.exponent), highlight, front);
-      r = _mm256_blendv_pd(
-          r, _mm256_fmadd_pd(highlight, pick(tf.specular[0], tb.specular[0]), r), shiny);
-      g = _mm256_blendv_pd(
-          g, _mm256_fmadd_pd(highlight, pick(tf.specular[1], tb.specular[1]), g), shiny);
-      b = _mm256_blendv_pd(
-          b, _mm256_fmadd_pd(highlight, pick(tf.specular[2], tb.specular[2]), b), shiny);
+      r = _mm256_blendv_pd(r, _mm256_fmadd_pd(highlight, pick(tf.specular[0], tb.specular[0]), r),
+                           shiny);
+      g = _mm256_blendv_pd(g, _mm256_fmadd_pd(highlight, pick(tf.specular[1], tb.specular[1]), g),
+                           shiny);
+      b = _mm256_blendv_pd(b, _mm256_fmadd_pd(highlight, pick(tf.specular[2], tb.specular[2]), b),
+                           shiny);
     }
     double rs[4], gs[4], bs[4];
     _mm256_storeu_pd(rs, r);
@@ -157,8 +155,7 @@ bool for_each_tile(int width, int height, int tile_width, int tile_height, int t
     for (int t = next++; t < tiles && !trap.failed() && !stop.stop_requested(); t = next++)
       trap.run([&] {
         const int x0 = (t % tx) * tile_width, y0 = (t / tx) * tile_height;
-        body(x0, y0, std::min(width, x0 + tile_width), std::min(height, y0 + tile_height),
-             worker);
+        body(x0, y0, std::min(width, x0 + tile_width), std::min(height, y0 + tile_height), worker);
         const int d = ++done;
         if (progress) {
           std::unique_lock lock(mutex, std::try_to_lock);
@@ -203,8 +200,7 @@ void store_linear(Image& image, int x, int y, const Color& c) {
 std::vector<Vec2> sample_offsets(int samples) {
   std::vector<Vec2> out;
   for (int j = 0; j < samples; ++j)
-    for (int i = 0; i < samples; ++i)
-      out.emplace_back((i + 0.5) / samples, (j + 0.5) / samples);
+    for (int i = 0; i < samples; ++i) out.emplace_back((i + 0.5) / samples, (j + 0.5) / samples);
   return out;
 }
 

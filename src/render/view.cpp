@@ -31,9 +31,9 @@ View View::from_camera(const Camera& camera, double scene_radius, int width, int
   }
   const Vec3 to_target = v.target - v.eye;
   if (!v.eye.allFinite() || !v.target.allFinite() || !(to_target.norm() > 0))
-    throw InvalidArgument("camera", "eye " + std::to_string(v.eye.x()) + "," +
-                                        std::to_string(v.eye.y()) + "," +
-                                        std::to_string(v.eye.z()),
+    throw InvalidArgument("camera",
+                          "eye " + std::to_string(v.eye.x()) + "," + std::to_string(v.eye.y()) +
+                              "," + std::to_string(v.eye.z()),
                           "the eye must be finite and differ from the target");
   const CameraFrame f = camera.frame(scene_radius);
   v.forward = f.forward;

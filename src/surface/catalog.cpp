@@ -137,8 +137,14 @@ std::vector<CatalogEntry> build_catalog() {
       cam(35, 25),
       {},
   });
-  c.push_back({"sphere", "Unit sphere", "x^2 + y^2 + z^2 - 1", "Smooth and closed.", {},
-               Clip::sphere(1.5), cam(30, 20), {}});
+  c.push_back({"sphere",
+               "Unit sphere",
+               "x^2 + y^2 + z^2 - 1",
+               "Smooth and closed.",
+               {},
+               Clip::sphere(1.5),
+               cam(30, 20),
+               {}});
   c.push_back({
       "torus",
       "Ring torus",
@@ -178,8 +184,8 @@ std::vector<CatalogEntry> build_catalog() {
       Clip::sphere(1.5),
       cam(30, 20),
       [](const Field&) {
-        return std::vector<Vec3>{Vec3(-0.5, -0.5, -0.5), Vec3(0.5, 0.5, -0.5),
-                                 Vec3(0.5, -0.5, 0.5), Vec3(-0.5, 0.5, 0.5)};
+        return std::vector<Vec3>{Vec3(-0.5, -0.5, -0.5), Vec3(0.5, 0.5, -0.5), Vec3(0.5, -0.5, 0.5),
+                                 Vec3(-0.5, 0.5, 0.5)};
       },
   });
   c.push_back({
@@ -197,7 +203,8 @@ std::vector<CatalogEntry> build_catalog() {
       "barth6",
       "Barth's sextic",
       "phi = (1 + sqrt(5))/2\n"
-      "4*(phi^2*x^2 - y^2)*(phi^2*y^2 - z^2)*(phi^2*z^2 - x^2) - (1 + 2*phi)*(x^2 + y^2 + z^2 - 1)^2",
+      "4*(phi^2*x^2 - y^2)*(phi^2*y^2 - z^2)*(phi^2*z^2 - x^2) - (1 + 2*phi)*(x^2 + y^2 + z^2 - "
+      "1)^2",
       "The sextic with 65 nodes, the most known for degree 6; 50 of them are affine here.",
       {},
       Clip::sphere(1.8),

@@ -121,9 +121,9 @@ Field formula(const std::string& item, const std::string& spec) {
   if (!r.ok())
     throw InvalidArgument(
         "--clip", spec,
-        fmt::format("'{}' is neither a number nor an expression of the parameters: {}", item,
-                    r.diagnostics.empty() ? std::string("no expression")
-                                          : r.diagnostics.front().message));
+        fmt::format(
+            "'{}' is neither a number nor an expression of the parameters: {}", item,
+            r.diagnostics.empty() ? std::string("no expression") : r.diagnostics.front().message));
   if (r.field->depends_on_position())
     throw InvalidArgument("--clip", spec,
                           fmt::format("'{}' depends on x, y or z; a clip's numbers may depend "
@@ -395,8 +395,7 @@ Box3 Clip::bounds() const {
   return b;
 }
 
-bool Clip::ray_interval(const Vec3& o, const Vec3& d, double t_min, double& t0,
-                        double& t1) const {
+bool Clip::ray_interval(const Vec3& o, const Vec3& d, double t_min, double& t0, double& t1) const {
   t0 = t_min;
   t1 = std::numeric_limits<double>::infinity();
   for (const auto& s : spheres) {

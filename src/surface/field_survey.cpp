@@ -1,8 +1,8 @@
 #include "zeroset/surface/field_survey.h"
 
+#include <fmt/format.h>
 #include <algorithm>
 #include <cmath>
-#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <vector>
 
@@ -31,8 +31,10 @@ FieldSurvey survey_field(const Surface& surface, int nodes) {
     eval.values(x, y, z, f);
     for (double v : f) {
       ++s.samples;
-      if (!std::isfinite(v)) ++s.undefined;
-      else if (v == 0) ++s.zero;
+      if (!std::isfinite(v))
+        ++s.undefined;
+      else if (v == 0)
+        ++s.zero;
     }
     x.clear(), y.clear(), z.clear();
   };
@@ -43,7 +45,8 @@ FieldSurvey survey_field(const Surface& surface, int nodes) {
   for (long long k = 0; k < n[2]; ++k)
     for (long long j = 0; j < n[1]; ++j)
       for (long long i = 0; i < n[0]; ++i)
-        add(box.lo + h * Vec3(static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)));
+        add(box.lo +
+            h * Vec3(static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)));
   if (x.empty()) add(0.5 * (box.lo + box.hi));  // a clip smaller than the grid's spacing
   flush();
   return s;
@@ -51,13 +54,17 @@ FieldSurvey survey_field(const Surface& surface, int nodes) {
 
 std::optional<std::string> survey_warning(const Surface& surface, const FieldSurvey& survey) {
   if (survey.vanishes_identically())
-    return fmt::format("{}: F vanishes identically on the clip (F = 0 everywhere): there is no "
-                       "surface to find", surface.label());
+    return fmt::format(
+        "{}: F vanishes identically on the clip (F = 0 everywhere): there is no "
+        "surface to find",
+        surface.label());
   if (survey.undefined == 0) return std::nullopt;
   const double percent = 100 * survey.undefined_fraction();
-  return fmt::format("{}: F is undefined (NaN or infinite) on {} of the clip; those parts are "
-                     "left out", surface.label(),
-                     percent >= 0.1 ? fmt::format("{:.1f}%", percent) : std::string("less than 0.1%"));
+  return fmt::format(
+      "{}: F is undefined (NaN or infinite) on {} of the clip; those parts are "
+      "left out",
+      surface.label(),
+      percent >= 0.1 ? fmt::format("{:.1f}%", percent) : std::string("less than 0.1%"));
 }
 
 nlohmann::json survey_json(const FieldSurvey& survey) {

@@ -34,8 +34,8 @@ double number_in(const json& j, const std::string& origin, const std::string& wh
   return v;
 }
 
-std::uint64_t whole(const json& j, const std::string& origin, const std::string& where,
-                    double lo, double hi) {
+std::uint64_t whole(const json& j, const std::string& origin, const std::string& where, double lo,
+                    double hi) {
   const double v = j.is_number() ? j.get<double>() : std::nan("");
   if (!(v >= lo && v <= hi && v == std::floor(v)))
     fail(origin, where, fmt::format("expected a whole number from {:.0f} to {:.0f}", lo, hi));

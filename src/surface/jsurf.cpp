@@ -172,9 +172,10 @@ Scene jsurf_to_scene(std::string_view text, const std::string& origin) {
 
   // The equation and its parameters.
   if (!r.has("surface_equation"))
-    throw BadInput(fmt::format("{}: no surface_equation entry (a SURFER file gives its surface "
-                               "as surface_equation=...)",
-                               origin));
+    throw BadInput(
+        fmt::format("{}: no surface_equation entry (a SURFER file gives its surface "
+                    "as surface_equation=...)",
+                    origin));
   const std::string& equation = r.find("surface_equation")->value;
   if (equation.find_first_not_of(" \t\f") == std::string::npos)
     r.fail("surface_equation", "the equation is empty");
@@ -229,8 +230,9 @@ Scene jsurf_to_scene(std::string_view text, const std::string& origin) {
                             : r.has("camera_transform") ? "camera_transform"
                                                         : "transform_matrix";
   if (!view)
-    r.fail(blame, "with the other transforms it is not a rotation with a uniform scale and a "
-                  "translation (zeroset's camera cannot show a sheared or mirrored view)");
+    r.fail(blame,
+           "with the other transforms it is not a rotation with a uniform scale and a "
+           "translation (zeroset's camera cannot show a sheared or mirrored view)");
 
   // The camera: its frame in surface space is the rotation's columns (x right, y up, z towards
   // the viewer); it looks at the point of its axis nearest to the clip sphere's centre.
@@ -240,11 +242,12 @@ Scene jsurf_to_scene(std::string_view text, const std::string& origin) {
     orthographic = type == "ORTHOGRAPHIC_CAMERA";
     if (!orthographic && type != "PERSPECTIVE_CAMERA")
       r.fail("camera_type", fmt::format("'{}' is neither PERSPECTIVE_CAMERA nor "
-                                        "ORTHOGRAPHIC_CAMERA", type));
+                                        "ORTHOGRAPHIC_CAMERA",
+                                        type));
   }
   Camera& cam = s.camera;
-  cam.fov_deg = r.has("camera_fov_y") ? r.number_in("camera_fov_y", kMinFovDeg, kMaxFovDeg)
-                                      : kJsurfFovDeg;
+  cam.fov_deg =
+      r.has("camera_fov_y") ? r.number_in("camera_fov_y", kMinFovDeg, kMaxFovDeg) : kJsurfFovDeg;
   cam.projection = orthographic ? Projection::orthographic : Projection::perspective;
   cam.ortho_height = 0;  // without camera_height zeroset frames the clip sphere
   if (orthographic && r.has("camera_height")) {
@@ -271,8 +274,8 @@ Scene jsurf_to_scene(std::string_view text, const std::string& origin) {
     cam.distance = d > 1e-12 * clip->scale ? d : 0;
   }
   cam.elevation_deg = degrees(std::asin(std::clamp(back.z(), -1.0, 1.0)));
-  cam.azimuth_deg = std::hypot(back.x(), back.y()) > 1e-12 ? degrees(std::atan2(back.y(), back.x()))
-                                                           : 0.0;
+  cam.azimuth_deg =
+      std::hypot(back.x(), back.y()) > 1e-12 ? degrees(std::atan2(back.y(), back.x())) : 0.0;
   cam.roll_deg = 0;
   const CameraFrame unrolled = cam.frame(clip->scale);
   cam.roll_deg = degrees(std::atan2(right.dot(unrolled.up), right.dot(unrolled.right)));

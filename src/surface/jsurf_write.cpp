@@ -30,9 +30,10 @@ std::map<std::string, std::string> surfer_names(const std::vector<std::string>& 
   if (names.size() > static_cast<size_t>(kMaxJsurfParameters)) {
     std::string list;
     for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
-    throw BadInput(fmt::format("SURFER has at most {} parameters (a, b, c, d); this surface has "
-                               "{}: {}",
-                               kMaxJsurfParameters, names.size(), list));
+    throw BadInput(
+        fmt::format("SURFER has at most {} parameters (a, b, c, d); this surface has "
+                    "{}: {}",
+                    kMaxJsurfParameters, names.size(), list));
   }
   std::map<std::string, std::string> out;
   std::string free = "abcd";
@@ -83,9 +84,10 @@ std::string surfer_equation(const Field& field, const std::map<std::string, std:
       out += c;
       ++i;
     } else {
-      throw BadInput(fmt::format("the equation cannot be written in SURFER's syntax (it uses "
-                                 "'{}'): {}",
-                                 c, text));
+      throw BadInput(
+          fmt::format("the equation cannot be written in SURFER's syntax (it uses "
+                      "'{}'): {}",
+                      c, text));
     }
   }
   return out;
@@ -136,9 +138,10 @@ std::string scene_to_jsurf(const Scene& scene) {
     const Polynomial expanded = field.polynomial();
     for (const Monomial& m : expanded.terms())
       if (!std::isfinite(m.c))
-        throw BadInput(fmt::format("SURFER export: a coefficient of '{}' is not finite ({}) at "
-                                   "the scene's parameter values",
-                                   field.source(), m.c));
+        throw BadInput(
+            fmt::format("SURFER export: a coefficient of '{}' is not finite ({}) at "
+                        "the scene's parameter values",
+                        field.source(), m.c));
   }
   const std::string equation = surfer_equation(field, names);
   const ParseResult check = parse_field(equation);  // the text must mean the same surface
@@ -148,9 +151,10 @@ std::string scene_to_jsurf(const Scene& scene) {
   if (!s.clip.planes.empty() || s.clip.spheres.size() != 1) {
     std::string specs;
     for (const auto& spec : s.clip.to_specs()) specs += (specs.empty() ? "" : " ") + spec;
-    throw BadInput(fmt::format("SURFER clips to one sphere about the origin; this clip is {} "
-                               "(give one with --clip sphere:R)",
-                               specs.empty() ? "empty (all of space)" : specs));
+    throw BadInput(
+        fmt::format("SURFER clips to one sphere about the origin; this clip is {} "
+                    "(give one with --clip sphere:R)",
+                    specs.empty() ? "empty (all of space)" : specs));
   }
   const SphereClip& sphere = s.clip.spheres[0];
   if (sphere.center.norm() != 0)
@@ -176,9 +180,8 @@ std::string scene_to_jsurf(const Scene& scene) {
   for (size_t i = 0; i < field.parameter_names().size(); ++i)
     put("surface_parameter_" + names.at(field.parameter_names()[i]), finite_number(values[i]));
   put("scale_factor", finite_number(std::log10(radius)));
-  put("rotation_matrix",
-      numbers({rot(0, 0), rot(0, 1), rot(0, 2), 0, rot(1, 0), rot(1, 1), rot(1, 2), 0, rot(2, 0),
-               rot(2, 1), rot(2, 2), 0, 0, 0, 0, 1}));
+  put("rotation_matrix", numbers({rot(0, 0), rot(0, 1), rot(0, 2), 0, rot(1, 0), rot(1, 1),
+                                  rot(1, 2), 0, rot(2, 0), rot(2, 1), rot(2, 2), 0, 0, 0, 0, 1}));
   if (s.camera.is_orthographic()) {
     put("camera_type", "ORTHOGRAPHIC_CAMERA");
     put("camera_height", finite_number(s.camera.view_height(s.scene_radius()) / radius));
@@ -213,8 +216,8 @@ std::string scene_to_jsurf(const Scene& scene) {
   if (render.contains("lights") && render["lights"].is_array()) {
     const json& lights = render["lights"];
     if (lights.size() > static_cast<size_t>(kJsurfLights))
-      throw BadInput(fmt::format("SURFER has {} lights; this scene has {}", kJsurfLights,
-                                 lights.size()));
+      throw BadInput(
+          fmt::format("SURFER has {} lights; this scene has {}", kJsurfLights, lights.size()));
     // Far from the clip sphere's centre (t in camera space), so that jsurf's point lights
     // shine from nearly one direction, as zeroset's do.
     const double far = 100 * (t.norm() + 1);

@@ -122,8 +122,9 @@ Keyframes read_keyframes(const json& settings, const Surface& surface, int frame
   const json& keys = animation["keyframes"];
   const std::string base = "/animation/keyframes";
   if (!keys.is_array() || keys.empty())
-    fail(origin, base, "expected a list of keyframes {\"time\" or \"frame\", \"params\", "
-                       "\"camera\", \"ease\"}");
+    fail(origin, base,
+         "expected a list of keyframes {\"time\" or \"frame\", \"params\", "
+         "\"camera\", \"ease\"}");
   double last_time = -1;
   for (size_t i = 0; i < keys.size(); ++i) {
     const json& k = keys[i];
@@ -139,11 +140,13 @@ Keyframes read_keyframes(const json& settings, const Surface& surface, int frame
                                                            std::max(0, frames - 1))),
                          frames);
     if (!(time > last_time))
-      fail(origin, where, fmt::format("keyframes must come in increasing time; this one is at "
-                                      "time {}, the one before at {}",
-                                      time, last_time));
+      fail(origin, where,
+           fmt::format("keyframes must come in increasing time; this one is at "
+                       "time {}, the one before at {}",
+                       time, last_time));
     last_time = time;
-    const Ease e = k.contains("ease") ? ease_from(k["ease"], origin, where + "/ease") : Ease::kInOut;
+    const Ease e =
+        k.contains("ease") ? ease_from(k["ease"], origin, where + "/ease") : Ease::kInOut;
     const auto add = [&](std::vector<KeyTrack>& tracks, const std::string& name, double v) {
       KeyTrack& t = track_of(tracks, name);
       t.times.push_back(time);

@@ -59,9 +59,10 @@ std::string unescape(std::string_view s, const std::string& origin, int line) {
       if (h >= 'a' && h <= 'f') digit = h - 'a' + 10;
       if (h >= 'A' && h <= 'F') digit = h - 'A' + 10;
       if (digit < 0)
-        throw BadInput(fmt::format("{}:{}: malformed \\uXXXX escape '\\u{}' (four hex digits "
-                                   "expected)",
-                                   origin, line, s.substr(i + 1, 4)));
+        throw BadInput(
+            fmt::format("{}:{}: malformed \\uXXXX escape '\\u{}' (four hex digits "
+                        "expected)",
+                        origin, line, s.substr(i + 1, 4)));
       unit = unit * 16 + static_cast<std::uint32_t>(digit);
     }
     i += 4;

@@ -87,7 +87,8 @@ std::string suggestion(const std::string& name) {
 // highest-degree part H_d keeps one sign on the unit sphere, the surface is bounded, since
 // |F(R u)| ≥ m R^d - Σ_{k<d} |H_k|₁ R^k > 0 for R large (m = min |H_d| on the sphere, |H_k|₁ the
 // sum of the absolute coefficients of degree k). m is estimated on 4,000 directions and the
-// axes and halved for safety; forms that come near zero anywhere are treated as indefinite. Returns an empty clip when no bound is found (an unbounded surface).
+// axes and halved for safety; forms that come near zero anywhere are treated as indefinite. Returns
+// an empty clip when no bound is found (an unbounded surface).
 Clip default_clip(const Field& field) {
   if (!field.is_expandable() || !field.missing_parameters().empty()) return {};
   const Polynomial poly = field.polynomial();
@@ -122,7 +123,8 @@ Clip default_clip(const Field& field) {
   if (!(lo > 0 || hi < 0)) return {};
   // A form that nearly vanishes in some sampled direction may vanish between samples
   // (semidefinite): then no bound is claimed.
-  const double small = std::min(std::abs(lo), std::abs(hi)), big = std::max(std::abs(lo), std::abs(hi));
+  const double small = std::min(std::abs(lo), std::abs(hi)),
+               big = std::max(std::abs(lo), std::abs(hi));
   if (small < 0.02 * big) return {};
   const double m = 0.5 * small;
   auto separated = [&](double R) {
@@ -155,9 +157,9 @@ void apply_overrides(Scene& scene, const SurfaceOverrides& o) {
     if (s.field.parameter_index(name) < 0) {
       std::string have;
       for (const auto& n : s.field.parameter_names()) have += (have.empty() ? "" : ", ") + n;
-      throw InvalidArgument(fmt::format(
-          "--param {}: the surface has no parameter '{}'{}", name, name,
-          have.empty() ? " (it has none)" : fmt::format(" (it has: {})", have)));
+      throw InvalidArgument(
+          fmt::format("--param {}: the surface has no parameter '{}'{}", name, name,
+                      have.empty() ? " (it has none)" : fmt::format(" (it has: {})", have)));
     }
     s.field.set_parameter(name, value);
   }
@@ -193,8 +195,8 @@ Scene resolve_scene(const std::string& spec, const SurfaceOverrides& overrides) 
   } else {
     if (is_bare_name(spec)) {
       // A lone word is meant as a catalog name; as an equation it would be a constant.
-      throw BadInput(fmt::format("'{}' is not a catalog surface{}; `zeroset list` shows them all", spec,
-                                 suggestion(spec)));
+      throw BadInput(fmt::format("'{}' is not a catalog surface{}; `zeroset list` shows them all",
+                                 spec, suggestion(spec)));
     }
     ParseResult r = parse_field(spec);
     if (!r.ok()) throw BadInput("cannot read the equation:\n" + r.format());
@@ -362,8 +364,9 @@ Scene scene_from_json(json j, const std::string& origin) {
   if (j.contains("camera")) {
     const json& c = j["camera"];
     if (!c.is_object()) fail(origin, "/camera", "expected an object");
-    known_keys(c, {"azimuth_deg", "elevation_deg", "distance", "fov_deg", "target", "roll_deg",
-                   "projection", "ortho_height"},
+    known_keys(c,
+               {"azimuth_deg", "elevation_deg", "distance", "fov_deg", "target", "roll_deg",
+                "projection", "ortho_height"},
                origin, "/camera");
     auto num = [&](const char* key, double& out) {
       if (c.contains(key)) out = number(c[key], origin, std::string("/camera/") + key);

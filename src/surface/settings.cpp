@@ -26,8 +26,7 @@ void validate_camera(const Camera& c) {
   check(c.fov_deg >= kMinFovDeg && c.fov_deg <= kMaxFovDeg, "fov_deg", c.fov_deg,
         fmt::format("must lie in [{}, {}] degrees", kMinFovDeg, kMaxFovDeg));
   check(std::abs(c.roll_deg) <= kMaxCameraAngleDeg, "roll_deg", c.roll_deg, angle);
-  check(c.ortho_height >= 0 && c.ortho_height <= kMaxCameraLength, "ortho_height",
-        c.ortho_height,
+  check(c.ortho_height >= 0 && c.ortho_height <= kMaxCameraLength, "ortho_height", c.ortho_height,
         fmt::format("must lie in [0, {:g}] (0: fit the clip volume)", kMaxCameraLength));
   for (int a = 0; a < 3; ++a)
     check(std::abs(c.target[a]) <= kMaxCameraLength, "target", c.target[a], length);

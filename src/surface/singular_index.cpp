@@ -25,8 +25,8 @@ SingularSetIndex::SingularSetIndex(const SingularSet& set, double reach) : reach
   for (std::size_t c = 0; c < set.curves.size(); ++c) {
     const auto& pts = set.curves[c].points;
     for (std::size_t i = 0; i + 1 < pts.size(); ++i)
-      features_.push_back({pts[i], pts[i + 1], static_cast<int>(c), -1,
-                           static_cast<std::uint32_t>(i)});
+      features_.push_back(
+          {pts[i], pts[i + 1], static_cast<int>(c), -1, static_cast<std::uint32_t>(i)});
   }
   for (std::size_t k = 0; k < set.points.size(); ++k) {
     const Vec3& p = set.points[k].position;
@@ -61,7 +61,8 @@ SingularSetIndex::SingularSetIndex(const SingularSet& set, double reach) : reach
     std::array<int, 6> r{};
     for (int a = 0; a < 3; ++a) {
       const double lo = std::min(f.a[a], f.b[a]) - near, hi = std::max(f.a[a], f.b[a]) + near;
-      r[static_cast<std::size_t>(a)] = std::max(0, static_cast<int>(std::floor((lo - origin_[a]) / cell_)));
+      r[static_cast<std::size_t>(a)] =
+          std::max(0, static_cast<int>(std::floor((lo - origin_[a]) / cell_)));
       r[static_cast<std::size_t>(a + 3)] =
           std::min(cells_[static_cast<std::size_t>(a)] - 1,
                    static_cast<int>(std::floor((hi - origin_[a]) / cell_)));
@@ -70,7 +71,8 @@ SingularSetIndex::SingularSetIndex(const SingularSet& set, double reach) : reach
       for (int j = r[1]; j <= r[4]; ++j)
         for (int i = r[0]; i <= r[3]; ++i) {
           const Vec3 c = centre(i, j, k);
-          const double d = (c - (f.a + detail::segment_parameter(c, f.a, f.b) * (f.b - f.a))).norm();
+          const double d =
+              (c - (f.a + detail::segment_parameter(c, f.a, f.b) * (f.b - f.a))).norm();
           if (d <= near)
             visit(static_cast<std::size_t>(i) +
                       static_cast<std::size_t>(cells_[0]) *

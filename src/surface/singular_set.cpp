@@ -38,7 +38,8 @@ struct GridSamples {
 };
 
 // Stops after the row in which `stop` is requested (the samples are then incomplete).
-GridSamples sample_grid(const Field& field, const Box3& box, int cells, const std::stop_token& stop) {
+GridSamples sample_grid(const Field& field, const Box3& box, int cells,
+                        const std::stop_token& stop) {
   GridSamples gs;
   gs.cell = box.size().maxCoeff() / cells;
   for (int a = 0; a < 3; ++a)
@@ -115,8 +116,8 @@ bool on_singular_sheet(Evaluator& ev, const Vec3& p, const detail::HessianShape&
   for (int k = 1; k < 3; ++k)
     for (double sign : {-1.0, 1.0}) {
       const Vec3 dir = shape.vectors.col(k);
-      const detail::Converged c = detail::converge_in_plane(ev, p + sign * s.cell * dir, dir, s,
-                                                            0.5 * s.cell);
+      const detail::Converged c =
+          detail::converge_in_plane(ev, p + sign * s.cell * dir, dir, s, 0.5 * s.cell);
       if (!c.ok) return false;
     }
   return true;
@@ -155,7 +156,8 @@ std::vector<Vec3> triple_points_on(Evaluator& ev, const SingularCurve& curve,
   for (size_t i = 0; i < n; ++i) norm[i] = ev.sample(pts[i], true, false).hessian.norm();
   std::vector<Vec3> found;
   for (size_t k = 0; k < n; ++k) {
-    const bool local_min = (k == 0 || norm[k] <= norm[k - 1]) && (k + 1 == n || norm[k] <= norm[k + 1]);
+    const bool local_min =
+        (k == 0 || norm[k] <= norm[k - 1]) && (k + 1 == n || norm[k] <= norm[k + 1]);
     if (!local_min || !(norm[k] < 0.2 * s.hess)) continue;
     const Vec3 a = pts[k > 0 ? k - 1 : 0], b = pts[std::min(k + 1, n - 1)];
     const double len = (b - a).norm();
@@ -286,20 +288,28 @@ void add_point(std::vector<SingularPoint>& points, const Vec3& p, SingularPointK
 
 std::string_view to_string(CurveKind kind) {
   switch (kind) {
-    case CurveKind::kCrossing: return "crossing";
-    case CurveKind::kIsolated: return "isolated";
-    case CurveKind::kDegenerate: return "degenerate";
+    case CurveKind::kCrossing:
+      return "crossing";
+    case CurveKind::kIsolated:
+      return "isolated";
+    case CurveKind::kDegenerate:
+      return "degenerate";
   }
   return "?";
 }
 
 std::string_view to_string(SingularPointKind kind) {
   switch (kind) {
-    case SingularPointKind::kNode: return "node";
-    case SingularPointKind::kPinch: return "pinch";
-    case SingularPointKind::kTriple: return "triple";
-    case SingularPointKind::kClipEnd: return "clip end";
-    case SingularPointKind::kDegenerate: return "degenerate";
+    case SingularPointKind::kNode:
+      return "node";
+    case SingularPointKind::kPinch:
+      return "pinch";
+    case SingularPointKind::kTriple:
+      return "triple";
+    case SingularPointKind::kClipEnd:
+      return "clip end";
+    case SingularPointKind::kDegenerate:
+      return "degenerate";
   }
   return "?";
 }
@@ -405,7 +415,8 @@ SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& 
     if (stop.stop_requested() || budget <= 0) break;
     const Vec3 node = grid.point(i);
     if (!clip.is_empty_spec() && !clip.contains(node, grid.cell)) continue;
-    if (!(first_step_length(grid.f[i], grid.g[i], grid.h[i], grid.cell) <= 1.5 * kSqrt3 * grid.cell))
+    if (!(first_step_length(grid.f[i], grid.g[i], grid.h[i], grid.cell) <=
+          1.5 * kSqrt3 * grid.cell))
       continue;
     ++out.seeds;
     const detail::Converged c = detail::converge_to_singular(ev, node, s, 3 * grid.cell);
@@ -475,7 +486,8 @@ SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& 
   std::vector<SingularCurve> pieces;
   std::vector<Vec3> pinches;
   for (const SingularCurve& c : out.curves)
-    for (SingularCurve& piece : split_by_kind(ev, c, s, pinches)) pieces.push_back(std::move(piece));
+    for (SingularCurve& piece : split_by_kind(ev, c, s, pinches))
+      pieces.push_back(std::move(piece));
   out.curves = std::move(pieces);
   for (const Vec3& q : pinches) add_point(out.points, q, SingularPointKind::kPinch, 0.5 * spacing);
   for (const SingularCurve& c : out.curves) {
@@ -487,8 +499,7 @@ SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& 
   return out;
 }
 
-namespace {
-}  // namespace
+namespace {}  // namespace
 
 std::optional<SingularSet> find_singular_set_if_bounded(const Surface& surface,
                                                         std::stop_token stop) {
@@ -502,17 +513,19 @@ std::optional<std::string> singular_sheet_warning(const Surface& surface,
   const SingularSet set = known ? *known : find_singular_set(surface, {.cells = 24});
   if (!set.has_singular_sheet) return std::nullopt;
   const Vec3& p = set.singular_sheet_example;
-  return fmt::format("{}: grad F vanishes on a whole sheet of F = 0 (e.g. at ({:.6g}, {:.6g}, "
-                     "{:.6g})): F is a square or worse there and never changes sign; mesh or "
-                     "sample G where F = G^2",
-                     surface.label(), p.x(), p.y(), p.z());
+  return fmt::format(
+      "{}: grad F vanishes on a whole sheet of F = 0 (e.g. at ({:.6g}, {:.6g}, "
+      "{:.6g})): F is a square or worse there and never changes sign; mesh or "
+      "sample G where F = G^2",
+      surface.label(), p.x(), p.y(), p.z());
 }
 
 nlohmann::json singular_set_json(const SingularSet& set, bool with_polylines) {
   nlohmann::json j;
   j["points"] = nlohmann::json::array();
   for (const SingularPoint& p : set.points)
-    j["points"].push_back({{"kind", to_string(p.kind)}, {"position", json_read::from_vec3(p.position)}});
+    j["points"].push_back(
+        {{"kind", to_string(p.kind)}, {"position", json_read::from_vec3(p.position)}});
   j["curves"] = nlohmann::json::array();
   for (const SingularCurve& c : set.curves) {
     nlohmann::json jc = {{"kind", to_string(c.kind)},
@@ -528,7 +541,8 @@ nlohmann::json singular_set_json(const SingularSet& set, bool with_polylines) {
     j["curves"].push_back(std::move(jc));
   }
   j["singular_sheet"] = set.has_singular_sheet;
-  if (set.has_singular_sheet) j["singular_sheet_example"] = json_read::from_vec3(set.singular_sheet_example);
+  if (set.has_singular_sheet)
+    j["singular_sheet_example"] = json_read::from_vec3(set.singular_sheet_example);
   return j;
 }
 
@@ -541,13 +555,14 @@ std::string singular_set_summary(const SingularSet& set) {
     if (const int n = set.count(k); n > 0)
       curves += fmt::format("{}{} {} curve{}", curves.empty() ? "" : ", ", n, to_string(k),
                             n == 1 ? "" : "s");
-  for (SingularPointKind k : {SingularPointKind::kNode, SingularPointKind::kTriple,
-                              SingularPointKind::kPinch, SingularPointKind::kDegenerate,
-                              SingularPointKind::kClipEnd})
+  for (SingularPointKind k :
+       {SingularPointKind::kNode, SingularPointKind::kTriple, SingularPointKind::kPinch,
+        SingularPointKind::kDegenerate, SingularPointKind::kClipEnd})
     if (const size_t n = set.points_of(k).size(); n > 0)
-      points += fmt::format("{}{} {}{}", points.empty() ? "" : ", ", n,
-                            k == SingularPointKind::kNode ? "node" : std::string(to_string(k)) + " point",
-                            n == 1 ? "" : "s");
+      points +=
+          fmt::format("{}{} {}{}", points.empty() ? "" : ", ", n,
+                      k == SingularPointKind::kNode ? "node" : std::string(to_string(k)) + " point",
+                      n == 1 ? "" : "s");
   if (curves.empty()) return points;
   if (points.empty()) return curves;
   return curves + "; " + points;

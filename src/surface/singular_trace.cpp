@@ -29,7 +29,8 @@ Eigen::Matrix<double, N, 1> min_norm_solve(const Eigen::Matrix<double, N, N>& a,
   Eigen::Matrix<double, N, 1> x = Eigen::Matrix<double, N, 1>::Zero();
   if (!(top > 0) || !std::isfinite(top)) return x;
   for (int k = 0; k < N; ++k)
-    if (lambda[k] > 1e-24 * top) x += (es.eigenvectors().col(k).dot(b) / lambda[k]) * es.eigenvectors().col(k);
+    if (lambda[k] > 1e-24 * top)
+      x += (es.eigenvectors().col(k).dot(b) / lambda[k]) * es.eigenvectors().col(k);
   return x;
 }
 
@@ -54,8 +55,7 @@ Vec3 gauss_newton_step(Evaluator& ev, const Vec3& p, const Eigen::Matrix<double,
   Eigen::Vector4d r;
   r << fs.value / h, fs.gradient;
   const Eigen::Matrix<double, 4, N> jb = j * basis;
-  const Eigen::Matrix<double, N, 1> x =
-      min_norm_solve<N>(jb.transpose() * jb, jb.transpose() * r);
+  const Eigen::Matrix<double, N, 1> x = min_norm_solve<N>(jb.transpose() * jb, jb.transpose() * r);
   return basis * x;
 }
 
@@ -127,7 +127,7 @@ Vec3 curve_tangent(const Mat3& h, const Vec3& previous, double hess_scale) {
   } else {
     const bool first_small = shape.abs_eigenvalues[0] <= 0.05 * hess_scale;
     if (first_small) return previous.normalized();  // H ≈ 0: no information, keep going
-    const Vec3 n = shape.vectors.col(0);             // the one clearly non-null direction
+    const Vec3 n = shape.vectors.col(0);            // the one clearly non-null direction
     t = previous - previous.dot(n) * n;
     if (t.norm() < 1e-3 * previous.norm()) t = shape.vectors.col(2);
   }

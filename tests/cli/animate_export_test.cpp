@@ -82,8 +82,7 @@ TEST(CliAnimate, BadFrameRangesExitTwoAndWriteNothing) {
   for (const char* range :
        {"5-3", "3-10", "10-10", "a-b", "-1-3", "3--5", "1.5-2", "3-", "-", "''", "1e1-2"}) {
     const std::string dir = root + "/frames";
-    const auto r =
-        run_command(zs(kTorus + " --frames 10 --frame-range " + range + " -o " + dir));
+    const auto r = run_command(zs(kTorus + " --frames 10 --frame-range " + range + " -o " + dir));
     EXPECT_EQ(r.exit_code, 2) << range << ": " << r.output;
     EXPECT_NE(r.output.find("--frame-range"), std::string::npos) << range << ": " << r.output;
     EXPECT_FALSE(fs::exists(dir)) << range;
@@ -96,8 +95,10 @@ TEST(CliAnimate, BadFrameRangesExitTwoAndWriteNothing) {
   // Frames, too, are checked; and a part of the animation makes no video.
   r = run_command(zs(kTorus + " --frames 0 -o " + dir));
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  r = run_command(zs("animate torus --param r=0.2:0.9 --size 40x32 --frames 10 --frame-range 2-4 "
-                     "--video " + dir + "/part.mp4 -o " + dir));
+  r =
+      run_command(zs("animate torus --param r=0.2:0.9 --size 40x32 --frames 10 --frame-range 2-4 "
+                     "--video " +
+                     dir + "/part.mp4 -o " + dir));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("--video"), std::string::npos) << r.output;
   EXPECT_TRUE(files_in(dir).empty());
@@ -116,7 +117,8 @@ TEST(CliAnimate, AFailingEncoderIsAnErrorAndLeavesNoFrameAndNoVideo) {
   const std::string root = fresh_dir("animate-ffmpeg");
   const std::string path = with_fake_ffmpeg(root, "echo 'encoder says no' >&2\nexit 1\n");
   const auto r = run_command(path + zs("animate torus --param r=0.2:0.9 --size 32x32 --frames 2 "
-                                       "-o " + root + "/frames"));
+                                       "-o " +
+                                       root + "/frames"));
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("encoder says no"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("--no-video"), std::string::npos) << r.output;
@@ -137,7 +139,8 @@ done
 echo video > "$1"
 )");
   const auto r = run_command(path + zs("animate torus --param r=0.2:0.9 --size 32x32 --frames 3 "
-                                       "-o " + root + "/frames"));
+                                       "-o " +
+                                       root + "/frames"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(files_in(root + "/frames"),
             (std::set<std::string>{"animation.mp4", "frame_0000.png", "frame_0001.png",
@@ -160,8 +163,8 @@ TEST(CliExport, WritesAPovSceneThatPovRayRenders) {
   EXPECT_EQ(theirs.width, 32);
   EXPECT_EQ(theirs.height, 32);
   // The same silhouette as zeroset's own picture.
-  r = run_command(zs("render kummer --param mu=2 --camera 40,25 --size 32x32 --aa 1 -o " + dir +
-                     "/ours.png"));
+  r = run_command(
+      zs("render kummer --param mu=2 --camera 40,25 --size 32x32 --aa 1 -o " + dir + "/ours.png"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Image ours = read_image(dir + "/ours.png");
   const Color white(1, 1, 1);
@@ -193,7 +196,8 @@ std::string keyframed_scene(const std::string& dir, const std::string& keyframes
   std::ofstream(path) << R"j({"equation": "(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + y^2)",
     "parameters": {"R": 0.75, "r": 0.25}, "clip": ["sphere:2"],
     "camera": {"azimuth_deg": 30, "elevation_deg": 20},
-    "animation": {"keyframes": )j" + keyframes + "}}";
+    "animation": {"keyframes": )j" +
+                             keyframes + "}}";
   return path;
 }
 
@@ -207,14 +211,16 @@ const std::string kKeyframes = R"([
 TEST(CliKeyframes, AnimateFollowsTheKeyframesOfTheSceneFile) {
   const std::string dir = fresh_dir("keyframes-animate");
   const std::string scene = keyframed_scene(dir, kKeyframes);
-  auto r = run_command(zs("animate " + scene + " --frames 9 --size 48x48 --aa 1 --no-video -o " +
-                          dir + "/frames"));
+  auto r = run_command(
+      zs("animate " + scene + " --frames 9 --size 48x48 --aa 1 --no-video -o " + dir + "/frames"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   ASSERT_EQ(files_in(dir + "/frames").size(), 9u);
   // Frame 4 is the middle keyframe: r and the elevation as it gives them, R, the azimuth and
   // the distance halfway (smoothstep and linear both give 1/2 there).
-  r = run_command(zs("render " + scene + " --param R=1 --param r=0.5 --camera 60,60,6,0 "
-                     "--size 48x48 --aa 1 -o " + dir + "/still.png"));
+  r = run_command(zs("render " + scene +
+                     " --param R=1 --param r=0.5 --camera 60,60,6,0 "
+                     "--size 48x48 --aa 1 -o " +
+                     dir + "/still.png"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(bytes_of(dir + "/still.png") == bytes_of(dir + "/frames/frame_0004.png"));
   // And the frames between keyframes are not the keyframes' pictures.
@@ -226,15 +232,21 @@ TEST(CliKeyframes, PovRayRendersTheSameFramesFromTheExportedAnimation) {
   if (!have_povray()) GTEST_SKIP() << "povray is not installed";
   const std::string dir = fresh_dir("keyframes-pov");
   const std::string scene = keyframed_scene(dir, kKeyframes);
-  auto r = run_command(zs("animate " + scene + " --frames 9 --frame-range 2-4 --size 48x48 "
-                          "--aa 1 --no-video -o " + dir + "/frames"));
+  auto r = run_command(zs("animate " + scene +
+                          " --frames 9 --frame-range 2-4 --size 48x48 "
+                          "--aa 1 --no-video -o " +
+                          dir + "/frames"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  r = run_command(zs("export " + scene + " --animate --frames 9 --frame-range 2-4 --size 48x48 "
-                     "-o " + dir + "/pov/torus.pov"));
+  r = run_command(zs("export " + scene +
+                     " --animate --frames 9 --frame-range 2-4 --size 48x48 "
+                     "-o " +
+                     dir + "/pov/torus.pov"));
   ASSERT_NE(r.exit_code, 0) << "the directory pov/ does not exist yet";
   fs::create_directories(dir + "/pov");
-  r = run_command(zs("export " + scene + " --animate --frames 9 --frame-range 2-4 --size 48x48 "
-                     "-o " + dir + "/pov/torus.pov"));
+  r = run_command(zs("export " + scene +
+                     " --animate --frames 9 --frame-range 2-4 --size 48x48 "
+                     "-o " +
+                     dir + "/pov/torus.pov"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::string ini = bytes_of(dir + "/pov/torus.ini");
   for (const char* line : {"Initial_Frame=0\n", "Final_Frame=8\n", "Initial_Clock=0\n",
@@ -254,8 +266,7 @@ TEST(CliKeyframes, PovRayRendersTheSameFramesFromTheExportedAnimation) {
     ASSERT_EQ(theirs.width, 48);
     ASSERT_EQ(theirs.height, 48);
     masks.push_back(test::surface_mask(ours, white));
-    EXPECT_GE(test::intersection_over_union(test::surface_mask(theirs, white), masks.back()),
-              0.97)
+    EXPECT_GE(test::intersection_over_union(test::surface_mask(theirs, white), masks.back()), 0.97)
         << "frame " << f;
   }
   // The silhouettes move from frame to frame, so agreeing frame by frame means something.
@@ -271,8 +282,8 @@ TEST(CliKeyframes, KeyframesSwitchTheProjection) {
     {"time": 0, "camera": {"projection": "perspective"}},
     {"frame": 4, "camera": {"projection": "orthographic", "ortho_height": 4}},
     {"time": 1, "camera": {"ortho_height": 3}, "ease": "linear"}])");
-  auto r = run_command(zs("animate " + scene + " --frames 9 --size 48x48 --aa 1 --no-video -o " +
-                          dir + "/frames"));
+  auto r = run_command(
+      zs("animate " + scene + " --frames 9 --size 48x48 --aa 1 --no-video -o " + dir + "/frames"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::string still = " --size 48x48 --aa 1 -o " + dir;
   r = run_command(zs("render " + scene + still + "/persp.png"));
@@ -285,15 +296,17 @@ TEST(CliKeyframes, KeyframesSwitchTheProjection) {
                bytes_of(dir + "/frames/frame_0008.png"));
   if (!have_povray()) GTEST_SKIP() << "povray is not installed";
   fs::create_directories(dir + "/pov");
-  r = run_command(zs("export " + scene + " --animate --frames 9 --frame-range 3-4 --size 48x48 "
-                     "-o " + dir + "/pov/torus.pov"));
+  r = run_command(zs("export " + scene +
+                     " --animate --frames 9 --frame-range 3-4 --size 48x48 "
+                     "-o " +
+                     dir + "/pov/torus.pov"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   r = run_command("cd " + dir + "/pov && povray -D -V torus.ini -A");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Color white(1, 1, 1);
   for (int f = 3; f <= 4; ++f) {
-    const auto theirs = test::surface_mask(
-        read_image(dir + "/pov/torus_" + std::to_string(f) + ".png"), white);
+    const auto theirs =
+        test::surface_mask(read_image(dir + "/pov/torus_" + std::to_string(f) + ".png"), white);
     const auto ours = test::surface_mask(
         read_image(dir + "/frames/frame_000" + std::to_string(f) + ".png"), white);
     EXPECT_GE(test::intersection_over_union(theirs, ours), 0.97) << "frame " << f;
@@ -329,8 +342,7 @@ TEST(CliKeyframes, BadKeyframesAndFlagsTheyMakeMeaninglessExitTwo) {
     }
   }
   const std::string scene = keyframed_scene(dir, kKeyframes);
-  for (const char* flags :
-       {"--param r=0.1:0.2", "--param r=0.3", "--orbit 90", "--camera 10,10"}) {
+  for (const char* flags : {"--param r=0.1:0.2", "--param r=0.3", "--orbit 90", "--camera 10,10"}) {
     const auto r = run_command(zs("animate " + scene + " " + std::string(flags) +
                                   " --frames 9 --size 32x32 --no-video -o " + dir + "/frames"));
     EXPECT_EQ(r.exit_code, 2) << flags << "\n" << r.output;
@@ -343,8 +355,7 @@ TEST(CliKeyframes, BadKeyframesAndFlagsTheyMakeMeaninglessExitTwo) {
         "export " + scene + " --animate -o " + dir + "/a.jsurf",
         "export \"x^2 + y^2 + z^2 - sqrt(a)\" --param a=0.5:1 --animate -o " + dir + "/a.pov",
         "export \"x^2 + y^2 + z^2 - sqrt(a)\" --param a=0.1:1 --animate -o " + dir + "/a.pov",
-        "export \"x^2 + y^2 + z^2 - 1/(1 + a^2)\" --param a=-1:1 --animate -o " + dir +
-            "/a.pov"}) {
+        "export \"x^2 + y^2 + z^2 - 1/(1 + a^2)\" --param a=-1:1 --animate -o " + dir + "/a.pov"}) {
     const auto r = run_command(zs(args));
     EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
   }

@@ -8,9 +8,7 @@
 namespace zeroset::test {
 
 /// The command line that runs the built `zeroset` with `args`.
-inline std::string zs(const std::string& args) {
-  return std::string(ZEROSET_BINARY) + " " + args;
-}
+inline std::string zs(const std::string& args) { return std::string(ZEROSET_BINARY) + " " + args; }
 
 /// The tests' scratch directory (made if missing).
 inline std::string temp_dir() {

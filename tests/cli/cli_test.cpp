@@ -250,7 +250,9 @@ std::string surfer_file(double roll) {
       "surface_parameter_a : 1.5\n"
       "surface_parameter_b  0.25\n"
       "scale_factor=0.3\n"
-      "rotation_matrix=" + surfer_rotation(40, 25, roll) + "\n"
+      "rotation_matrix=" +
+      surfer_rotation(40, 25, roll) +
+      "\n"
       "camera_type=PERSPECTIVE_CAMERA\n"
       "camera_fov_y=3\\\n  5\n"
       "camera_transform=1.0 0.0 0.0 0.0 0.0 1.0 0.0 0.0 0.0 0.0 1.0 -3.0 0.0 0.0 0.0 1.0\n"
@@ -297,8 +299,8 @@ TEST(CliJsurf, RendersWithItsParametersClipCameraAndColours) {
     surface_pixels += a.rgb[i] != 51 || a.rgb[i + 1] != 102 || a.rgb[i + 2] != 153;
   EXPECT_GT(surface_pixels, a.rgb.size() / 3 / 10);
   // The roll is part of the rotation: without it the picture is another one.
-  r = run_command(zs("render " + write_text("noroll.jsurf", surfer_file(0)) + look + dir +
-                     "/noroll.png"));
+  r = run_command(
+      zs("render " + write_text("noroll.jsurf", surfer_file(0)) + look + dir + "/noroll.png"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_FALSE(read_image(dir + "/noroll.png").rgb == a.rgb);
 }
@@ -354,16 +356,14 @@ TEST(CliJsurf, BadFilesExitWithCodeTwoNamingFileAndLine) {
 TEST(CliJsurf, EveryCommandTakesAJsurfSurface) {
   const std::string dir = temp_dir();
   const std::string f = write_text("every.jsurf", surfer_file(10));
-  for (const std::string& cmd : {
-           "info " + f,
-           "eval " + f + " --at 0,0,0",
-           "render " + f + " --size 48x48 -o " + dir + "/every.png",
-           "sample " + f + " --seed 1 --steps 5 -o " + dir + "/every.ply",
-           "mesh " + f + " -r 16 -o " + dir + "/every.obj",
-           "export " + f + " -o " + dir + "/every.pov",
-           "export " + f + " -o " + dir + "/every2.jsurf",
-           "animate " + f + " --param a=1.4:1.6 --frames 2 --size 32x32 --no-video -o " + dir +
-               "/every_frames"}) {
+  for (const std::string& cmd :
+       {"info " + f, "eval " + f + " --at 0,0,0",
+        "render " + f + " --size 48x48 -o " + dir + "/every.png",
+        "sample " + f + " --seed 1 --steps 5 -o " + dir + "/every.ply",
+        "mesh " + f + " -r 16 -o " + dir + "/every.obj",
+        "export " + f + " -o " + dir + "/every.pov", "export " + f + " -o " + dir + "/every2.jsurf",
+        "animate " + f + " --param a=1.4:1.6 --frames 2 --size 32x32 --no-video -o " + dir +
+            "/every_frames"}) {
     const auto r = run_command(zs(cmd));
     EXPECT_EQ(r.exit_code, 0) << cmd << "\n" << r.output;
   }
@@ -371,22 +371,22 @@ TEST(CliJsurf, EveryCommandTakesAJsurfSurface) {
 
 TEST(CliRender, OrthographicProjectionFlag) {
   const std::string dir = temp_dir();
-  auto r = run_command(zs("render sphere --projection ortho:3 --size 64x64 --aa 1 -o " + dir +
-                          "/o.png"));
+  auto r = run_command(
+      zs("render sphere --projection ortho:3 --size 64x64 --aa 1 -o " + dir + "/o.png"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
   r = run_command(zs("render sphere --projection ortho --size 64x64 --aa 1 -o " + dir + "/f.png"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
-  for (const char* bad : {"fisheye", "ortho:-1", "ortho:nan", "ortho:1e300",
-                          "perspective:2", "ortho:"}) {
+  for (const char* bad :
+       {"fisheye", "ortho:-1", "ortho:nan", "ortho:1e300", "perspective:2", "ortho:"}) {
     r = run_command(zs(std::string("render sphere --projection ") + bad + " -o " + dir + "/b.png"));
     EXPECT_EQ(r.exit_code, 2) << bad << ": " << r.output;
     EXPECT_NE(r.output.find("--projection"), std::string::npos) << bad << ": " << r.output;
   }
   // A SURFER file's orthographic camera, exported back as one.
-  const std::string file = write_text(
-      "ortho.jsurf",
-      "#jSurfer\nsurface_equation=x^2+y^2+z^2-a^2\nsurface_parameter_a=0.5\n"
-      "camera_type=ORTHOGRAPHIC_CAMERA\ncamera_height=2.0\n");
+  const std::string file =
+      write_text("ortho.jsurf",
+                 "#jSurfer\nsurface_equation=x^2+y^2+z^2-a^2\nsurface_parameter_a=0.5\n"
+                 "camera_type=ORTHOGRAPHIC_CAMERA\ncamera_height=2.0\n");
   r = run_command(zs("render " + file + " --size 64x64 --aa 1 -o " + dir + "/j.png"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
   r = run_command(zs("export " + file + " -o " + dir + "/j.pov"));

@@ -36,8 +36,7 @@ test::CommandResult under_limit(long kib, const std::string& dir, const std::str
 // Files other than `keep` in `dir` (temporary or partial outputs).
 int other_files(const std::string& dir, const std::string& keep = "") {
   int n = 0;
-  for (const auto& e : std::filesystem::directory_iterator(dir))
-    n += e.path().filename() != keep;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) n += e.path().filename() != keep;
   return n;
 }
 
@@ -76,15 +75,16 @@ TEST(HostileFaults, ThreadsThatCannotStartAreAFailureWithAMessage) {
 TEST(HostileFaults, TheOfferedResolutionFits) {
   ZS_SKIP_UNDER_ASAN();
   const std::string dir = fresh_dir("faults_mesh_offer");
-  const auto refused = under_limit(500'000, dir, "mesh sphere -r 800 --grid dense --improve off -o m.obj");
+  const auto refused =
+      under_limit(500'000, dir, "mesh sphere -r 800 --grid dense --improve off -o m.obj");
   ASSERT_EQ(refused.exit_code, 2) << refused.output;
   const auto at = refused.output.find("use --resolution ");
   ASSERT_NE(at, std::string::npos) << refused.output;
   const int offered = std::stoi(refused.output.substr(at + 17));
   EXPECT_GT(offered, 100) << refused.output;
-  const auto r = under_limit(500'000, dir,
-                             "mesh sphere -r " + std::to_string(offered) +
-                                 " --grid dense --improve off -o m.obj");
+  const auto r = under_limit(
+      500'000, dir,
+      "mesh sphere -r " + std::to_string(offered) + " --grid dense --improve off -o m.obj");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(std::filesystem::exists(dir + "/m.obj")) << r.output;
 }
@@ -100,7 +100,8 @@ TEST(HostileFaults, FloatersBeyondTheProcessLimitAreRefusedWithACountThatFits) {
         kib, dir, "sample sphere --max-count 20000000 --seed-count 3000000 --steps 3 -o p.ply");
     EXPECT_EQ(r.exit_code, 2) << kib << " KiB\n" << r.output;
     EXPECT_NE(r.output.find("the process limit (ulimit -v) allows about"), std::string::npos)
-        << kib << " KiB\n" << r.output;
+        << kib << " KiB\n"
+        << r.output;
     EXPECT_NE(r.output.find("use --max-count "), std::string::npos) << r.output;
     EXPECT_EQ(other_files(dir), 0) << kib << " KiB: a partial or temporary file is left";
   }
@@ -109,9 +110,10 @@ TEST(HostileFaults, FloatersBeyondTheProcessLimitAreRefusedWithACountThatFits) {
   ASSERT_NE(at, std::string::npos) << refused.output;
   const long long offered = std::stoll(refused.output.substr(at + 16));
   EXPECT_GT(offered, 100'000) << refused.output;
-  const auto r = under_limit(500'000, dir,
-                             "sample sphere --max-count " + std::to_string(offered) +
-                                 " --seed-count " + std::to_string(offered) + " --steps 2 -o p.ply");
+  const auto r =
+      under_limit(500'000, dir,
+                  "sample sphere --max-count " + std::to_string(offered) + " --seed-count " +
+                      std::to_string(offered) + " --steps 2 -o p.ply");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(std::filesystem::exists(dir + "/p.ply")) << r.output;
 }

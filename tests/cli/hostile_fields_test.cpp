@@ -100,9 +100,9 @@ TEST(HostileFields, MeshesKeepEveryVertexInsideTheClipWhereFIsFinite) {
     SCOPED_TRACE(c.equation);
     const std::string obj = dir + "/m.obj", stats = dir + "/m.json";
     std::filesystem::remove(obj);
-    const auto r = run_command(zs("mesh '" + c.equation + "' --clip sphere:" +
-                                  std::to_string(c.clip_radius) + " -r 40 --improve 40 -o " +
-                                  obj + " --stats " + stats));
+    const auto r =
+        run_command(zs("mesh '" + c.equation + "' --clip sphere:" + std::to_string(c.clip_radius) +
+                       " -r 40 --improve 40 -o " + obj + " --stats " + stats));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_EQ(r.output.find("F is undefined") != std::string::npos, c.undefined_somewhere)
         << r.output;
@@ -132,8 +132,8 @@ TEST(HostileFields, APoleGetsNoWall) {
   ASSERT_FALSE(v.empty());
   for (const Vec3& p : v) ASSERT_NEAR(p.x(), 1.0, 1e-6) << p.transpose();
   // 1/(x² + y² − 1) has no zero at all, only a pole on a cylinder.
-  const auto none = run_command(zs("mesh '1/(x^2 + y^2 - 1)' --clip sphere:2 -r 32 -o " + dir +
-                                   "/none.obj"));
+  const auto none =
+      run_command(zs("mesh '1/(x^2 + y^2 - 1)' --clip sphere:2 -r 32 -o " + dir + "/none.obj"));
   ASSERT_EQ(none.exit_code, 0) << none.output;
   EXPECT_TRUE(obj_vertices(dir + "/none.obj").empty());
   EXPECT_NE(none.output.find("found no surface"), std::string::npos) << none.output;
@@ -171,8 +171,10 @@ TEST(HostileFields, AVanishingFieldIsNoSurfaceForMeshSampleAndRender) {
 // Floaters never leave the clip or stay where F is undefined; the file holds finite numbers.
 TEST(HostileFields, FloatersStayWhereFIsDefined) {
   const std::string dir = fresh_dir("hostile_sample");
-  const auto r = run_command(zs("sample 'sqrt(x) + y^2 + z^2 - 1' --clip sphere:2 --ascii "
-                                "--steps 150 --max-count 600 -o " + dir + "/s.ply"));
+  const auto r =
+      run_command(zs("sample 'sqrt(x) + y^2 + z^2 - 1' --clip sphere:2 --ascii "
+                     "--steps 150 --max-count 600 -o " +
+                     dir + "/s.ply"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("F is undefined (NaN or infinite) on"), std::string::npos) << r.output;
   EXPECT_FALSE(has_non_finite_word(read_text(dir + "/s.ply")));
@@ -188,8 +190,10 @@ TEST(HostileFields, FloatersStayWhereFIsDefined) {
 // first-order pull crawls. Settled floaters lie on the unit sphere.
 TEST(HostileFields, FloatersOfAHighDegreeSphereSettleOnIt) {
   const std::string dir = fresh_dir("hostile_degree");
-  const auto r = run_command(zs("sample '(x^2 + y^2 + z^2)^1000 - 1' --clip sphere:2 --ascii "
-                                "--max-count 400 -o " + dir + "/h.ply"));
+  const auto r =
+      run_command(zs("sample '(x^2 + y^2 + z^2)^1000 - 1' --clip sphere:2 --ascii "
+                     "--max-count 400 -o " +
+                     dir + "/h.ply"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("settled at step"), std::string::npos) << r.output;
   const std::vector<Vec3> v = ply_points(dir + "/h.ply");
@@ -228,8 +232,8 @@ TEST(HostileFields, ExportsRefuseNonFiniteCoefficients) {
     EXPECT_NE(r.output.find("not finite"), std::string::npos) << r.output;
     EXPECT_FALSE(std::filesystem::exists(pov));
   }
-  const auto ok = run_command(zs("export 'x^2 + y^2 + z^2 - 1' --clip sphere:2 -o " + dir +
-                                 "/ok.pov"));
+  const auto ok =
+      run_command(zs("export 'x^2 + y^2 + z^2 - 1' --clip sphere:2 -o " + dir + "/ok.pov"));
   ASSERT_EQ(ok.exit_code, 0) << ok.output;
   EXPECT_FALSE(has_non_finite_word(read_text(dir + "/ok.pov")));
 }

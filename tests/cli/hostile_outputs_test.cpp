@@ -108,7 +108,7 @@ bool wait_until(pid_t pid, const std::function<bool()>& ready) {
 TEST(HostileOutputs, TwoOutputsNamingOneFileAreRefusedBeforeAnyWork) {
   const std::string d = fresh_dir("hostile-same-file");
   fs::create_directories(d + "/sub");
-  fs::create_symlink("m.obj", d + "/m.json");      // dangling: m.obj does not exist yet
+  fs::create_symlink("m.obj", d + "/m.json");  // dangling: m.obj does not exist yet
   fs::create_symlink("p.png", d + "/p.json");
   const std::vector<std::string> cases = {
       "render sphere --size 16x16 -o " + d + "/a.png --stats " + d + "/a.png",
@@ -204,9 +204,9 @@ TEST(HostileOutputs, AReplacedOutputKeepsItsPermissionBits) {
   fs::permissions(d + "/m.obj", static_cast<fs::perms>(0600));
   put(d + "/a.png", "old picture");
   fs::permissions(d + "/a.png", static_cast<fs::perms>(0640));
-  auto r = run_command("umask 022 && exec " + zs("-q mesh sphere -r 8 -o " + d + "/m.obj --png " +
-                                                  d + "/a.png --size 16x16 --stats " + d +
-                                                  "/new.json"));
+  auto r =
+      run_command("umask 022 && exec " + zs("-q mesh sphere -r 8 -o " + d + "/m.obj --png " + d +
+                                            "/a.png --size 16x16 --stats " + d + "/new.json"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(contents(d).at("m.obj"), "old mesh");
   EXPECT_EQ(mode_of(d + "/m.obj"), 0600u);
@@ -259,8 +259,8 @@ TEST(HostileOutputs, AFullDiskIsAFailureAndTheEarlierOutputsAreNotWritten) {
 
 TEST(HostileOutputs, StandardOutputOnAFullDiskIsAFailure) {
   if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
-  for (const char* args : {"list", "eval sphere --at 1,0,0", "completion bash", "info sphere",
-                           "info kummer --json"}) {
+  for (const char* args :
+       {"list", "eval sphere --at 1,0,0", "completion bash", "info sphere", "info kummer --json"}) {
     // Standard output to the full device, its errors to the test (the group's 2>&1).
     const auto r = run_command("{ " + zs(args) + " > /dev/full; }");
     EXPECT_EQ(r.exit_code, 1) << args << "\n" << r.output;
@@ -268,7 +268,8 @@ TEST(HostileOutputs, StandardOutputOnAFullDiskIsAFailure) {
     // output, as the completion script's, leaves only the stream's error flag).
     EXPECT_TRUE(r.output.find("writing standard output failed") != std::string::npos ||
                 r.output.find("No space left on device") != std::string::npos)
-        << args << "\n" << r.output;
+        << args << "\n"
+        << r.output;
     EXPECT_EQ(run_command(zs(args) + " > /dev/null").exit_code, 0) << args;
   }
 }
@@ -276,8 +277,8 @@ TEST(HostileOutputs, StandardOutputOnAFullDiskIsAFailure) {
 TEST(HostileOutputs, TheViewersScreenshotAndStatsNamingOneFileAreRefused) {
   const std::string d = fresh_dir("hostile-view-same");
   for (const std::string& stats : {d + "/same.png", d + "/./same.png"}) {
-    const auto r = run_command(zs("view kummer --frames 2 --screenshot " + d +
-                                  "/same.png --stats-out " + stats));
+    const auto r = run_command(
+        zs("view kummer --frames 2 --screenshot " + d + "/same.png --stats-out " + stats));
     EXPECT_EQ(r.exit_code, 2) << r.output;
     EXPECT_NE(r.output.find("--stats-out"), std::string::npos) << r.output;
     EXPECT_TRUE(contents(d).empty()) << r.output;
@@ -302,8 +303,8 @@ TEST(HostileOutputs, AnOutputPathWrongBeforeAnyWorkIsBadInput) {
 /// Runs `args` with an old `target` in `d`; sends `sig` once `ready` holds (or, without it,
 /// after half a second); expects the process ended by the signal, no temp file and `d` as
 /// it was.
-void expect_interrupted_cleanly(const std::string& d, const std::vector<std::string>& args,
-                                int sig, const std::function<bool()>& ready = {}) {
+void expect_interrupted_cleanly(const std::string& d, const std::vector<std::string>& args, int sig,
+                                const std::function<bool()>& ready = {}) {
   const std::map<std::string, std::string> before = contents(d);
   const std::string log = d + ".log";
   const pid_t pid = spawn(args, log);
@@ -326,10 +327,10 @@ TEST(HostileOutputs, SigintAndSigtermDuringALongRenderLeaveTheOldPicture) {
   const std::string d = fresh_dir("hostile-signal-render");
   put(d + "/a.png", "old picture");
   for (const int sig : {SIGINT, SIGTERM})
-    expect_interrupted_cleanly(
-        d, {"render", "kummer", "--size", "3000x3000", "--aa", "3", "-o", d + "/a.png",
-            "--stats", d + "/a.json"},
-        sig);
+    expect_interrupted_cleanly(d,
+                               {"render", "kummer", "--size", "3000x3000", "--aa", "3", "-o",
+                                d + "/a.png", "--stats", d + "/a.json"},
+                               sig);
 }
 
 TEST(HostileOutputs, ASignalWhileAMeshIsStagedRemovesIt) {
@@ -339,23 +340,25 @@ TEST(HostileOutputs, ASignalWhileAMeshIsStagedRemovesIt) {
   put(d + "/m.obj", "old mesh");
   const auto staged = [&] { return has_staged_file(d); };
   for (const int sig : {SIGINT, SIGTERM})
-    expect_interrupted_cleanly(d, {"mesh", "sphere", "-r", "24", "--improve", "off", "-o",
-                                   d + "/m.obj", "--png", d + "/m.png", "--size", "4000x4000"},
+    expect_interrupted_cleanly(d,
+                               {"mesh", "sphere", "-r", "24", "--improve", "off", "-o",
+                                d + "/m.obj", "--png", d + "/m.png", "--size", "4000x4000"},
                                sig, staged);
 }
 
 TEST(HostileOutputs, ASignalWhileFloatersAreStagedRemovesThem) {
   const std::string d = fresh_dir("hostile-signal-sample");
   const auto staged = [&] { return has_staged_file(d); };
-  expect_interrupted_cleanly(d, {"sample", "sphere", "--max-count", "200", "--steps", "5", "-o",
-                                 d + "/s.ply", "--png", d + "/s.png", "--size", "4000x4000"},
+  expect_interrupted_cleanly(d,
+                             {"sample", "sphere", "--max-count", "200", "--steps", "5", "-o",
+                              d + "/s.ply", "--png", d + "/s.png", "--size", "4000x4000"},
                              SIGTERM, staged);
 }
 
 // ---- animations -------------------------------------------------------------------------------
 
-const std::vector<std::string> kAnimate = {"animate", "torus", "--param", "r=0.2:0.9",
-                                           "--size", "40x32", "--aa", "1", "--no-video"};
+const std::vector<std::string> kAnimate = {"animate", "torus", "--param", "r=0.2:0.9", "--size",
+                                           "40x32",   "--aa",  "1",       "--no-video"};
 
 std::string animate(const std::string& extra) {
   return zs("animate torus --param r=0.2:0.9 --size 40x32 --aa 1 --no-video " + extra);

@@ -75,8 +75,8 @@ TEST(KummerFamily, InfoListsAllSixteenNodesAtTheEndOfTheRange) {
 }
 
 TEST(KummerFamily, ClipExpressionsOnTheCommandLine) {
-  const auto ok = run_command(
-      zs("info \"x^2 + y^2 + z^2 - a\" --param a=4 --clip \"sphere:1.5*sqrt(a)\""));
+  const auto ok =
+      run_command(zs("info \"x^2 + y^2 + z^2 - a\" --param a=4 --clip \"sphere:1.5*sqrt(a)\""));
   EXPECT_EQ(ok.exit_code, 0) << ok.output;
   EXPECT_NE(ok.output.find("sphere:1.5*sqrt(a)"), std::string::npos) << ok.output;
   for (const char* clip : {"sphere:b", "sphere:sqrt(a", "sphere:x*a", "sphere:log(a-4)",

@@ -13,9 +13,7 @@
 namespace zeroset {
 namespace {
 
-bool encloses(const Interval& e, double v) {
-  return !std::isfinite(v) || (e.lo <= v && v <= e.hi);
-}
+bool encloses(const Interval& e, double v) { return !std::isfinite(v) || (e.lo <= v && v <= e.hi); }
 
 // F and ∇F at points of a box lie in the box's enclosures, for every operation of the tape.
 TEST(IntervalEvaluator, EnclosesTheFieldAndItsGradientOverABox) {

@@ -57,8 +57,8 @@ TEST(Cancellation, AStoppedFloaterSystemSkipsTheLongSetUp) {
   FloaterSystem stopped(s, o, source.get_token());
   const double stopped_s = seconds_since(t0);
   // The area estimate alone is 400,000 candidates, each tested against 256 clip parts.
-  EXPECT_LT(stopped_s, 0.2 * full_s) << "full set-up " << full_s << " s, stopped " << stopped_s
-                                     << " s";
+  EXPECT_LT(stopped_s, 0.2 * full_s)
+      << "full set-up " << full_s << " s, stopped " << stopped_s << " s";
 }
 
 }  // namespace

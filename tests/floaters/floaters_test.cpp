@@ -8,12 +8,12 @@
 #include <cmath>
 #include <vector>
 
-#include "zeroset/error.h"
 #include "floater_test_support.h"
+#include "support/equation.h"
+#include "zeroset/error.h"
 #include "zeroset/floaters/metrics.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/scene.h"
-#include "support/equation.h"
 
 #ifdef _OPENMP
 #include <omp.h>

@@ -7,8 +7,8 @@
 #include <cmath>
 #include <numbers>
 
-#include "zeroset/surface/scene.h"
 #include "support/equation.h"
+#include "zeroset/surface/scene.h"
 
 namespace zeroset {
 namespace {

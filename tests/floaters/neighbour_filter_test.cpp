@@ -90,8 +90,8 @@ TEST(NeighbourFilter, BoxKeepsWhatAnyFloaterInTheBoxKeeps) {
     for (FilterPath path : available_paths()) {
       SCOPED_TRACE(static_cast<int>(path));
       std::vector<std::uint32_t> box(c.x.size() + kFilterPad), one(c.x.size() + kFilterPad);
-      box.resize(filter_box(path, c.ranges, c.x.data(), c.y.data(), c.z.data(), c.cut.data(),
-                            lo, hi, reach, box.data()));
+      box.resize(filter_box(path, c.ranges, c.x.data(), c.y.data(), c.z.data(), c.cut.data(), lo,
+                            hi, reach, box.data()));
       ASSERT_TRUE(std::is_sorted(box.begin(), box.end()));
       for (std::size_t k = 0; k < fx.size(); ++k) {
         one.resize(c.x.size() + kFilterPad);

@@ -98,8 +98,7 @@ struct Scene {
 Scene make_scene(std::uint64_t seed, std::size_t count) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1, 1), radius(0.05, 0.2);
-  Scene scene{count,
-              Records(new (std::align_val_t{64}) double[count * kRecordFields]),
+  Scene scene{count, Records(new (std::align_val_t{64}) double[count * kRecordFields]),
               std::vector<std::uint64_t>(count)};
   for (std::size_t k = 0; k < count; ++k) {
     double* r = scene.records.get() + kRecordFields * k;
@@ -150,13 +149,12 @@ Candidates make_candidates(std::uint64_t seed, std::size_t count) {
 
 constexpr double kOwnLimit = 0.75;
 
-std::vector<PairSums> sums(FilterPath path, bool scaled, const PairConstants& k,
-                           const Scene& scene, const Candidates& c) {
+std::vector<PairSums> sums(FilterPath path, bool scaled, const PairConstants& k, const Scene& scene,
+                           const Candidates& c) {
   PairBatch batch(path);
   std::vector<PairSums> out(scene.count, PairSums{0, 0, 0, 0, 0, kOwnLimit});
   for (std::size_t s = 0; s < scene.count; ++s) {
-    batch.add(static_cast<std::uint32_t>(s), c.slots.data(), c.near.data() + c.first[s],
-              c.kept[s]);
+    batch.add(static_cast<std::uint32_t>(s), c.slots.data(), c.near.data() + c.first[s], c.kept[s]);
     if (batch.pairs() > 40 || s + 1 == scene.count)
       batch.accumulate(scaled, k, scene.records.get(), scene.ids.data(), out);
   }

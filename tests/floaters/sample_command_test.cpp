@@ -136,9 +136,9 @@ TEST_F(SampleCommand, BadInputExitsWithTwoAndWritesNothing) {
   EXPECT_EQ(bad_scene.exit_code, 2);
   EXPECT_NE(bad_scene.output.find("/floaters/max_count"), std::string::npos) << bad_scene.output;
   fs::remove(path("bad.json"));
-  for (const char* entry : {R"("feedback": 100)", R"("equilibrium_speed": -1)",
-                            R"("estimator_interval": 0)", R"("energy_taper": "off")",
-                            R"("clip_newton": 0)"}) {
+  for (const char* entry :
+       {R"("feedback": 100)", R"("equilibrium_speed": -1)", R"("estimator_interval": 0)",
+        R"("energy_taper": "off")", R"("clip_newton": 0)"}) {
     {
       std::ofstream scene(path("bad.json"));
       scene << R"({"name": "kummer", "floaters": {)" << entry << "}}";
@@ -170,8 +170,10 @@ TEST_F(SampleCommand, RadiusOutsideItsRangeIsKeptInsideAndSaidSo) {
 
 TEST_F(SampleCommand, FloatersThatFindNoSurfaceAreReported) {
   // F ≥ 1 everywhere: floaters gather at the minimum of F, off any surface.
-  const auto none = run("sample \"x^2 + y^2 + z^2 + 1\" --clip sphere:1 --max-count 100 "
-                        "--steps 300 -o " + path("n.ply"));
+  const auto none =
+      run("sample \"x^2 + y^2 + z^2 + 1\" --clip sphere:1 --max-count 100 "
+          "--steps 300 -o " +
+          path("n.ply"));
   EXPECT_EQ(none.exit_code, 0) << none.output;
   EXPECT_NE(none.output.find("warning"), std::string::npos) << none.output;
   EXPECT_NE(none.output.find("not on F = 0"), std::string::npos) << none.output;

@@ -37,8 +37,8 @@ TEST(SampleSurface, SettlesAndMeasuresOnRequest) {
   EXPECT_EQ(r.singular->points.size(), 16u);
   EXPECT_LT(r.metrics->residual_median, 1e-3 * s.scene_radius());
   const nlohmann::json j = r.to_json();
-  for (const char* key : {"surface", "parameters", "options", "steps", "converged_at_step",
-                          "field", "metrics", "singular_set", "singular_coverage"})
+  for (const char* key : {"surface", "parameters", "options", "steps", "converged_at_step", "field",
+                          "metrics", "singular_set", "singular_coverage"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["options"]["radius"].get<double>(), r.system->nominal_radius());
   EXPECT_FALSE(j.contains("animation"));
@@ -49,8 +49,8 @@ TEST(SampleSurface, AnimatesFromTheFirstValueWithTheClipFollowing) {
   // it must follow the parameter from the start value on.
   const Surface s = test::catalog_surface("kummer");
   SampleRun run;
-  run.animation = SampleAnimation{.parameter = "mu", .from = 1.2, .to = 4.5, .steps = 20,
-                                  .settle_steps = 150};
+  run.animation =
+      SampleAnimation{.parameter = "mu", .from = 1.2, .to = 4.5, .steps = 20, .settle_steps = 150};
   const SampleResult r = sample_surface(s, few(200), run);
   ASSERT_TRUE(r.animation && r.system);
   EXPECT_LE(r.animation->settle_steps, 150u);

@@ -7,8 +7,8 @@
 #include <set>
 #include <string>
 
-#include "zeroset/floaters/floaters.h"
 #include "floater_test_support.h"
+#include "zeroset/floaters/floaters.h"
 #include "zeroset/floaters/metrics.h"
 #include "zeroset/surface/scene.h"
 #include "zeroset/surface/singular_set.h"

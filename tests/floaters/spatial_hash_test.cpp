@@ -60,8 +60,8 @@ void expect_forward_ranges_list_each_pair_once(const std::vector<Vec3>& points, 
       for (int r = 0; r < count; ++r) {
         ASSERT_LT(ranges[r].first, ranges[r].second);
         for (std::uint32_t t = ranges[r].first; t < ranges[r].second; ++t) {
-          const std::int64_t dz = SpatialHash::layer(hash.runs()[run_of[t]].key) -
-                                  SpatialHash::layer(run.key);
+          const std::int64_t dz =
+              SpatialHash::layer(hash.runs()[run_of[t]].key) - SpatialHash::layer(run.key);
           ASSERT_TRUE(dz == 0 || dz == 1) << "a forward cell " << dz << " layers away";
           ASSERT_NE(run_of[t], run_of[s]);
           partners.push_back(t);

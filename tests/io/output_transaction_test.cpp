@@ -12,9 +12,9 @@
 #include <set>
 #include <stdexcept>
 
+#include "support/scratch_dir.h"
 #include "zeroset/error.h"
 #include "zeroset/io/atomic_file.h"
-#include "support/scratch_dir.h"
 
 namespace zeroset {
 namespace {
@@ -34,7 +34,6 @@ class OutputTransactionTest : public test::ScratchDirTest {
   static auto writes(const std::string& text) {
     return [text](std::ostream& out) { out << text; };
   }
-
 };
 
 TEST_F(OutputTransactionTest, OutputsAppearTogetherAtCommit) {
@@ -112,8 +111,9 @@ TEST_F(OutputTransactionTest, TwoOutputsNamingOneFileAreRefusedBySpelling) {
   // Relative spellings, as a command line gives them.
   const fs::path cwd = fs::current_path();
   fs::current_path(dir_);
-  for (const auto& [first, second] : {std::pair{"a.png", "./a.png"}, std::pair{"a.png", "sub/../a.png"},
-                                      std::pair{"real.png", "link.png"}}) {
+  for (const auto& [first, second] :
+       {std::pair{"a.png", "./a.png"}, std::pair{"a.png", "sub/../a.png"},
+        std::pair{"real.png", "link.png"}}) {
     OutputTransaction tx;
     tx.declare(first, "-o");
     EXPECT_THROW(tx.declare(second, "--stats"), InvalidArgument) << first << " " << second;
@@ -130,7 +130,7 @@ TEST_F(OutputTransactionTest, ASymbolicLinkIsWrittenThroughAndStaysALink) {
   fs::create_directories(path("elsewhere"));
   put(path("elsewhere/real.txt"), "old");
   fs::create_symlink("elsewhere/real.txt", path("link.txt"));
-  fs::create_symlink("link.txt", path("link2.txt"));               // a chain
+  fs::create_symlink("link.txt", path("link2.txt"));              // a chain
   fs::create_symlink("elsewhere/new.txt", path("dangling.txt"));  // its target does not exist yet
   write_file_atomically(path("link2.txt"), writes("new"));
   write_file_atomically(path("dangling.txt"), writes("made"));

@@ -91,8 +91,8 @@ TEST_F(IoPlyTest, RoundTripInBothFormats) {
 // Every number is written as a float: one that is not finite or beyond a float's range would
 // become a word no reader parses, so the file is refused and nothing is written.
 TEST_F(IoPlyTest, NumbersThatAreNotFiniteFloatsAreRefused) {
-  for (double bad : {std::numeric_limits<double>::quiet_NaN(),
-                     std::numeric_limits<double>::infinity(), 1e39}) {
+  for (double bad :
+       {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(), 1e39}) {
     for (int where = 0; where < 3; ++where) {
       PlyContent c = mesh_content();
       std::vector<Vec3> positions = positions_, normals = normals_;

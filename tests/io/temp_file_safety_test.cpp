@@ -17,10 +17,10 @@
 #include <thread>
 #include <vector>
 
+#include "support/scratch_dir.h"
 #include "zeroset/error.h"
 #include "zeroset/io/atomic_file.h"
 #include "zeroset/io/output_transaction.h"
-#include "support/scratch_dir.h"
 
 namespace zeroset {
 namespace {
@@ -48,8 +48,8 @@ class TempFileSafetyTest : public test::ScratchDirTest {
                                     const std::string& victim, int ids) const {
     std::set<std::string> planted;
     const std::string pid = std::to_string(::getpid());
-    for (int id = 0; id < ids; ++id) planted.insert("." + stem + ".tmp-" + pid + "-" +
-                                                    std::to_string(id) + ext);
+    for (int id = 0; id < ids; ++id)
+      planted.insert("." + stem + ".tmp-" + pid + "-" + std::to_string(id) + ext);
     for (const std::string& guess :
          std::vector<std::string>{"0000000000000000", "vvvvvvvvvvvvvvvv", "0", pid})
       planted.insert("." + stem + ".tmp-" + guess + ext);

@@ -23,7 +23,8 @@ std::vector<std::pair<const std::uint8_t*, const std::uint16_t*>> table_cycles(i
     int start = 0;
     for (int c = 0; c < p.cycle_count; ++c) {
       if (p.cycle_length[static_cast<size_t>(c)] == n)
-        out.emplace_back(&p.edges[static_cast<size_t>(start)], &p.chords[static_cast<size_t>(start)]);
+        out.emplace_back(&p.edges[static_cast<size_t>(start)],
+                         &p.chords[static_cast<size_t>(start)]);
       start += p.cycle_length[static_cast<size_t>(c)];
     }
   }
@@ -45,8 +46,8 @@ double worst(const std::vector<Tri>& tris, const std::array<Vec3, 12>& p) {
   for (const Tri& t : tris) {
     const Vec3 &a = p[static_cast<size_t>(t[0])], &b = p[static_cast<size_t>(t[1])],
                &c = p[static_cast<size_t>(t[2])];
-    w = std::min(w, triangle_quality((b - a).squaredNorm(), (c - a).squaredNorm(),
-                                     (c - b).squaredNorm()));
+    w = std::min(
+        w, triangle_quality((b - a).squaredNorm(), (c - a).squaredNorm(), (c - b).squaredNorm()));
   }
   return w;
 }
@@ -61,7 +62,8 @@ bool respects_chords(const std::vector<Tri>& tris, const std::uint8_t* edges,
   };
   for (const Tri& t : tris)
     for (int k = 0; k < 3; ++k) {
-      const int a = index(t[static_cast<size_t>(k)]), b = index(t[static_cast<size_t>((k + 1) % 3)]);
+      const int a = index(t[static_cast<size_t>(k)]),
+                b = index(t[static_cast<size_t>((k + 1) % 3)]);
       if (a < 0 || b < 0) return false;
       const int lo = std::min(a, b), hi = std::max(a, b);
       if (!((chords[lo] >> hi) & 1)) return false;
@@ -90,7 +92,8 @@ void for_random_cycles(int n, std::uint64_t seed, Check&& check) {
     const auto& chords = cycle.second;
     const std::array<Vec3, 12> p = random_points(rng);
     auto pos = [&](int e) -> const Vec3& { return p[static_cast<size_t>(e)]; };
-    const auto fast = triangles_of([&](auto emit) { triangulate_cycle(edges, chords, n, pos, emit); });
+    const auto fast =
+        triangles_of([&](auto emit) { triangulate_cycle(edges, chords, n, pos, emit); });
     const auto general =
         triangles_of([&](auto emit) { triangulate_polygon(edges, chords, n, pos, emit); });
     SCOPED_TRACE(testing::Message() << "trial " << trial);
@@ -102,9 +105,8 @@ void for_random_cycles(int n, std::uint64_t seed, Check&& check) {
 }
 
 TEST(CellTriangulation, PentagonsAreSplitExactlyAsByTheGeneralProgramme) {
-  for_random_cycles(5, 11, [](const auto&, const auto& fast, const auto& general) {
-    ASSERT_EQ(fast, general);
-  });
+  for_random_cycles(
+      5, 11, [](const auto&, const auto& fast, const auto& general) { ASSERT_EQ(fast, general); });
 }
 
 TEST(CellTriangulation, QuadrilateralsTakeTheBetterAllowedDiagonal) {

@@ -48,7 +48,8 @@ class TriangleBins {
   TriangleBins(const Mesh& m, double cell) : m_(m), cell_(cell) {
     for (std::uint32_t t = 0; t < m.triangles.size(); ++t) {
       Vec3 lo = m.positions[m.triangles[t][0]], hi = lo;
-      for (std::uint32_t v : m.triangles[t]) lo = lo.cwiseMin(m.positions[v]), hi = hi.cwiseMax(m.positions[v]);
+      for (std::uint32_t v : m.triangles[t])
+        lo = lo.cwiseMin(m.positions[v]), hi = hi.cwiseMax(m.positions[v]);
       const auto a = key(lo), b = key(hi);
       for (long long i = a[0]; i <= b[0]; ++i)
         for (long long j = a[1]; j <= b[1]; ++j)
@@ -65,8 +66,10 @@ class TriangleBins {
           if (it == bins_.end()) continue;
           for (std::uint32_t t : it->second) {
             const auto& tri = m_.triangles[t];
-            best = std::min(best, (p - closest_on_triangle(p, m_.positions[tri[0]], m_.positions[tri[1]],
-                                                           m_.positions[tri[2]])).norm());
+            best =
+                std::min(best, (p - closest_on_triangle(p, m_.positions[tri[0]],
+                                                        m_.positions[tri[1]], m_.positions[tri[2]]))
+                                   .norm());
           }
         }
     return best;
@@ -74,7 +77,8 @@ class TriangleBins {
 
  private:
   std::array<long long, 3> key(const Vec3& p) const {
-    return {static_cast<long long>(std::floor(p.x() / cell_)), static_cast<long long>(std::floor(p.y() / cell_)),
+    return {static_cast<long long>(std::floor(p.x() / cell_)),
+            static_cast<long long>(std::floor(p.y() / cell_)),
             static_cast<long long>(std::floor(p.z() / cell_))};
   }
   const Mesh& m_;
@@ -169,7 +173,8 @@ void check_crossing_mesh(const Surface& s, int cells, const Expect& expect = {})
     ++crossing;
     for (size_t i = 0; i < c.points.size(); ++i) {
       const Vec3& p = c.points[i];
-      const double tolerance = expect.curve_tolerance_edges > 0 ? expect.curve_tolerance_edges * e : 1e-6 * radius;
+      const double tolerance =
+          expect.curve_tolerance_edges > 0 ? expect.curve_tolerance_edges * e : 1e-6 * radius;
       ASSERT_LE(bins.distance(p), tolerance) << "curve point " << p.transpose();
       if (i == 0 || i + 1 == c.points.size()) continue;
       // Half an edge out along each sheet, projected onto F = 0: on the mesh.
@@ -203,8 +208,10 @@ void check_crossing_mesh(const Surface& s, int cells, const Expect& expect = {})
       if (near_special(mid)) continue;
       const int n = count[{std::min(a, b), std::max(a, b)}];
       ++curve_edges;
-      if (n == 4 || (expect.triple_line && n == 6)) ++four;
-      else ADD_FAILURE() << "curve edge at " << mid.transpose() << " has " << n << " triangles";
+      if (n == 4 || (expect.triple_line && n == 6))
+        ++four;
+      else
+        ADD_FAILURE() << "curve edge at " << mid.transpose() << " has " << n << " triangles";
     }
   }
   EXPECT_GT(curve_edges, 0);
@@ -223,7 +230,8 @@ void check_crossing_mesh(const Surface& s, int cells, const Expect& expect = {})
   for (const auto& t : m.triangles) {
     const Vec3 c = (m.positions[t[0]] + m.positions[t[1]] + m.positions[t[2]]) / 3;
     if (set.distance(c) < 2 * e || near_special(c)) continue;
-    const Vec3 n = (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]);
+    const Vec3 n =
+        (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]);
     if (n.dot(ev.sample(c, true, false).gradient) < 0) ++flipped;
   }
   EXPECT_LE(flipped, expect.max_flipped);

@@ -37,7 +37,8 @@ std::vector<Case> exact_zero_surfaces() {
   out.push_back({"whitney", test::equation("x^2 - y^2*z", Clip::sphere(2))});
   out.push_back({"cayley", test::catalog_surface("cayley")});
   out.push_back({"planes", test::catalog_surface("planes")});
-  for (double mu : {1.0, 2.0, 3.0}) out.push_back({"kummer " + std::to_string(mu), test::kummer(mu)});
+  for (double mu : {1.0, 2.0, 3.0})
+    out.push_back({"kummer " + std::to_string(mu), test::kummer(mu)});
   return out;
 }
 

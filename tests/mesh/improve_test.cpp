@@ -116,10 +116,13 @@ TEST(Improve, EverySwitchCanBeTurnedOff) {
   const Surface s = test::kummer(1.5, 3);
   Mesh m = polygonize(s, {.cells = 20});
   const size_t triangles = m.triangle_count();
-  const ImproveStats st = improve_mesh(m, s, {.max_steps = 10, .inertia = 0, .use_curvature = false,
-                                              .use_singularity = false,
-                                              .find_singular_points = false,
-                                              .flip_edges = false});
+  const ImproveStats st = improve_mesh(m, s,
+                                       {.max_steps = 10,
+                                        .inertia = 0,
+                                        .use_curvature = false,
+                                        .use_singularity = false,
+                                        .find_singular_points = false,
+                                        .flip_edges = false});
   EXPECT_EQ(st.flips, 0);
   EXPECT_TRUE(st.singular_points.empty());
   EXPECT_EQ(m.triangle_count(), triangles);

@@ -30,7 +30,8 @@ TEST(McTable, EveryCrossingEdgeIsInExactlyOneCycle) {
       for (int k = 0; k < total; ++k) ++seen[p.edges[k]];
       for (int e = 0; e < 12; ++e) {
         EXPECT_LE(seen[e], 1);
-        EXPECT_EQ(seen[e] == 1, ((kCrossingEdges[c] >> e) & 1) != 0) << "case " << c << " edge " << e;
+        EXPECT_EQ(seen[e] == 1, ((kCrossingEdges[c] >> e) & 1) != 0)
+            << "case " << c << " edge " << e;
       }
     }
 }
@@ -129,14 +130,17 @@ TEST(McTable, AsymptoticDeciderFollowsTheBilinearSaddle) {
   int checked = 0;
   while (checked < 2000) {
     const double v00 = uniform(), v10 = uniform(), v11 = uniform(), v01 = uniform();
-    const bool ambiguous = (v00 >= 0) == (v11 >= 0) && (v10 >= 0) == (v01 >= 0) && (v00 >= 0) != (v10 >= 0);
+    const bool ambiguous =
+        (v00 >= 0) == (v11 >= 0) && (v10 >= 0) == (v01 >= 0) && (v00 >= 0) != (v10 >= 0);
     if (!ambiguous) continue;
     const double den = v00 - v10 - v01 + v11;
     const double u = (v00 - v01) / den, v = (v00 - v10) / den;
-    const double saddle = v00 * (1 - u) * (1 - v) + v10 * u * (1 - v) + v11 * u * v + v01 * (1 - u) * v;
+    const double saddle =
+        v00 * (1 - u) * (1 - v) + v10 * u * (1 - v) + v11 * u * v + v01 * (1 - u) * v;
     if (std::abs(saddle) < 1e-9) continue;
     EXPECT_EQ(positive_corners_connected(v00, v10, v11, v01), saddle > 0);
-    EXPECT_EQ(positive_corners_connected(v00, v10, v11, v01), positive_corners_connected(v10, v00, v01, v11));
+    EXPECT_EQ(positive_corners_connected(v00, v10, v11, v01),
+              positive_corners_connected(v10, v00, v01, v11));
     ++checked;
   }
 }

@@ -50,9 +50,7 @@ TEST(MeasuredWorkers, ABusyMachineSwitchesToOneWorker) {
 TEST(MeasuredWorkers, TheChoiceFollowsTheLoad) {
   MeasuredWorkers m(2);
   bool busy = true;
-  auto seconds = [&](int w) {
-    return busy ? (w == 2 ? 0.020 : 0.014) : (w == 2 ? 0.005 : 0.010);
-  };
+  auto seconds = [&](int w) { return busy ? (w == 2 ? 0.020 : 0.014) : (w == 2 ? 0.005 : 0.010); };
   run_steps(m, 60, seconds);
   EXPECT_EQ(m.current(), 1);
   busy = false;

@@ -81,7 +81,8 @@ TEST_F(MeshIo, RejectsUnknownExtensionListingKnownOnes) {
     FAIL();
   } catch (const InvalidArgument& e) {
     const std::string what = e.what();
-    for (const char* ext : {".obj", ".ply", ".stl", ".glb"}) EXPECT_NE(what.find(ext), std::string::npos);
+    for (const char* ext : {".obj", ".ply", ".stl", ".glb"})
+      EXPECT_NE(what.find(ext), std::string::npos);
   }
   EXPECT_FALSE(fs::exists(path("mesh.xyz")));
   EXPECT_THROW(check_mesh_path(path("noext")), InvalidArgument);
@@ -124,8 +125,8 @@ TEST_F(MeshIo, GlbJsonChunkIsReadWithTheSceneFilesLimits) {
     std::ofstream(path(name), std::ios::binary) << bytes;
     return path(name);
   };
-  const std::string deep = glb("deep.glb", "{\"extras\":" + std::string(100000, '[') +
-                                               std::string(100000, ']') + "}");
+  const std::string deep =
+      glb("deep.glb", "{\"extras\":" + std::string(100000, '[') + std::string(100000, ']') + "}");
   try {
     read_mesh(deep);
     FAIL() << "deep JSON accepted";

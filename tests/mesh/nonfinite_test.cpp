@@ -33,7 +33,8 @@ TEST(PolygonizeNonFinite, APoleMakesNoVertices) {
 TEST(PolygonizeNonFinite, InfiniteNodesHoldNoVertex) {
   const Surface s = test::equation("1/x - 1", Clip::sphere(2));
   PolygonizeStats st;
-  const Mesh m = polygonize(s, {.bounds = Box3::cube(2), .cells = 32, .mode = GridMode::kDense}, &st);
+  const Mesh m =
+      polygonize(s, {.bounds = Box3::cube(2), .cells = 32, .mode = GridMode::kDense}, &st);
   EXPECT_GT(st.nan_samples, 0);
   for (const Vec3& p : m.positions) ASSERT_NEAR(p.x(), 1.0, 1e-9) << p.transpose();
 }

@@ -24,12 +24,13 @@ TEST(ExceptionTrap, BadAllocInAWorkerReachesTheCaller) {
   auto loop = [&] {
     ExceptionTrap trap;
 #pragma omp parallel for num_threads(kThreads) schedule(dynamic, 1)
-    for (long long i = 0; i < kPieces; ++i) trap.run([&] {
-      while (i == 100 && ran.load() < 100) std::this_thread::yield();
-      while (i > 100 && !trap.failed()) std::this_thread::yield();
-      ++ran;
-      if (i == 100) throw std::bad_alloc();
-    });
+    for (long long i = 0; i < kPieces; ++i)
+      trap.run([&] {
+        while (i == 100 && ran.load() < 100) std::this_thread::yield();
+        while (i > 100 && !trap.failed()) std::this_thread::yield();
+        ++ran;
+        if (i == 100) throw std::bad_alloc();
+      });
     trap.rethrow();
   };
   EXPECT_THROW(loop(), std::bad_alloc);

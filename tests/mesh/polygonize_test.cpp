@@ -171,7 +171,8 @@ TEST(Polygonize, SparseGridMatchesDenseGrid) {
   const Surface s = test::kummer(1.5, 3);
   PolygonizeStats sd, ss;
   const Mesh dense = polygonize(s, {.cells = 40, .mode = GridMode::kDense}, &sd);
-  const Mesh sparse = polygonize(s, {.cells = 40, .mode = GridMode::kSparse, .brick_cells = 4}, &ss);
+  const Mesh sparse =
+      polygonize(s, {.cells = 40, .mode = GridMode::kSparse, .brick_cells = 4}, &ss);
   EXPECT_TRUE(ss.sparse);
   EXPECT_EQ(sorted(sparse.triangles), sorted(dense.triangles));
   EXPECT_EQ(sparse.positions, dense.positions);
@@ -200,7 +201,8 @@ TEST(Polygonize, DenseSlabsMatchSparseBricksOnAnUnevenGrid) {
 TEST(Polygonize, SparseGridSkipsEmptySpace) {
   const Surface s = test::catalog_surface("torus");
   PolygonizeStats ss;
-  const Mesh sparse = polygonize(s, {.cells = 96, .mode = GridMode::kSparse, .brick_cells = 4}, &ss);
+  const Mesh sparse =
+      polygonize(s, {.cells = 96, .mode = GridMode::kSparse, .brick_cells = 4}, &ss);
   const Mesh dense = polygonize(s, {.cells = 96, .mode = GridMode::kDense});
   EXPECT_LT(ss.bricks_kept, ss.bricks / 2);
   EXPECT_EQ(sorted(sparse.triangles), sorted(dense.triangles));
@@ -235,7 +237,8 @@ TEST(Polygonize, ResultDoesNotDependOnThreadCount) {
 TEST(Polygonize, ReturnsEmptyWhenStopped) {
   std::stop_source src;
   src.request_stop();
-  EXPECT_TRUE(polygonize(test::catalog_surface("sphere"), {.cells = 30}, nullptr, src.get_token()).empty());
+  EXPECT_TRUE(
+      polygonize(test::catalog_surface("sphere"), {.cells = 30}, nullptr, src.get_token()).empty());
 }
 
 TEST(Polygonize, RejectsBadOptions) {

@@ -197,11 +197,10 @@ TEST(Remesh, FixedBoundaryStays) {
   size_t kept = 0;
   for (size_t v = 0; v < m.positions.size(); ++v)
     if (m.is_boundary[v])
-      kept += std::binary_search(border.begin(), border.end(), m.positions[v],
-                                 [](const Vec3& a, const Vec3& b) {
-                                   return std::lexicographical_compare(a.data(), a.data() + 3,
-                                                                       b.data(), b.data() + 3);
-                                 });
+      kept += std::binary_search(
+          border.begin(), border.end(), m.positions[v], [](const Vec3& a, const Vec3& b) {
+            return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+          });
   EXPECT_EQ(kept, border.size());
 }
 
@@ -264,7 +263,8 @@ TEST(Remesh, RomanCrossingCurvesKeepTheirFourTriangles) {
     ++checked;
     Vec3 g;
     ev.value_gradient(c, g);
-    const Vec3 n = (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]);
+    const Vec3 n =
+        (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]);
     flipped += n.dot(g) < 0;
   }
   EXPECT_GT(checked, m.triangles.size() / 2);

@@ -21,8 +21,7 @@ using test::equation;
 TEST(RaycastNonFinite, AnUndefinedFieldCostsABoundedBudgetPerRay) {
   const Surface s = equation("1/(x - x) - 1", Clip::sphere(2));
   SurfaceRayCaster caster(s, Vec3(0, 0, 6));
-  for (int k = 0; k < 20; ++k)
-    EXPECT_FALSE(caster.first_hit(Vec3(0.01 * k, 0.02, -1)).has_value());
+  for (int k = 0; k < 20; ++k) EXPECT_FALSE(caster.first_hit(Vec3(0.01 * k, 0.02, -1)).has_value());
   EXPECT_EQ(caster.abandoned_rays(), 20);
   RenderOptions o;
   o.width = o.height = 48;
@@ -56,8 +55,8 @@ TEST(RaycastNonFinite, AVanishingFieldShowsNoSurface) {
 
 // A field defined along every ray needs far less than the budget: nothing is given up.
 TEST(RaycastNonFinite, DefinedFieldsGiveUpNoRay) {
-  for (const char* eq : {"sin(3*x) + sin(3*y) + sin(3*z)", "sqrt(x^2 + y^2 + 0.01) - 0.5 - z^2",
-                         "1/x - 1"}) {
+  for (const char* eq :
+       {"sin(3*x) + sin(3*y) + sin(3*z)", "sqrt(x^2 + y^2 + 0.01) - 0.5 - z^2", "1/x - 1"}) {
     SCOPED_TRACE(eq);
     const Surface s = equation(eq, Clip::sphere(2));
     RenderOptions o;

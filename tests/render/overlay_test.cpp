@@ -9,12 +9,12 @@
 #include <vector>
 
 #include "render/sphere_shapes.h"
+#include "support/equation.h"
 #include "zeroset/error.h"
 #include "zeroset/render/render.h"
 #include "zeroset/render/view.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/singular_set.h"
-#include "support/equation.h"
 
 namespace zeroset {
 namespace {

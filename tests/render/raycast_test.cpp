@@ -180,9 +180,9 @@ TEST_P(CatalogRays, FirstHitAgreesWithDenseReference) {
   constexpr int kEyes = 20, kRaysPerEye = 500;
   for (int e = 0; e < kEyes; ++e) {
     // Eyes outside the scene at camera-like distances, and a few inside the clip volume.
-    const Vec3 eye = e % 5 == 4 ? Vec3(box.center() + 0.3 * radius * random_unit(rng))
-                                : Vec3(box.center() + radius * (2.5 + 2 * std::abs(u(rng))) *
-                                                          random_unit(rng));
+    const Vec3 eye =
+        e % 5 == 4 ? Vec3(box.center() + 0.3 * radius * random_unit(rng))
+                   : Vec3(box.center() + radius * (2.5 + 2 * std::abs(u(rng))) * random_unit(rng));
     SurfaceRayCaster caster(surface, eye);
     ASSERT_TRUE(caster.is_exact());
     for (int r = 0; r < kRaysPerEye; ++r) {
@@ -208,8 +208,8 @@ TEST_P(CatalogRays, FirstHitAgreesWithDenseReference) {
         continue;
       }
       ++hits;
-      ASSERT_TRUE(got) << "missed hit at t = " << ref.t << ", eye " << eye.transpose()
-                       << ", dir " << dir.transpose();
+      ASSERT_TRUE(got) << "missed hit at t = " << ref.t << ", eye " << eye.transpose() << ", dir "
+                       << dir.transpose();
       EXPECT_NEAR(*got, ref.t, 1e-7) << "eye " << eye.transpose() << ", dir " << dir.transpose();
     }
   }
@@ -262,8 +262,8 @@ TEST_P(CatalogRays, RowRaysAgreeWithDenseReferenceWhateverTheGuess) {
           ++misled;
         } else if (!std::isnan(last)) {
           guess.t = std::isnan(before_last) ? last : 2 * last - before_last;
-          guess.spread = 2 * (std::isnan(before_last) ? 0 : std::abs(last - before_last)) +
-                         1e-4 * last;
+          guess.spread =
+              2 * (std::isnan(before_last) ? 0 : std::abs(last - before_last)) + 1e-4 * last;
           ++guided;
         }
         SurfaceHit hit;
@@ -329,8 +329,8 @@ TEST_P(CatalogRays, ParallelRowRaysAgreeWithDenseReference) {
         RootGuess guess;
         if (!std::isnan(last)) {
           guess.t = std::isnan(before_last) ? last : 2 * last - before_last;
-          guess.spread = 2 * (std::isnan(before_last) ? 0 : std::abs(last - before_last)) +
-                         1e-4 * last;
+          guess.spread =
+              2 * (std::isnan(before_last) ? 0 : std::abs(last - before_last)) + 1e-4 * last;
         }
         SurfaceHit hit;
         const bool got = caster.intersect_in_row(s, hit, guess);
@@ -631,10 +631,9 @@ TEST(Raycast, IntervalPathAgreesWithExactPath) {
     std::uniform_real_distribution<double> u(-1, 1);
     int agree = 0, both = 0, n = 300;
     for (int i = 0; i < n; ++i) {
-      const Vec3 dir =
-          (surface.camera.target + 0.8 * surface.scene_radius() * Vec3(u(rng), u(rng), u(rng)) -
-           eye)
-              .normalized();
+      const Vec3 dir = (surface.camera.target +
+                        0.8 * surface.scene_radius() * Vec3(u(rng), u(rng), u(rng)) - eye)
+                           .normalized();
       const auto a = exact.first_hit(dir), b = interval.first_hit(dir);
       both += a.has_value() && b.has_value();
       agree += a.has_value() == b.has_value() && (!a || std::abs(*a - *b) < 1e-7);

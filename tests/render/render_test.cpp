@@ -13,13 +13,13 @@
 #include "render/image_masks.h"
 #include "render/render_detail.h"
 #include "render/sphere_shapes.h"
+#include "support/equation.h"
 #include "zeroset/error.h"
 #include "zeroset/render/raycast.h"
 #include "zeroset/render/view.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/jsurf.h"
 #include "zeroset/surface/scene.h"
-#include "support/equation.h"
 
 namespace zeroset {
 namespace {
@@ -265,8 +265,8 @@ TEST(RenderSurface, MatchesCastingEveryPixelOnItsOwn) {
       for (int x = 0; x < o.width; ++x) {
         const Vec3 dir = v.direction(x + 0.5, y + 0.5);
         SurfaceHit hit;
-        const Color c = caster.intersect(dir, hit) ? shader.shade(hit.normal, dir, hit.front)
-                                                   : o.background;
+        const Color c =
+            caster.intersect(dir, hit) ? shader.shade(hit.normal, dir, hit.front) : o.background;
         detail::store_linear(single, x, y, c);
       }
     int differ = 0, far = 0;
@@ -326,8 +326,7 @@ TEST(RenderMesh, DrawsWireframeEdges) {
   const Mesh m = uv_sphere(12, 24);
   const Image plain = render_mesh(s, m, o), wire = render_mesh(s, m, o, true);
   int dark = 0;
-  for (size_t i = 0; i < wire.rgb.size(); i += 3)
-    dark += wire.rgb[i] + 60 < plain.rgb[i];
+  for (size_t i = 0; i < wire.rgb.size(); i += 3) dark += wire.rgb[i] + 60 < plain.rgb[i];
   EXPECT_GT(dark, 500);
 }
 

@@ -8,11 +8,11 @@
 #include <fstream>
 #include <string>
 
+#include "support/refusal.h"
 #include "zeroset/error.h"
 #include "zeroset/expr/parse.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/scene.h"
-#include "support/refusal.h"
 
 namespace zeroset {
 namespace {

@@ -6,12 +6,12 @@
 #include <cmath>
 #include <string>
 
+#include "support/refusal.h"
 #include "zeroset/error.h"
 #include "zeroset/surface/clip.h"
 #include "zeroset/surface/json_read.h"
 #include "zeroset/surface/keyframes.h"
 #include "zeroset/surface/scene.h"
-#include "support/refusal.h"
 
 namespace zeroset {
 namespace {

@@ -90,8 +90,8 @@ TEST(JavaProperties, ReadsEveryFormOfLine) {
 TEST(JavaProperties, EscapingGivesTheTextBack) {
   for (const std::string s :
        {"a b\\c", " lead", "tab\tnl\numl\xC3\xA4 emoji\xF0\x9F\x98\x80 #!=:"}) {
-    const std::string text = "k" + detail::escape_property("=: #", true) + "=" +
-                             detail::escape_property(s) + "\n";
+    const std::string text =
+        "k" + detail::escape_property("=: #", true) + "=" + detail::escape_property(s) + "\n";
     const auto p = detail::parse_properties(text, "t");
     ASSERT_EQ(p.count("k=: #"), 1u) << text;
     EXPECT_EQ(p.at("k=: #").value, s) << text;
@@ -160,11 +160,13 @@ TEST(Jsurf, PointLightsBecomeDirectionsFromTheClipCentre) {
 TEST(Jsurf, ErrorsNameTheFileAndLine) {
   EXPECT_NE(error_of("# nothing\nscale_factor=1\n").find("bad.jsurf: no surface_equation"),
             std::string::npos);
-  EXPECT_NE(error_of("surface_equation=x^2-1\n\nscale_factor=1,5\n").find("bad.jsurf:3: "
-                                                                          "scale_factor"),
+  EXPECT_NE(error_of("surface_equation=x^2-1\n\nscale_factor=1,5\n")
+                .find("bad.jsurf:3: "
+                      "scale_factor"),
             std::string::npos);
-  EXPECT_NE(error_of("surface_equation=x^2+-*1\n").find("bad.jsurf:1: surface_equation: cannot "
-                                                        "read"),
+  EXPECT_NE(error_of("surface_equation=x^2+-*1\n")
+                .find("bad.jsurf:1: surface_equation: cannot "
+                      "read"),
             std::string::npos);
   EXPECT_NE(error_of("a=1\nsurface_equation=x\\u00g1\n").find("bad.jsurf:2: malformed"),
             std::string::npos);
@@ -207,12 +209,16 @@ TEST(Jsurf, WritingRenamesParametersAndReadsBackTheSameScene) {
       "p = 1 - z - sqrt(2)*x; q = 1 - z + sqrt(2)*x\n"
       "(3 - mu)*(x^2 + y^2 + z^2 - mu)^2 - (3*mu - 1)*p*q*(1+z)**2 + b*pi",
       {.params = {{"mu", 1.25}, {"b", 0.5}}, .clip_specs = {"sphere:2.5"}});
-  scene.surface.camera = {.azimuth_deg = -70, .elevation_deg = 80, .distance = 9,
-                          .fov_deg = 28, .target = Vec3(0.1, -0.2, 0.3), .roll_deg = -35};
-  scene.settings["render"] = {{"background", {0.25, 0.5, 1.0}},
-                              {"front", {{"diffuse", {0.5, 0.25, 0.125}}, {"ambient", 0.2}}},
-                              {"lights", {{{"direction", {0, 0, 2}}, {"color", {1, 1, 1}},
-                                           {"follows_camera", false}}}}};
+  scene.surface.camera = {.azimuth_deg = -70,
+                          .elevation_deg = 80,
+                          .distance = 9,
+                          .fov_deg = 28,
+                          .target = Vec3(0.1, -0.2, 0.3),
+                          .roll_deg = -35};
+  scene.settings["render"] = {
+      {"background", {0.25, 0.5, 1.0}},
+      {"front", {{"diffuse", {0.5, 0.25, 0.125}}, {"ambient", 0.2}}},
+      {"lights", {{{"direction", {0, 0, 2}}, {"color", {1, 1, 1}}, {"follows_camera", false}}}}};
   const std::string text = scene_to_jsurf(scene);
   EXPECT_NE(text.find("surface_parameter_a=1.25"), std::string::npos) << text;  // mu -> a
   EXPECT_NE(text.find("surface_parameter_b=0.5"), std::string::npos) << text;

@@ -5,8 +5,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "zeroset/error.h"
 #include "support/temp_path.h"
+#include "zeroset/error.h"
 
 namespace zeroset {
 namespace {
@@ -21,7 +21,8 @@ TEST(Scene, ResolvesCatalogNamesWithDefaults) {
 }
 
 TEST(Scene, AppliesParameterAndClipOverrides) {
-  const Surface s = resolve_surface("kummer", {.params = {{"mu", 2.0}}, .clip_specs = {"sphere:2.5"}});
+  const Surface s =
+      resolve_surface("kummer", {.params = {{"mu", 2.0}}, .clip_specs = {"sphere:2.5"}});
   EXPECT_DOUBLE_EQ(s.field.parameter_values()[0], 2.0);
   ASSERT_EQ(s.clip.spheres.size(), 1u);
   EXPECT_DOUBLE_EQ(s.clip.spheres[0].radius, 2.5);
@@ -73,7 +74,8 @@ TEST(Scene, RoundTripsThroughAFile) {
   write_scene(scene, path);
   const Scene back = resolve_scene(path);
   EXPECT_EQ(back.surface.field.source(), scene.surface.field.source());
-  EXPECT_DOUBLE_EQ(back.surface.field.parameter_values()[scene.surface.field.parameter_index("r")], 0.3);
+  EXPECT_DOUBLE_EQ(back.surface.field.parameter_values()[scene.surface.field.parameter_index("r")],
+                   0.3);
   EXPECT_DOUBLE_EQ(back.surface.camera.azimuth_deg, 12);
   EXPECT_EQ(back.settings["render"]["samples"], 3);
   EXPECT_EQ(back.surface.clip.spheres.size(), 1u);

@@ -5,9 +5,9 @@
 
 #include <cmath>
 
+#include "support/equation.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/scene.h"
-#include "support/equation.h"
 
 namespace zeroset {
 namespace {
@@ -48,8 +48,12 @@ TEST(SingularSet, RomanHasThreeCrossingSegmentsATriplePointAndSixPinches) {
   }
   EXPECT_LT(set.points_of(SingularPointKind::kTriple)[0].norm(), 1e-9);
   for (const SingularCurve& c : set.curves) {
-    if (c.kind == CurveKind::kCrossing) { EXPECT_NEAR(c.length(), 1.0, 1e-6); }
-    if (c.kind == CurveKind::kIsolated) { EXPECT_NEAR(c.length(), 0.1, 1e-6); }
+    if (c.kind == CurveKind::kCrossing) {
+      EXPECT_NEAR(c.length(), 1.0, 1e-6);
+    }
+    if (c.kind == CurveKind::kIsolated) {
+      EXPECT_NEAR(c.length(), 0.1, 1e-6);
+    }
   }
   expect_on_singular_set(s, set);
 }
@@ -137,7 +141,8 @@ TEST(SingularSet, ConeHasOneNodeAndSmoothSurfacesNone) {
 }
 
 TEST(SingularSet, FindsTheClassicalNodes) {
-  for (auto [name, nodes] : {std::pair<const char*, int>{"cayley", 4}, {"barth6", 50}, {"dingdong", 1}}) {
+  for (auto [name, nodes] :
+       {std::pair<const char*, int>{"cayley", 4}, {"barth6", 50}, {"dingdong", 1}}) {
     const SingularSet set = find_singular_set(catalog_surface(name));
     EXPECT_EQ(points_of(set, SingularPointKind::kNode), nodes) << name;
     EXPECT_TRUE(set.curves.empty()) << name;

@@ -7,11 +7,11 @@
 #include <fstream>
 
 #include "support/file_bytes.h"
+#include "support/temp_path.h"
 #include "viewer_state.h"
 #include "zeroset/error.h"
 #include "zeroset/surface/keyframes.h"
 #include "zeroset/surface/scene.h"
-#include "support/temp_path.h"
 
 namespace zeroset::viewer {
 namespace {
@@ -143,10 +143,10 @@ TEST(ViewerKeyframes, SavingWritesTheLoadedKeyframesBackAsTheyCame) {
 TEST(ViewerKeyframes, CommandsRecordTheCurrentParametersAndCamera) {
   ViewerState s(read_scene(write_torus("record.json")), Mode::kRaytrace, 1);
   s.clear_keyframes();
-  for (const char* line : {"param R 0.8", "param r 0.3", "camera 10 20 6", "keyframe add 0 in",
-                           "param R 1.2", "camera 100 40 5", "keyframe add 1 linear",
-                           "param r 0.45", "camera 50 30 5.5", "keyframe add 0.5",
-                           "keyframe ease 1 out", "keyframe move 1 0.4"})
+  for (const char* line :
+       {"param R 0.8", "param r 0.3", "camera 10 20 6", "keyframe add 0 in", "param R 1.2",
+        "camera 100 40 5", "keyframe add 1 linear", "param r 0.45", "camera 50 30 5.5",
+        "keyframe add 0.5", "keyframe ease 1 out", "keyframe move 1 0.4"})
     ASSERT_TRUE(s.command(line)) << line << ": " << s.status().text;
   const json& k = s.keyframes();
   ASSERT_EQ(k.size(), 3u);

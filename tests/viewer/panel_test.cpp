@@ -108,7 +108,8 @@ TEST(Panel, RandomClicksOnTheKeyframesKeepThemValid) {
     "clip": ["sphere:2"],
     "animation": {"keyframes": [{"time": 0, "params": {"R": 0.8}},
       {"frame": 30, "params": {"R": 1.2}, "camera": {"azimuth_deg": 90}, "ease": "out"},
-      {"time": 1, "params": {"a": -0.2}, "camera": {"distance": 7}}]}})j"), "keys.json");
+      {"time": 1, "params": {"a": -0.2}, "camera": {"distance": 7}}]}})j"),
+                                      "keys.json");
   ViewerState state(scene, Mode::kRaytrace, 2);
   PanelState panel = panel_writing_to("zeroset_panel_keys");
   Gui gui;
@@ -140,7 +141,8 @@ TEST(Panel, DeletingAKeyframeFromTheListLeavesTheRowsBelowIntact) {
   const Scene scene = scene_from_json(nlohmann::json::parse(R"j({
     "equation": "x^2 + y^2 + z^2 - R^2", "parameters": {"R": 1}, "clip": ["sphere:2"],
     "animation": {"keyframes": [{"time": 0, "params": {"R": 0.8}},
-      {"time": 0.5, "params": {"R": 1.2}}, {"time": 1, "params": {"R": 1}}]}})j"), "keys.json");
+      {"time": 0.5, "params": {"R": 1.2}}, {"time": 1, "params": {"R": 1}}]}})j"),
+                                      "keys.json");
   ViewerState state(scene, Mode::kRaytrace, 2);
   PanelState panel = panel_writing_to("zeroset_panel_rows");
   Gui gui(3000);  // tall enough for every section unscrolled
@@ -177,9 +179,9 @@ TEST(Panel, EverySettingsKeyHasAWidgetWithATooltip) {
     }
   }
   for (const SettingWidget& w : setting_widgets()) {
-    const bool known = (w.object == "floaters" || w.object == "mesh") &&
-                       (w.object == "floaters" ? objects[0] : objects[1])
-                           .second.contains(std::string(w.key));
+    const bool known =
+        (w.object == "floaters" || w.object == "mesh") &&
+        (w.object == "floaters" ? objects[0] : objects[1]).second.contains(std::string(w.key));
     EXPECT_TRUE(known) << w.object << "." << w.key << " is no scene key";
   }
 }
@@ -192,7 +194,9 @@ TEST(Panel, EveryWidgetsValuesAreAcceptedSettings) {
   for (const SettingWidget& w : setting_widgets()) {
     std::vector<nlohmann::json> values;
     switch (w.kind) {
-      case WidgetKind::kSwitch: values = {false, true}; break;
+      case WidgetKind::kSwitch:
+        values = {false, true};
+        break;
       case WidgetKind::kWhole:
         values = {static_cast<long long>(w.min), static_cast<long long>(w.max)};
         break;

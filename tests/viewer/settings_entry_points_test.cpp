@@ -8,6 +8,7 @@
 #include <string>
 
 #include "support/run_command.h"
+#include "support/temp_path.h"
 #include "viewer_state.h"
 #include "zeroset/error.h"
 #include "zeroset/floaters/settings.h"
@@ -15,7 +16,6 @@
 #include "zeroset/render/settings.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/scene.h"
-#include "support/temp_path.h"
 
 namespace zeroset::viewer {
 namespace {
@@ -45,9 +45,8 @@ const BadValue kBadValues[] = {
      "/floaters/max_count", "floaters max_count=200000000", "must lie in [1, 100000000]"},
     {"sample sphere --seed-count 200000000", R"({"floaters": {"seed_count": 200000000}})",
      "/floaters/seed_count", "floaters seed_count=200000000", "must lie in [0, 100000000]"},
-    {"sample sphere --seed 100000000000000000", R"({"floaters": {"seed": 1e17}})",
-     "/floaters/seed", "floaters seed=100000000000000000",
-     "must lie in [0, 9007199254740992]"},
+    {"sample sphere --seed 100000000000000000", R"({"floaters": {"seed": 1e17}})", "/floaters/seed",
+     "floaters seed=100000000000000000", "must lie in [0, 9007199254740992]"},
     {"sample sphere --grading -0.5", R"({"floaters": {"radius_grading": -0.5}})",
      "/floaters/radius_grading", "floaters radius_grading=-0.5", "must lie in [0, 1000] (0: off)"},
     {"sample sphere --grading 1e9", R"({"floaters": {"radius_grading": 1e9}})",
@@ -60,9 +59,8 @@ const BadValue kBadValues[] = {
      "must lie in [1, 32768]"},
     {"mesh sphere --resolution 40000", R"({"mesh": {"cells": 40000}})", "/mesh/cells",
      "mesh cells=40000", "must lie in [1, 32768]"},
-    {"mesh sphere --improve sometimes", R"({"mesh": {"improve": "sometimes"}})",
-     "/mesh/improve", "mesh improve=sometimes",
-     "expected auto, off or a number of steps from 0 to 100000"},
+    {"mesh sphere --improve sometimes", R"({"mesh": {"improve": "sometimes"}})", "/mesh/improve",
+     "mesh improve=sometimes", "expected auto, off or a number of steps from 0 to 100000"},
     {"mesh sphere --improve 200000", R"({"mesh": {"improve": 200000}})", "/mesh/improve",
      "mesh max_steps=200000", "expected auto, off or a number of steps from 0 to 100000"},
     {"mesh sphere --boundary loose", R"({"mesh": {"boundary": "loose"}})", "/mesh/boundary",
@@ -79,16 +77,16 @@ const BadValue kBadValues[] = {
     // command line's and the "render" object's only)
     {"render sphere --front 1.5,0,0", R"({"render": {"front": {"diffuse": [1.5, 0, 0]}}})",
      "/render/front/diffuse", "color front 1.5 0 0", "components must lie in [0, 1]"},
-    {"", R"({"viewer": {"background": [0, 2, 0]}})", "/viewer/background",
-     "color background 0 2 0", "components must lie in [0, 1]"},
+    {"", R"({"viewer": {"background": [0, 2, 0]}})", "/viewer/background", "color background 0 2 0",
+     "components must lie in [0, 1]"},
     {"render sphere --aa 0", R"({"render": {"samples": 0}})", "/render/samples", "",
      "must lie in [1, 16]"},
     {"render sphere --aa 17", R"({"render": {"samples": 17}})", "/render/samples", "",
      "must lie in [1, 16]"},
     {"render sphere --size 40000x10", R"({"render": {"size": [40000, 10]}})", "/render/size", "",
      "width and height must lie in [1, 32768]"},
-    {"render sphere --size 20000x20000", R"({"render": {"size": [20000, 20000]}})",
-     "/render/size", "", "must have at most 100000000 pixels"},
+    {"render sphere --size 20000x20000", R"({"render": {"size": [20000, 20000]}})", "/render/size",
+     "", "must have at most 100000000 pixels"},
     // camera (the command line's --camera and --fov, the scene's "camera" object)
     {"render sphere --camera 0,100", R"({"camera": {"elevation_deg": 100}})",
      "/camera/elevation_deg", "camera 0 100", "must lie in [-90, 90] degrees"},
@@ -96,8 +94,8 @@ const BadValue kBadValues[] = {
      "/camera/elevation_deg", "camera 0 -91", "must lie in [-90, 90] degrees"},
     {"render sphere --camera 0,10,-1", R"({"camera": {"distance": -1}})", "/camera/distance",
      "camera 0 10 -1", "must lie in [0, 1e+12] (0: fit the clip volume)"},
-    {"render sphere --camera 0,10,1e300", R"({"camera": {"distance": 1e300}})",
-     "/camera/distance", "camera 0 10 1e300", "must lie in [0, 1e+12] (0: fit the clip volume)"},
+    {"render sphere --camera 0,10,1e300", R"({"camera": {"distance": 1e300}})", "/camera/distance",
+     "camera 0 10 1e300", "must lie in [0, 1e+12] (0: fit the clip volume)"},
     {"render sphere --fov 175", R"({"camera": {"fov_deg": 175}})", "/camera/fov_deg", "",
      "must lie in [1, 170] degrees"},
     {"render sphere --fov 0.5", R"({"camera": {"fov_deg": 0.5}})", "/camera/fov_deg", "",
@@ -134,12 +132,11 @@ TEST(SettingsEntryPoints, EachBadValueIsRefusedWithTheSameWordsEverywhere) {
     // The command line: the flag, and the scene file.
     if (*b.cli) expect_refused_by_cli(b.cli, b.why);
     const std::string cli = b.cli;
-    const std::string subcommand =
-        *b.cli ? cli.substr(0, cli.find(' ')) : std::string("render");
+    const std::string subcommand = *b.cli ? cli.substr(0, cli.find(' ')) : std::string("render");
     if (std::string(b.pointer).rfind("/viewer", 0) != 0) {
       const std::string scene_args = subcommand + " " + scene;
-      const auto r =
-          test::run_command(std::string(ZEROSET_BINARY) + " " + scene_args + output_for(scene_args));
+      const auto r = test::run_command(std::string(ZEROSET_BINARY) + " " + scene_args +
+                                       output_for(scene_args));
       EXPECT_EQ(r.exit_code, 2) << r.output;
       EXPECT_NE(r.output.find(std::string(b.pointer) + ": " + b.why), std::string::npos)
           << r.output;
@@ -149,8 +146,7 @@ TEST(SettingsEntryPoints, EachBadValueIsRefusedWithTheSameWordsEverywhere) {
     ViewerState state(sphere_scene(), Mode::kRaytrace, 1);
     if (std::string(b.pointer).rfind("/render", 0) != 0) {
       EXPECT_FALSE(state.command("load " + scene));
-      EXPECT_NE(state.status().text.find(std::string(b.pointer) + ": " + b.why),
-                std::string::npos)
+      EXPECT_NE(state.status().text.find(std::string(b.pointer) + ": " + b.why), std::string::npos)
           << state.status().text;
     }
     if (*b.command) {
@@ -182,11 +178,10 @@ TEST(SettingsEntryPoints, TheFloatersDynamicsConstantsAreRefusedAlikeBySampleAnd
   for (const Case& c : cases) {
     SCOPED_TRACE(c.settings);
     const std::string scene = write_scene_file(c.settings, index++);
-    const auto r = test::run_command(std::string(ZEROSET_BINARY) + " sample " + scene +
-                                     output_for("sample"));
+    const auto r =
+        test::run_command(std::string(ZEROSET_BINARY) + " sample " + scene + output_for("sample"));
     EXPECT_EQ(r.exit_code, 2) << r.output;
-    EXPECT_NE(r.output.find(std::string(c.pointer) + ": " + c.why), std::string::npos)
-        << r.output;
+    EXPECT_NE(r.output.find(std::string(c.pointer) + ": " + c.why), std::string::npos) << r.output;
     ViewerState state(sphere_scene(), Mode::kRaytrace, 1);
     EXPECT_FALSE(state.command("load " + scene));
     EXPECT_NE(state.status().text.find(std::string(c.pointer) + ": " + c.why), std::string::npos)

@@ -13,12 +13,12 @@
 
 #include "run_frames.h"
 #include "settings_values.h"
+#include "support/temp_path.h"
 #include "viewer_state.h"
 #include "zeroset/floaters/settings.h"
 #include "zeroset/mesh/settings.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/scene.h"
-#include "support/temp_path.h"
 
 namespace zeroset::viewer {
 namespace {
@@ -53,7 +53,8 @@ struct MeshPrint {
 };
 
 MeshPrint settle_mesh(ViewerState& state) {
-  EXPECT_TRUE(run_until(state, [&] { return state.is_settled(); }, 120));
+  EXPECT_TRUE(run_until(
+      state, [&] { return state.is_settled(); }, 120));
   const auto frame = state.mesh();
   if (!frame) return {};
   return {frame->mesh.positions, frame->mesh.triangle_count(), frame->mesh.curves.size(),
@@ -106,8 +107,7 @@ TEST(SettingsSwitches, EveryMeshKeyReachesTheMeshJob) {
 }
 
 TEST(SettingsSwitches, EveryFloaterKeyReachesTheFloaterJob) {
-  expect_every_key_listed(floater_settings_to_json(FloaterOptions{}), kFloaterValues,
-                          "floaters");
+  expect_every_key_listed(floater_settings_to_json(FloaterOptions{}), kFloaterValues, "floaters");
   ViewerState state(catalog_scene("kummer"), Mode::kFloaters, 1);
   ASSERT_TRUE(state.command("floaters max_count=600 seed=3"));
   for (const auto& [key, value] : kFloaterValues) {
@@ -116,7 +116,8 @@ TEST(SettingsSwitches, EveryFloaterKeyReachesTheFloaterJob) {
     EXPECT_EQ(state.settings_object("floaters")[key], expected_value(value));
     // The job runs on with the new options: floaters on F = 0 within their radius.
     const std::size_t steps = state.stats().floater_steps;
-    ASSERT_TRUE(run_until(state, [&] { return state.stats().floater_steps >= steps + 80; }, 120));
+    ASSERT_TRUE(run_until(
+        state, [&] { return state.stats().floater_steps >= steps + 80; }, 120));
     const ViewerStats st = state.stats();
     EXPECT_GT(st.floater_count, 20u);
     EXPECT_LT(st.median_residual, st.nominal_radius);
@@ -126,7 +127,8 @@ TEST(SettingsSwitches, EveryFloaterKeyReachesTheFloaterJob) {
     if (key == "radius") {
       // The restarted job publishes its σ̂ with its first frame, which may come after frames
       // of the job it replaced.
-      EXPECT_TRUE(run_until(state, [&] { return state.stats().nominal_radius == 0.2; }, 120))
+      EXPECT_TRUE(run_until(
+          state, [&] { return state.stats().nominal_radius == 0.2; }, 120))
           << state.stats().nominal_radius;
     }
   }

@@ -9,14 +9,14 @@
 #include <numbers>
 #include <thread>
 
-#include "singular_geometry.h"
 #include "run_frames.h"
+#include "singular_geometry.h"
+#include "support/temp_path.h"
 #include "viewer_state.h"
 #include "zeroset/error.h"
 #include "zeroset/expr/parse.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/scene.h"
-#include "support/temp_path.h"
 
 namespace zeroset::viewer {
 namespace {

@@ -10,9 +10,9 @@
 #include <string>
 
 #include "support/run_command.h"
+#include "support/temp_path.h"
 #include "support/xvfb.h"
 #include "zeroset/surface/clip.h"
-#include "support/temp_path.h"
 
 namespace zeroset {
 namespace {
@@ -35,8 +35,8 @@ std::string clip_scene(const std::string& name, std::size_t parts) {
   clips.reserve(parts * 16);
   for (std::size_t k = 0; k < parts; ++k)
     clips += (k ? ",\"sphere:" : "\"sphere:") + std::to_string(3 + k % 1000) + "\"";
-  return write_file(name, "{\"zeroset_scene\": 1, \"name\": \"kummer\", \"clip\": [" + clips +
-                              "]}");
+  return write_file(name,
+                    "{\"zeroset_scene\": 1, \"name\": \"kummer\", \"clip\": [" + clips + "]}");
 }
 
 struct Timed {
@@ -58,8 +58,7 @@ TEST(ViewerFaults, AMillionClipsOnTheCommandLineAreRefusedBeforeTheWindow) {
   const auto r = run_command(std::string(ZEROSET_BINARY) + " view " + scene + " --frames 1");
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("/clip/" + std::to_string(kMaxClipParts)), std::string::npos)
-      << r.output;
+  EXPECT_NE(r.output.find("/clip/" + std::to_string(kMaxClipParts)), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("at most 256 parts"), std::string::npos) << r.output;
   EXPECT_LT(s, 10) << r.output;
 }
@@ -95,11 +94,11 @@ TEST(ViewerFaults, AClipAtTheLimitDoesNotHoldTheExit) {
 // scene with the range ±1e308 (should a reader let it through) is drawn, not an abort.
 TEST(ViewerFaults, ExtremeParameterRangesDoNotAbortTheSlider) {
   if (!has_xvfb()) GTEST_SKIP() << "xvfb-run is not installed";
-  const std::string scene = write_file(
-      "huge-range.json",
-      "{\"zeroset_scene\": 1, \"equation\": \"a*x^2 + y^2 + z^2 - 1\", \"clip\": "
-      "[\"sphere:2\"], \"parameters\": {\"a\": {\"value\": 1, \"min\": -1e308, "
-      "\"max\": 1e308}}}");
+  const std::string scene =
+      write_file("huge-range.json",
+                 "{\"zeroset_scene\": 1, \"equation\": \"a*x^2 + y^2 + z^2 - 1\", \"clip\": "
+                 "[\"sphere:2\"], \"parameters\": {\"a\": {\"value\": 1, \"min\": -1e308, "
+                 "\"max\": 1e308}}}");
   const std::string script = write_file(
       "huge-range.txt", "load " + scene + "\nframes 3\nrange a -1e300 1e300\nframes 3\nquit\n");
   const Timed t = view("sphere --size 640x480 --script " + script);

@@ -13,12 +13,12 @@
 #include <vector>
 
 #include "run_frames.h"
+#include "support/temp_path.h"
 #include "viewer_state.h"
 #include "zeroset/error.h"
 #include "zeroset/expr/field.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/scene.h"
-#include "support/temp_path.h"
 
 namespace zeroset::viewer {
 namespace {
@@ -129,13 +129,36 @@ TEST(ViewerState, BadActionsBecomeErrorStatusesNotExceptions) {
 
 TEST(ViewerState, NoCommandLineThrowsWhateverItSays) {
   ViewerState state(kummer_scene(), Mode::kRaytrace);
-  const std::vector<std::string> lines = {
-      "", "# comment", "param", "param mu", "param mu x", "param mu 1e999", "mode nothing",
-      "clip sphere:-1", "clip box:0", "floaters max_count=0", "floaters radius=-1",
-      "floaters radius_adapt=best", "floaters what", "mesh cells=2", "camera 0 0 -1",
-      "zoom 0", "color front 2 0 0", "color middle 0 0 0", "equation (((", "equation x^",
-      "save-scene /nonexistent/dir/s.json", "save-mesh out.xyz", "save-floaters f.ply",
-      "frames 3", "range mu 1 1", "draw cubes", "lights up", "speed 0", "play nu", "load"};
+  const std::vector<std::string> lines = {"",
+                                          "# comment",
+                                          "param",
+                                          "param mu",
+                                          "param mu x",
+                                          "param mu 1e999",
+                                          "mode nothing",
+                                          "clip sphere:-1",
+                                          "clip box:0",
+                                          "floaters max_count=0",
+                                          "floaters radius=-1",
+                                          "floaters radius_adapt=best",
+                                          "floaters what",
+                                          "mesh cells=2",
+                                          "camera 0 0 -1",
+                                          "zoom 0",
+                                          "color front 2 0 0",
+                                          "color middle 0 0 0",
+                                          "equation (((",
+                                          "equation x^",
+                                          "save-scene /nonexistent/dir/s.json",
+                                          "save-mesh out.xyz",
+                                          "save-floaters f.ply",
+                                          "frames 3",
+                                          "range mu 1 1",
+                                          "draw cubes",
+                                          "lights up",
+                                          "speed 0",
+                                          "play nu",
+                                          "load"};
   for (const auto& line : lines) EXPECT_NO_THROW(state.command(line)) << line;
   // Random bytes, too.
   std::mt19937 rng(7);
@@ -245,7 +268,8 @@ TEST(ViewerState, RayTracedPreviewRefinesToFullResolution) {
 TEST(ViewerState, MeshModeDeliversAMeshOnTheSurface) {
   ViewerState state(kummer_scene(), Mode::kMesh, 2);
   ASSERT_TRUE(state.command("mesh cells=32 max_steps=5"));
-  ASSERT_TRUE(run_until(state, [&] { return state.is_settled(); }, 60));
+  ASSERT_TRUE(run_until(
+      state, [&] { return state.is_settled(); }, 60));
   const auto frame = state.mesh();
   ASSERT_TRUE(frame);
   EXPECT_EQ(frame->improver_steps, 5);
@@ -270,13 +294,15 @@ TEST(ViewerState, AParameterChangeCarriesTheMeshAndAJumpAcrossNodesRebuildsIt) {
     SCOPED_TRACE("improver " + improver);
     ViewerState state(kummer_scene(), Mode::kMesh, 2);
     ASSERT_TRUE(state.command("mesh cells=24 max_steps=30 improver=" + improver));
-    ASSERT_TRUE(run_until(state, [&] { return state.is_settled(); }, 60));
+    ASSERT_TRUE(run_until(
+        state, [&] { return state.is_settled(); }, 60));
     const size_t vertices = state.mesh()->mesh.vertex_count();
     EXPECT_EQ(state.stats().mesh_update, "built");
     // A small step of mu: the same vertices, carried onto the new surface, then improved to
     // rest.
     ASSERT_TRUE(state.set_parameter("mu", 1.52));
-    ASSERT_TRUE(run_until(state, [&] { return state.is_settled(); }, 60));
+    ASSERT_TRUE(run_until(
+        state, [&] { return state.is_settled(); }, 60));
     const auto frame = state.mesh();
     ASSERT_TRUE(frame);
     EXPECT_TRUE(frame->carried);
@@ -296,13 +322,15 @@ TEST(ViewerState, AParameterChangeCarriesTheMeshAndAJumpAcrossNodesRebuildsIt) {
     EXPECT_LT(worst, 1e-6);
     // Across mu = 1 twelve nodes vanish: made again from scratch, and the stats say why.
     ASSERT_TRUE(state.set_parameter("mu", 0.9));
-    ASSERT_TRUE(run_until(state, [&] { return state.is_settled(); }, 60));
+    ASSERT_TRUE(run_until(
+        state, [&] { return state.is_settled(); }, 60));
     EXPECT_FALSE(state.mesh()->carried);
     EXPECT_EQ(state.stats().mesh_update, "rebuilt: singular points: 16 → 4");
     EXPECT_EQ(state.stats().mesh_rebuilt, 1u);
     // Another setting is never carried across.
     ASSERT_TRUE(state.command("mesh cells=20"));
-    ASSERT_TRUE(run_until(state, [&] { return state.is_settled(); }, 60));
+    ASSERT_TRUE(run_until(
+        state, [&] { return state.is_settled(); }, 60));
     EXPECT_EQ(state.stats().mesh_update, "built");
   }
 }
@@ -335,9 +363,8 @@ TEST(ViewerState, FloatersFollowTheAnimatedParameter) {
     for (const Vec3& p : f->positions) worst = std::max(worst, std::abs(p.norm() - 1.5));
     return worst < 0.05 && state.stats().floater_steps >= steps + 20;
   };
-  ASSERT_TRUE(run_until(state, [&] {
-    return back_on_sphere() || state.stats().floater_steps >= steps + 200;
-  }));
+  ASSERT_TRUE(run_until(
+      state, [&] { return back_on_sphere() || state.stats().floater_steps >= steps + 200; }));
   EXPECT_GT(count, 50u);
   EXPECT_LT(worst, 0.05);
   EXPECT_GT(state.stats().steps_per_second, 0);
@@ -350,7 +377,8 @@ TEST(ViewerState, SceneRoundTripKeepsSurfaceCameraAndSettings) {
   ASSERT_TRUE(a.command("camera 40 25 11"));
   ASSERT_TRUE(a.command("clip sphere:2.5"));
   ASSERT_TRUE(a.command("mode floaters"));
-  ASSERT_TRUE(a.command("floaters max_count=1234 cos_weight=off radius_adapt=curvature snap_to_nodes=off"));
+  ASSERT_TRUE(
+      a.command("floaters max_count=1234 cos_weight=off radius_adapt=curvature snap_to_nodes=off"));
   ASSERT_TRUE(a.command("mesh cells=77"));
   ASSERT_TRUE(a.command("speed 0.3"));
   ASSERT_TRUE(a.command("draw points"));
@@ -438,7 +466,8 @@ TEST(ViewerState, LightsStayInPlaceWhenTheyStopFollowingTheCamera) {
   state.set_lights_follow_camera(false);
   EXPECT_LT((state.look().lights[0].direction.normalized() - world).norm(), 1e-12);
   state.set_lights_follow_camera(true);
-  EXPECT_LT((v.camera_to_world(state.look().lights[0].direction).normalized() - world).norm(), 1e-12);
+  EXPECT_LT((v.camera_to_world(state.look().lights[0].direction).normalized() - world).norm(),
+            1e-12);
 }
 
 }  // namespace

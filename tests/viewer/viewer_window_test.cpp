@@ -94,9 +94,9 @@ void check_mode(const std::string& mode, const std::string& setup, const std::st
   const std::string a = dir + "/" + mode + "-a.png", b = dir + "/" + mode + "-b.png";
   std::filesystem::remove(a);
   std::filesystem::remove(b);
-  const std::string script = write_script(
-      mode + ".txt", "mode " + mode + "\n" + setup + settle + "screenshot " + a +
-                         "\nparam mu 2.2\n" + settle + "screenshot " + b + "\n");
+  const std::string script =
+      write_script(mode + ".txt", "mode " + mode + "\n" + setup + settle + "screenshot " + a +
+                                      "\nparam mu 2.2\n" + settle + "screenshot " + b + "\n");
   const auto r = view("kummer --no-ui --size 400x400 --script " + script);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Image ia = read_image(a), ib = read_image(b);
@@ -112,7 +112,9 @@ void check_mode(const std::string& mode, const std::string& setup, const std::st
   EXPECT_GT(changed_fraction(ia, ib), 0.05) << mode << ": mu = 2.2 looks different";
 }
 
-TEST(ViewerWindow, RayTracedKummerShowsBothSidesAndFollowsMu) { check_mode("raytrace", "", "wait\n"); }
+TEST(ViewerWindow, RayTracedKummerShowsBothSidesAndFollowsMu) {
+  check_mode("raytrace", "", "wait\n");
+}
 
 TEST(ViewerWindow, MeshOfKummerShowsBothSidesAndFollowsMu) {
   check_mode("mesh", "mesh cells=40 max_steps=10\n", "wait\n");
@@ -128,9 +130,9 @@ TEST(ViewerWindow, AVanishingFieldIsWarnedAboutAndDrawsNothing) {
   if (!has_xvfb()) GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb)";
   const std::string dir = temp_dir();
   const std::string first = dir + "/vanishing-sin.png", second = dir + "/vanishing-exp.png";
-  const std::string script = write_script(
-      "vanishing.txt", "mode raytrace\nwait\nscreenshot " + first +
-                           "\nequation 0*exp(x)\nwait\nscreenshot " + second + "\n");
+  const std::string script =
+      write_script("vanishing.txt", "mode raytrace\nwait\nscreenshot " + first +
+                                        "\nequation 0*exp(x)\nwait\nscreenshot " + second + "\n");
   const auto r = view("'sin(x) - sin(x)' --clip sphere:2 --size 800x500 --script " + script);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   for (const char* eq : {"warning: sin(x) - sin(x): F vanishes identically",
@@ -144,16 +146,18 @@ TEST(ViewerWindow, MalformedEquationShowsTheErrorAndTheViewerKeepsRunning) {
   if (!has_xvfb()) GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb)";
   const std::string dir = temp_dir();
   const std::string bad = dir + "/bad-equation.png", good = dir + "/good-equation.png";
-  const std::string script = write_script(
-      "typing.txt",
-      "wait\n"
-      "equation x^2 + y^2 +\n"
-      "expect-error expected\n"
-      "frames 3\n"
-      "screenshot " + bad + "\n"
-      "equation x^2 + y^2 - z^2\n"
-      "wait\n"
-      "screenshot " + good + "\n");
+  const std::string script = write_script("typing.txt",
+                                          "wait\n"
+                                          "equation x^2 + y^2 +\n"
+                                          "expect-error expected\n"
+                                          "frames 3\n"
+                                          "screenshot " +
+                                              bad +
+                                              "\n"
+                                              "equation x^2 + y^2 - z^2\n"
+                                              "wait\n"
+                                              "screenshot " +
+                                              good + "\n");
   const auto r = view("kummer --size 800x500 --script " + script);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("failed as expected"), std::string::npos) << r.output;
@@ -215,8 +219,8 @@ void check_singular_overlay(const std::string& mode, const std::string& settle) 
       "singular-" + mode + ".txt",
       "clip sphere:0.6 plane:1,1,1,0.12\ncamera 35 25 2.4\nmode " + mode + "\n" + settle +
           "screenshot " + off + "\nsingular on\n" + settle + "stats\nscreenshot " + on + "\n");
-  const auto r = view("roman --no-ui --size " + std::to_string(size) + "x" +
-                      std::to_string(size) + " --script " + script);
+  const auto r = view("roman --no-ui --size " + std::to_string(size) + "x" + std::to_string(size) +
+                      " --script " + script);
   ASSERT_EQ(r.exit_code, 0) << r.output;
 
   Surface roman = make_surface(*find_catalog_entry("roman"));
@@ -286,8 +290,8 @@ TEST(ViewerWindow, SingularSetNotesForASquareAndAnUnboundedSurface) {
       {"'x*y'", "no bounded clip of its own", dir + "/singular-unbounded.png"},
       {"roman", "", dir + "/singular-no-note.png"}};
   for (const Case& c : cases) {
-    const std::string script = write_script(
-        "singular-note.txt", "singular on\nwait\nstats\nscreenshot " + c.shot + "\n");
+    const std::string script =
+        write_script("singular-note.txt", "singular on\nwait\nstats\nscreenshot " + c.shot + "\n");
     const auto r = view(c.surface + " --size 800x500 --script " + script);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     const nlohmann::json stats = stats_line(r.output);
@@ -310,13 +314,13 @@ TEST(ViewerWindow, OpensASurferFile) {
   if (!has_xvfb()) GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb)";
   const std::string dir = temp_dir();
   // SURFER's own syntax: the parameter a, a clip sphere of radius 10^0.3, a rotation.
-  const std::string surface = write_script(
-      "cayley.jsurf",
-      "# a SURFER file\r\n"
-      "surface_equation=4*(x^2+y^2+z^2) + 16*x*y*z - a\r\n"
-      "surface_parameter_a=1\r\n"
-      "scale_factor=0.3\r\n"
-      "rotation_matrix=1 0 0 0 0 0.8 -0.6 0 0 0.6 0.8 0 0 0 0 1\r\n");
+  const std::string surface =
+      write_script("cayley.jsurf",
+                   "# a SURFER file\r\n"
+                   "surface_equation=4*(x^2+y^2+z^2) + 16*x*y*z - a\r\n"
+                   "surface_parameter_a=1\r\n"
+                   "scale_factor=0.3\r\n"
+                   "rotation_matrix=1 0 0 0 0 0.8 -0.6 0 0 0.6 0.8 0 0 0 0 1\r\n");
   const std::string shot = dir + "/jsurf.png";
   const auto r = view(surface + " --size 700x500 --script " +
                       write_script("jsurf.txt", "wait\nscreenshot " + shot + "\n"));
@@ -382,19 +386,20 @@ TEST(ViewerWindow, KeyframesRecordedByAScriptAnimateAsTheSameKeyframesWrittenByH
      "elevation_deg": 40, "distance": 5, "roll_deg": 0, "fov_deg": 30}}]}})";
   // Recorded out of order (the last keyframe first), with bad commands between: each is
   // refused and the script goes on.
-  const std::string script = write_script(
-      "keyframes.txt",
-      "param R 0.8\nparam r 0.3\ncamera 10 20 6\nkeyframe add 0 in\n"
-      "param R 1.2\nparam r 0.45\ncamera 100 40 5\nkeyframe add 1 linear\n"
-      "param r 0.5\ncamera 50 60 5.5\nkeyframe add 0.5 in-out\n"
-      "keyframe add 0.5\nexpect-error already\n"
-      "keyframe move 1 0\nexpect-error increasing time\n"
-      "keyframe ease 1 bouncy\nexpect-error expected linear, in, out or in-out\n"
-      "keyframe delete 3\nexpect-error expected 0 to 2\n"
-      "keyframe add 2\nexpect-error must lie in [0, 1]\n"
-      "keyframe ease 1 out\n"
-      "keyframe time 0.25\nframes 3\nplay\nframes 5\npause\n"
-      "save-scene " + recorded + "\n");
+  const std::string script =
+      write_script("keyframes.txt",
+                   "param R 0.8\nparam r 0.3\ncamera 10 20 6\nkeyframe add 0 in\n"
+                   "param R 1.2\nparam r 0.45\ncamera 100 40 5\nkeyframe add 1 linear\n"
+                   "param r 0.5\ncamera 50 60 5.5\nkeyframe add 0.5 in-out\n"
+                   "keyframe add 0.5\nexpect-error already\n"
+                   "keyframe move 1 0\nexpect-error increasing time\n"
+                   "keyframe ease 1 bouncy\nexpect-error expected linear, in, out or in-out\n"
+                   "keyframe delete 3\nexpect-error expected 0 to 2\n"
+                   "keyframe add 2\nexpect-error must lie in [0, 1]\n"
+                   "keyframe ease 1 out\n"
+                   "keyframe time 0.25\nframes 3\nplay\nframes 5\npause\n"
+                   "save-scene " +
+                       recorded + "\n");
   const auto r = view(base + " --no-ui --size 200x200 --script " + script);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::vector<std::string> ours = animate_frames(recorded, dir + "/recorded-frames");
@@ -410,9 +415,9 @@ TEST(ViewerWindow, KeyframesRecordedByAScriptAnimateAsTheSameKeyframesWrittenByH
   const std::string once = dir + "/once.json", twice = dir + "/twice.json";
   std::filesystem::remove(once);
   std::filesystem::remove(twice);
-  const std::string resave = write_script(
-      "resave.txt", "keyframe time 0.6\nframes 2\nsave-scene " + once + "\nload " + once +
-                        "\nsave-scene " + twice + "\n");
+  const std::string resave =
+      write_script("resave.txt", "keyframe time 0.6\nframes 2\nsave-scene " + once + "\nload " +
+                                     once + "\nsave-scene " + twice + "\n");
   const auto r2 = view(hand + " --no-ui --size 200x200 --script " + resave);
   ASSERT_EQ(r2.exit_code, 0) << r2.output;
   EXPECT_EQ(file_bytes(twice), file_bytes(once));
@@ -441,8 +446,9 @@ TEST(ViewerWindow, ScriptSetsEveryMeshAndFloaterSetting) {
     text += "set floaters." + key + " " + viewer::test::kFloaterValues.at(key) + "\n";
   text += "steps 100\nstats\nsave-scene " + floater_scene + "\n";
   text += "set floaters.feedback -1\nexpect-error /floaters/feedback: must lie in [0, 66.6667)\n";
-  text += "set floaters.estimator_interval 0\n"
-          "expect-error /floaters/estimator_interval: must lie in [1, 1000]\n";
+  text +=
+      "set floaters.estimator_interval 0\n"
+      "expect-error /floaters/estimator_interval: must lie in [1, 1000]\n";
   const auto r =
       view("kummer --no-ui --size 300x300 --script " + write_script("set-every-key.txt", text));
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -473,7 +479,6 @@ TEST(ViewerWindow, ScriptSetsEveryMeshAndFloaterSetting) {
   }
 }
 
-
 // ---- live meshes: carried along an animation, rebuilt where the nodes change ------------------
 
 // mu animates on Kummer in mesh mode: the stats lines show meshes carried from one value to the
@@ -501,8 +506,7 @@ TEST(ViewerWindow, AnimatedMeshIsCarriedAndRebuiltWhereNodesAppear) {
   EXPECT_TRUE(last.starts_with("carried in ") || last.starts_with("rebuilt: ")) << last;
   const nlohmann::json& jump = stats[1]["mesh"];
   EXPECT_GT(jump["rebuilt"].get<int>(), live["rebuilt"].get<int>()) << r.output;
-  EXPECT_EQ(jump["last_update"].get<std::string>(), "rebuilt: singular points: 4 → 16")
-      << r.output;
+  EXPECT_EQ(jump["last_update"].get<std::string>(), "rebuilt: singular points: 4 → 16") << r.output;
 }
 
 }  // namespace

@@ -1,7 +1,7 @@
 #pragma once
 /// The compiled field F(x, y, z; q): an immutable instruction tape plus parameter values.
-#include <map>
 #include <array>
+#include <map>
 #include <memory>
 #include <span>
 #include <string>
@@ -116,14 +116,13 @@ class Evaluator {
               std::span<double> out);
   /// Batched value and gradient.
   void values_gradients(std::span<const double> x, std::span<const double> y,
-                        std::span<const double> z, std::span<double> value,
-                        std::span<double> gx, std::span<double> gy, std::span<double> gz);
+                        std::span<const double> z, std::span<double> value, std::span<double> gx,
+                        std::span<double> gy, std::span<double> gz);
   /// Batched value, gradient and Hessian: hessian[k][i] is entry k of the Hessian at point i,
   /// in the order xx, xy, xz, yy, yz, zz. The same numbers as sample() at each point.
   void values_gradients_hessians(std::span<const double> x, std::span<const double> y,
                                  std::span<const double> z, std::span<double> value,
-                                 std::span<double> gx, std::span<double> gy,
-                                 std::span<double> gz,
+                                 std::span<double> gx, std::span<double> gy, std::span<double> gz,
                                  const std::array<std::span<double>, 6>& hessian);
 
  private:

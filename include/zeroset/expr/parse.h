@@ -19,11 +19,11 @@ namespace zeroset {
 
 /// One problem found in the source text.
 struct Diagnostic {
-  int line = 1;          ///< 1-based line
-  int column = 1;        ///< 1-based column (characters)
-  int length = 1;        ///< how many characters the caret line underlines
-  std::string message;   ///< what is wrong, e.g. "expected an operand after '+'"
-  std::string hint;      ///< what to try, may be empty
+  int line = 1;         ///< 1-based line
+  int column = 1;       ///< 1-based column (characters)
+  int length = 1;       ///< how many characters the caret line underlines
+  std::string message;  ///< what is wrong, e.g. "expected an operand after '+'"
+  std::string hint;     ///< what to try, may be empty
 
   /// "line L, column C: message\n  <source line>\n  <caret line>\n  hint: ..." .
   std::string format(std::string_view source) const;

@@ -154,11 +154,11 @@ struct FloaterOptions {
 
 /// What one step did, and the state after it.
 struct StepStats {
-  std::size_t step = 0;      ///< steps taken so far, this one included
-  std::size_t count = 0;     ///< floaters after the step
-  std::size_t births = 0;    ///< fissions
-  std::size_t deaths = 0;    ///< deaths by the randomised density rule
-  std::size_t removed = 0;   ///< strays (far from F = 0, degenerate σ, or outside the clip)
+  std::size_t step = 0;     ///< steps taken so far, this one included
+  std::size_t count = 0;    ///< floaters after the step
+  std::size_t births = 0;   ///< fissions
+  std::size_t deaths = 0;   ///< deaths by the randomised density rule
+  std::size_t removed = 0;  ///< strays (far from F = 0, degenerate σ, or outside the clip)
   /// Of those, floaters removed because F or ∇F was not finite where they went (a pole, a NaN
   /// region) or they left the clip.
   std::size_t undefined_removed = 0;

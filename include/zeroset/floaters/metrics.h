@@ -123,8 +123,7 @@ struct SingularSetCoverage {
 /// Measures the coverage. `on_set` 0: 1e-9 times the extent of the samples. Curves are probed
 /// every tenth of the mean off-set spacing. All zero when there are fewer than two samples
 /// off the set.
-SingularSetCoverage measure_singular_coverage(const SingularSet& set,
-                                              std::span<const Vec3> samples,
+SingularSetCoverage measure_singular_coverage(const SingularSet& set, std::span<const Vec3> samples,
                                               int local_neighbours = 8, double on_set = 0);
 
 }  // namespace zeroset

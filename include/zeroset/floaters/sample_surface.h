@@ -66,10 +66,10 @@ struct SampleResult {
   Surface surface;  ///< at the final parameter values
   SampleRun run;    ///< as run (without its callbacks)
   std::optional<FieldSurvey> survey;
-  StepStats last;  ///< the last step's figures
-  double seconds = 0;  ///< over the steps
-  std::size_t updates = 0;  ///< floater updates over the steps
-  std::size_t undefined_removed = 0;  ///< floaters removed where F or ∇F was not finite
+  StepStats last;                           ///< the last step's figures
+  double seconds = 0;                       ///< over the steps
+  std::size_t updates = 0;                  ///< floater updates over the steps
+  std::size_t undefined_removed = 0;        ///< floaters removed where F or ∇F was not finite
   std::optional<std::size_t> converged_at;  ///< the step at which the system first settled
   std::optional<SampleAnimationStats> animation;
   std::optional<SampleMetrics> metrics;

@@ -12,7 +12,8 @@ namespace zeroset {
 /// own: written into a temp file beside the target and renamed into place. If `write` throws,
 /// the temp file is removed and the exception propagates; `path` is untouched. Throws IoError
 /// when `path` cannot be created (checked first), WriteError when writing or the rename fails.
-void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& write);
+void write_file_atomically(const std::string& path,
+                           const std::function<void(std::ostream&)>& write);
 
 /// Checks early (before long work) that `path` can be written: its directory (that of the
 /// file a symbolic link at `path` leads to) exists and is writable, and `path` is not a

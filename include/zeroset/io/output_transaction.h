@@ -47,9 +47,10 @@ class OutputTransaction {
 
   /// Declares the output `path` (set by `flag`, named in messages) before any work and makes its
   /// temp file. Throws IoError (bad input) when it cannot be created (no such directory, not
-  /// writable, a directory, its temp file cannot be made) and InvalidArgument when an output declared before names the same file, by any
-  /// spelling (./a.png, a symbolic link to it, a hard link). Throws Error when more outputs are
-  /// pending in the process than the signal clean-up can hold (65,536).
+  /// writable, a directory, its temp file cannot be made) and InvalidArgument when an output
+  /// declared before names the same file, by any spelling (./a.png, a symbolic link to it, a hard
+  /// link). Throws Error when more outputs are pending in the process than the signal clean-up can
+  /// hold (65,536).
   void declare(const std::string& path, const std::string& flag);
 
   /// Writes the output `path` (declared now if it was not) through `write` into its temp file.
@@ -95,8 +96,8 @@ class OutputTransaction {
   std::map<std::string, size_t> by_path_;
   std::map<std::string, size_t> by_name_;
   std::map<std::pair<unsigned long long, unsigned long long>, size_t> by_inode_;
-  std::vector<std::string> made_dirs_;     // in the order made: parents first
-  std::vector<int> dir_slots_;             // their signal clean-up slots
+  std::vector<std::string> made_dirs_;  // in the order made: parents first
+  std::vector<int> dir_slots_;          // their signal clean-up slots
   std::vector<std::string> remove_at_commit_;
   std::string token_;  // the random part of this transaction's temp names
   bool committed_ = false;

@@ -64,13 +64,13 @@ VertexTriangles build_vertex_triangles(size_t vertex_count,
 
 /// Counts that decide whether a mesh is a closed, consistently oriented 2-manifold.
 struct MeshTopology {
-  size_t vertices = 0;            ///< vertices used by at least one triangle
+  size_t vertices = 0;  ///< vertices used by at least one triangle
   size_t edges = 0;
   size_t triangles = 0;
-  size_t boundary_edges = 0;      ///< in exactly one triangle
-  size_t non_manifold_edges = 0;  ///< in three or more triangles
-  size_t misoriented_edges = 0;   ///< interior edges traversed twice in the same direction
-  size_t degenerate_triangles = 0;  ///< a vertex index repeated
+  size_t boundary_edges = 0;           ///< in exactly one triangle
+  size_t non_manifold_edges = 0;       ///< in three or more triangles
+  size_t misoriented_edges = 0;        ///< interior edges traversed twice in the same direction
+  size_t degenerate_triangles = 0;     ///< a vertex index repeated
   long long euler_characteristic = 0;  ///< V − E + T over the used vertices
 
   /// Every edge in exactly two triangles, each traversed once in each direction.

@@ -30,41 +30,42 @@ enum class BoundaryMode {
 };
 
 struct ImproveOptions {
-  int max_steps = 300;               ///< improve_mesh stops after this many steps
-  double relaxation = 0.5;           ///< λ: fraction of the way to the spring equilibrium per step
+  int max_steps = 300;      ///< improve_mesh stops after this many steps
+  double relaxation = 0.5;  ///< λ: fraction of the way to the spring equilibrium per step
   /// β: share of its last tangential move a vertex carries into the next, on flat parts more
   /// than three rings from singular curves (heavy-ball momentum; 0: none)
   double inertia = 0.9;
-  double feedback = 1.0;             ///< φ·dt: fraction of the Newton correction to F = 0 per step
-  double spring_base = 1.0;          ///< κ_0
-  bool use_curvature = true;         ///< add the curvature estimator (paper eq. 6)
-  double curvature_weight = 8.0;     ///< κ_d
-  bool use_singularity = true;       ///< add the singularity estimator β (docs/algorithms.md B.3)
-  double singularity_weight = 4.0;   ///< κ_s
-  double singularity_scale = 3.0;    ///< γ_s in mean edge lengths
-  int singularity_interval = 5;      ///< steps between Hessian evaluations for β
-  bool find_singular_points = true;  ///< Newton on ∇F = 0; moves and holds the nearest vertex
-  bool flip_edges = true;            ///< Delaunay edge flips between nearly coplanar triangles
-  double flip_max_dihedral_deg = 25; ///< flip only where the two triangles bend less than this
-  int flip_steps = 40;               ///< flip during the first steps only, then let the springs settle
+  double feedback = 1.0;            ///< φ·dt: fraction of the Newton correction to F = 0 per step
+  double spring_base = 1.0;         ///< κ_0
+  bool use_curvature = true;        ///< add the curvature estimator (paper eq. 6)
+  double curvature_weight = 8.0;    ///< κ_d
+  bool use_singularity = true;      ///< add the singularity estimator β (docs/algorithms.md B.3)
+  double singularity_weight = 4.0;  ///< κ_s
+  double singularity_scale = 3.0;   ///< γ_s in mean edge lengths
+  int singularity_interval = 5;     ///< steps between Hessian evaluations for β
+  bool find_singular_points = true;   ///< Newton on ∇F = 0; moves and holds the nearest vertex
+  bool flip_edges = true;             ///< Delaunay edge flips between nearly coplanar triangles
+  double flip_max_dihedral_deg = 25;  ///< flip only where the two triangles bend less than this
+  int flip_steps = 40;  ///< flip during the first steps only, then let the springs settle
   BoundaryMode boundary = BoundaryMode::kConstrained;
-  double speed_threshold = 5e-3;     ///< converged when every move < this × mean edge length
-  double max_move_fraction = 0.3;    ///< a move is at most this × the vertex's shortest edge
-  double min_area_fraction = 1e-3;   ///< a triangle must keep ≥ this × mean edge length² × √3/4
-  bool final_projection = true;      ///< improve_mesh calls finish() at the end
-  int threads = 0;                   ///< 0: one per 100 000 vertices, at most all cores
+  double speed_threshold = 5e-3;   ///< converged when every move < this × mean edge length
+  double max_move_fraction = 0.3;  ///< a move is at most this × the vertex's shortest edge
+  double min_area_fraction = 1e-3;  ///< a triangle must keep ≥ this × mean edge length² × √3/4
+  bool final_projection = true;     ///< improve_mesh calls finish() at the end
+  int threads = 0;                  ///< 0: one per 100 000 vertices, at most all cores
 };
 
 /// Figures of the last step (or of the whole run in improve_mesh).
 struct ImproveStats {
   int steps = 0;
   bool converged = false;
-  double max_move = 0;             ///< largest move of the last step, in mean edge lengths
+  double max_move = 0;  ///< largest move of the last step, in mean edge lengths
   double mean_edge_length = 0;
-  long long flips = 0;             ///< edge flips so far
-  long long shortened_moves = 0;   ///< moves halved by the flip guard so far
-  long long cancelled_moves = 0;   ///< moves cancelled by the flip guard so far
-  long long flipped_triangles = 0; ///< triangles facing against ∇F now (should stay 0 on smooth parts)
+  long long flips = 0;            ///< edge flips so far
+  long long shortened_moves = 0;  ///< moves halved by the flip guard so far
+  long long cancelled_moves = 0;  ///< moves cancelled by the flip guard so far
+  long long flipped_triangles =
+      0;  ///< triangles facing against ∇F now (should stay 0 on smooth parts)
   std::vector<Vec3> singular_points;  ///< points found with F ≈ 0 and ∇F ≈ 0, each held by a vertex
   /// Moves refused so far, the vertex staying where it was: out of the clip, or onto a point
   /// where F or ∇F is not finite (found at the next evaluation and undone).
@@ -72,7 +73,7 @@ struct ImproveStats {
   /// After finish(): vertices where F is not finite. Each is a failure: max_residual is then
   /// the largest double.
   long long undefined_vertices = 0;
-  double max_residual = 0;         ///< max |F|/|∇F| over free vertices after finish()
+  double max_residual = 0;  ///< max |F|/|∇F| over free vertices after finish()
   double seconds = 0;
 };
 

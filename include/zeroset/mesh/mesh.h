@@ -23,7 +23,7 @@ struct Mesh {
   std::vector<Vec3> positions;
   std::vector<std::array<std::uint32_t, 3>> triangles;  ///< counter-clockwise seen from +∇F side
   std::vector<std::uint8_t> is_boundary;                ///< per vertex: lies on the clip surface
-  std::vector<Vec3> normals;                            ///< per vertex, optional (empty or unit ∇F/|∇F|)
+  std::vector<Vec3> normals;      ///< per vertex, optional (empty or unit ∇F/|∇F|)
   std::vector<MeshCurve> curves;  ///< singular curves through the vertices, may be empty
 
   size_t vertex_count() const { return positions.size(); }

@@ -7,8 +7,9 @@
 
 namespace zeroset {
 
-/// Drops vertices no triangle and no curve uses and renumbers the rest (order kept). Keeps `is_boundary`
-/// and `normals` in step when they have one entry per vertex. Returns how many were dropped.
+/// Drops vertices no triangle and no curve uses and renumbers the rest (order kept). Keeps
+/// `is_boundary` and `normals` in step when they have one entry per vertex. Returns how many were
+/// dropped.
 size_t remove_unreferenced_vertices(Mesh& mesh);
 
 /// Removes degenerate triangles by collapsing every edge shorter than `min_length` (shortest

@@ -50,8 +50,8 @@ struct MeshRun {
   int threads = 0;  ///< 0: as each stage chooses (ImproveOptions::threads, ...)
   /// The improver's step limit when the settings say "auto" (until at rest).
   int auto_steps = ImproveOptions{}.max_steps;
-  bool survey = true;            ///< survey the field first (FieldSurvey and its warning)
-  bool quality = false;          ///< measure quality and topology before and after improving
+  bool survey = true;    ///< survey the field first (FieldSurvey and its warning)
+  bool quality = false;  ///< measure quality and topology before and after improving
   /// Find the singular set also when the crossings step does not run (for a stats file or an
   /// overlay); the crossings step finds it whenever it runs.
   bool singular_set = false;
@@ -69,14 +69,14 @@ struct MeshRun {
 
 /// A mesh with everything that was measured on the way.
 struct MeshResult {
-  Surface surface;        ///< as meshed
-  MeshSettings settings;  ///< as validated
-  Mesh mesh;              ///< the singular curves left out when settings.curves is off
-  std::optional<FieldSurvey> survey;     ///< with MeshRun::survey
+  Surface surface;                    ///< as meshed
+  MeshSettings settings;              ///< as validated
+  Mesh mesh;                          ///< the singular curves left out when settings.curves is off
+  std::optional<FieldSurvey> survey;  ///< with MeshRun::survey
   PolygonizeStats polygonize;
-  std::size_t polygonized_vertices = 0;   ///< the marching-cubes mesh, before the crossings
+  std::size_t polygonized_vertices = 0;  ///< the marching-cubes mesh, before the crossings
   std::size_t polygonized_triangles = 0;
-  std::optional<SingularSet> singular;   ///< found by the crossings step, or on request
+  std::optional<SingularSet> singular;  ///< found by the crossings step, or on request
   std::optional<CrossingStats> crossings;
   std::optional<MeshImprovement> improvement;  ///< when improving ran (a mesh, steps > 0)
   std::optional<MeshQuality> quality_before, quality_after;  ///< with MeshRun::quality

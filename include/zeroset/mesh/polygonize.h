@@ -64,29 +64,29 @@ struct PolygonizeOptions {
 
 /// What one polygonization did and how long it took.
 struct PolygonizeStats {
-  Box3 grid_bounds;                    ///< the box the grid covers
-  std::array<int, 3> cells{0, 0, 0};   ///< cells per axis
+  Box3 grid_bounds;                   ///< the box the grid covers
+  std::array<int, 3> cells{0, 0, 0};  ///< cells per axis
   double cell_size = 0;
   bool sparse = false;
-  long long bricks = 0;                ///< sparse path: bricks in the grid
-  long long bricks_kept = 0;           ///< sparse path: bricks sampled
-  long long grid_samples = 0;          ///< field values at grid nodes
-  long long refine_evaluations = 0;    ///< field values spent refining edge vertices
-  long long nan_samples = 0;           ///< grid nodes where F was not finite (NaN or ±∞)
-  long long undefined_edges = 0;       ///< crossing edges with a non-finite end: no vertex
-  long long pole_edges = 0;            ///< sign changes refused as poles or jumps: no vertex
-  long long undefined_triangles = 0;   ///< triangles left out for a corner on such an edge
-  long long active_cells = 0;          ///< cells the surface passes through
-  long long ambiguous_faces = 0;       ///< face decisions made by the asymptotic decider
-  long long edge_vertices = 0;         ///< vertices before clean-up and clipping
-  long long welded_vertices = 0;       ///< vertices merged into one on a grid node where F = 0
-  long long collapsed_edges = 0;       ///< degenerate triangles removed by edge collapse
-  long long clip_cut_edges = 0;        ///< new vertices where mesh edges cross the clip
-  long long clip_snapped = 0;          ///< vertices moved onto the clip curve
-  double seconds_sampling = 0;         ///< field at the grid nodes
-  double seconds_extraction = 0;       ///< classification, vertices (with refinement), triangles
-  double seconds_refinement = 0;       ///< the refinement part of the extraction
-  double seconds_cleanup = 0;          ///< collapses, clipping, normals
+  long long bricks = 0;               ///< sparse path: bricks in the grid
+  long long bricks_kept = 0;          ///< sparse path: bricks sampled
+  long long grid_samples = 0;         ///< field values at grid nodes
+  long long refine_evaluations = 0;   ///< field values spent refining edge vertices
+  long long nan_samples = 0;          ///< grid nodes where F was not finite (NaN or ±∞)
+  long long undefined_edges = 0;      ///< crossing edges with a non-finite end: no vertex
+  long long pole_edges = 0;           ///< sign changes refused as poles or jumps: no vertex
+  long long undefined_triangles = 0;  ///< triangles left out for a corner on such an edge
+  long long active_cells = 0;         ///< cells the surface passes through
+  long long ambiguous_faces = 0;      ///< face decisions made by the asymptotic decider
+  long long edge_vertices = 0;        ///< vertices before clean-up and clipping
+  long long welded_vertices = 0;      ///< vertices merged into one on a grid node where F = 0
+  long long collapsed_edges = 0;      ///< degenerate triangles removed by edge collapse
+  long long clip_cut_edges = 0;       ///< new vertices where mesh edges cross the clip
+  long long clip_snapped = 0;         ///< vertices moved onto the clip curve
+  double seconds_sampling = 0;        ///< field at the grid nodes
+  double seconds_extraction = 0;      ///< classification, vertices (with refinement), triangles
+  double seconds_refinement = 0;      ///< the refinement part of the extraction
+  double seconds_cleanup = 0;         ///< collapses, clipping, normals
   double seconds_total = 0;
 };
 

@@ -31,9 +31,9 @@
 namespace zeroset {
 
 struct RemeshOptions {
-  double target_edge = 0;      ///< L; 0: the mean edge length of the input mesh
-  int max_iterations = 30;     ///< split/collapse/flip/relax rounds at most
-  int relax_steps = 3;         ///< relaxation steps per iteration
+  double target_edge = 0;   ///< L; 0: the mean edge length of the input mesh
+  int max_iterations = 30;  ///< split/collapse/flip/relax rounds at most
+  int relax_steps = 3;      ///< relaxation steps per iteration
   /// Delaunay flip + relaxation rounds after the iterations, at most (then up to 20 rounds of
   /// flips alone; 0: no polish).
   int polish_rounds = 10;
@@ -57,12 +57,12 @@ struct RemeshStats {
   bool converged = false;
   long long splits = 0;
   long long collapses = 0;
-  long long flips = 0;            ///< valence and Delaunay flips
+  long long flips = 0;  ///< valence and Delaunay flips
   long long refused_collapses = 0;
-  long long relax_steps = 0;      ///< relaxation steps, over all iterations
-  long long reverted_moves = 0;   ///< relaxation moves undone because a triangle would turn over
+  long long relax_steps = 0;     ///< relaxation steps, over all iterations
+  long long reverted_moves = 0;  ///< relaxation moves undone because a triangle would turn over
   double target_edge = 0;
-  double last_max_move = 0;       ///< largest relaxation move of the last iteration, in L
+  double last_max_move = 0;           ///< largest relaxation move of the last iteration, in L
   std::vector<Vec3> singular_points;  ///< points held exactly by a vertex
   /// Isolated singular points found that no vertex could take without turning a triangle
   /// over (0 on every surface tested).
@@ -72,7 +72,7 @@ struct RemeshStats {
   /// back (a flip there would have made an edge of three triangles): then no vertex is held.
   long long pinch_held_vertices = 0;
   int pinch_improver_steps = 0;
-  double max_residual = 0;        ///< max |F|/|∇F| over the vertices that move (not the locked)
+  double max_residual = 0;  ///< max |F|/|∇F| over the vertices that move (not the locked)
   long long undefined_vertices = 0;
   double seconds = 0;
 };

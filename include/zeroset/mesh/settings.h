@@ -57,8 +57,8 @@ inline bool is_paper_only_mesh_key(std::string_view key) {
 
 /// How a surface is polygonized and improved.
 struct MeshSettings {
-  int cells = 128;       ///< marching cubes cells along the longest side of the clip box
-  bool improve = true;   ///< run the improver after polygonizing
+  int cells = 128;      ///< marching cubes cells along the longest side of the clip box
+  bool improve = true;  ///< run the improver after polygonizing
   /// At most this many improver steps; nullopt ("auto"): until at rest, at most the front
   /// end's default (ImproveOptions::max_steps for `zeroset mesh`).
   std::optional<int> max_improve_steps;

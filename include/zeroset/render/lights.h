@@ -37,7 +37,6 @@ std::vector<PlacedLight> world_lights(std::span<const Light> lights, const View&
 /// The lights that shine, in order, with their directions in camera coordinates (x right, y up,
 /// z towards the viewer: OpenGL's eye space). `world_to_camera` turns world directions into
 /// camera ones (its rows: the view's right, up and −forward).
-std::vector<PlacedLight> camera_lights(std::span<const Light> lights,
-                                       const Mat3& world_to_camera);
+std::vector<PlacedLight> camera_lights(std::span<const Light> lights, const Mat3& world_to_camera);
 
 }  // namespace zeroset

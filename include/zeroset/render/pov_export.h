@@ -18,8 +18,7 @@ namespace zeroset {
 std::string pov_scene(const Surface& surface, const RenderOptions& options);
 
 /// Writes pov_scene(...) to `path` atomically. Throws BadInput / IoError.
-void write_pov_scene(const Surface& surface, const RenderOptions& options,
-                     const std::string& path);
+void write_pov_scene(const Surface& surface, const RenderOptions& options, const std::string& path);
 
 /// A keyframed animation for POV-Ray: the scene text, driven by `clock` (0 at the first frame,
 /// 1 at the last: the animation time of Keyframes). Each track becomes a piecewise function of

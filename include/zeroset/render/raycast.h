@@ -30,11 +30,11 @@ struct RaycastOptions {
 
 /// One intersection of a ray with the surface.
 struct SurfaceHit {
-  double t = 0;                ///< ray parameter: point = eye + t·direction
+  double t = 0;  ///< ray parameter: point = eye + t·direction
   Vec3 point = Vec3::Zero();
-  Vec3 normal = Vec3::UnitZ(); ///< unit, turned towards the eye
-  bool front = true;           ///< the eye is on the side ∇F points to (F > 0 there)
-  bool singular = false;       ///< ∇F vanished at the hit: the normal is a fallback
+  Vec3 normal = Vec3::UnitZ();  ///< unit, turned towards the eye
+  bool front = true;            ///< the eye is on the side ∇F points to (F > 0 there)
+  bool singular = false;        ///< ∇F vanished at the hit: the normal is a fallback
 };
 
 /// Casts rays from a fixed eye against a surface inside its clip. Not thread-safe (owns an

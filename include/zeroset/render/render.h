@@ -26,13 +26,13 @@ struct Material {
 struct RenderOptions {
   int width = 800;
   int height = 800;
-  int samples = 1;                ///< anti-aliasing: samples×samples rays per pixel
-  std::optional<Camera> camera;   ///< default: the surface's camera
-  std::vector<Light> lights;      ///< empty: default_lights(), a rig that follows the camera
-  Material front;                 ///< the side ∇F points to
+  int samples = 1;               ///< anti-aliasing: samples×samples rays per pixel
+  std::optional<Camera> camera;  ///< default: the surface's camera
+  std::vector<Light> lights;     ///< empty: default_lights(), a rig that follows the camera
+  Material front;                ///< the side ∇F points to
   Material back{.diffuse = Color(0.06, 0.12, 0.35)};  ///< the other side, darker (paper's figures)
   Color background = Color(1, 1, 1);  ///< linear RGB (pictures are gamma encoded, 2.2)
-  int threads = 0;                ///< 0: all cores; the picture does not depend on it
+  int threads = 0;                    ///< 0: all cores; the picture does not depend on it
   /// Draws the singular set over the picture (overlay.h); without it the picture is exactly
   /// as before. Each sample ray meets the tubes and spheres exactly and keeps the nearest of
   /// them and the surface, so the overlay is anti-aliased with the picture's samples.

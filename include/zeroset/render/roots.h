@@ -28,11 +28,11 @@ struct RootOptions {
 /// Counters of one or many searches (for benchmarks and tests).
 struct RootStats {
   long long calls = 0;
-  long long subdivisions = 0;   ///< de Casteljau splits
-  long long refinements = 0;    ///< function evaluations while refining simple roots
-  long long band_roots = 0;     ///< roots reported through the zero band (no sign change)
-  long long guided = 0;         ///< searches given a usable `RootGuess`
-  long long guided_roots = 0;   ///< of those, found before the guess's limit
+  long long subdivisions = 0;      ///< de Casteljau splits
+  long long refinements = 0;       ///< function evaluations while refining simple roots
+  long long band_roots = 0;        ///< roots reported through the zero band (no sign change)
+  long long guided = 0;            ///< searches given a usable `RootGuess`
+  long long guided_roots = 0;      ///< of those, found before the guess's limit
   long long guides_abandoned = 0;  ///< guided searches that fell back to the plain one
 };
 
@@ -44,7 +44,7 @@ struct RootStats {
 /// next to the root.
 struct RootGuess {
   double t = std::numeric_limits<double>::quiet_NaN();  ///< NaN: no guess
-  double spread = 0;  ///< ≥ 0, in the units of t
+  double spread = 0;                                    ///< ≥ 0, in the units of t
 };
 
 /// Finds the smallest root of f(t) = Σ a_k t^k in [t0, t1]. Allocation-free; owns scratch

@@ -38,10 +38,10 @@ void validate_image_size(long long width, long long height);
 /// "front/diffuse", "lights/0/direction", ...).
 void validate_settings(const RenderOptions& options);
 
-/// Applies `render` (the object above) to `options`, then validates them. Throws BadInput naming `origin` and the
-/// JSON pointer of a malformed or out-of-range entry (e.g. "scene.json: /render/front/diffuse:
-/// expected '#rrggbb' or [r, g, b]"); nothing is applied then. Unknown keys are an error too, so typos do not pass
-/// silently.
+/// Applies `render` (the object above) to `options`, then validates them. Throws BadInput naming
+/// `origin` and the JSON pointer of a malformed or out-of-range entry (e.g. "scene.json:
+/// /render/front/diffuse: expected '#rrggbb' or [r, g, b]"); nothing is applied then. Unknown keys
+/// are an error too, so typos do not pass silently.
 void apply_render_settings(const nlohmann::json& render, RenderOptions& options,
                            const std::string& origin);
 

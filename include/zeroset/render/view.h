@@ -1,7 +1,8 @@
 #pragma once
 /// The view of an orbit camera, a pinhole (perspective) or parallel rays (orthographic): eye
-/// point, orthonormal frame, and the map between image positions and rays. Shared by the ray caster, the disk and mesh renderers and the
-/// POV-Ray export so that they all show exactly the same picture.
+/// point, orthonormal frame, and the map between image positions and rays. Shared by the ray
+/// caster, the disk and mesh renderers and the POV-Ray export so that they all show exactly the
+/// same picture.
 #include <Eigen/Geometry>
 
 #include "zeroset/surface/surface.h"
@@ -20,8 +21,8 @@ struct View {
   /// eye, the window being 2·half_height world units high.
   bool orthographic = false;
   double half_height = 1;  ///< orthographic only: half the window's height in world units
-  int width = 1;                  ///< pixels
-  int height = 1;                 ///< pixels
+  int width = 1;           ///< pixels
+  int height = 1;          ///< pixels
 
   /// The view of `camera` for a scene of radius `scene_radius` (used when camera.distance
   /// is 0) on a width × height image. Throws InvalidArgument for a non-positive size, a field

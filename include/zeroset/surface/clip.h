@@ -42,11 +42,11 @@ inline constexpr std::size_t kMaxClipParts = 256;
 /// A clip spec whose numbers are expressions of the surface's parameters, such as
 /// "sphere:3*sqrt(mu)" (docs/scenes.md): its text, its numbers compiled, and the parts it sets.
 struct ClipFormula {
-  std::string spec;             ///< as given; to_specs() writes it back
-  std::vector<Field> numbers;   ///< every number of the spec in order (a sphere's centre last)
-  std::size_t first = 0;        ///< its first part: an index into spheres (a sphere spec) or
-                                ///< planes (a plane spec: one, a box: six)
-  bool sphere = false;          ///< the spec is a sphere
+  std::string spec;            ///< as given; to_specs() writes it back
+  std::vector<Field> numbers;  ///< every number of the spec in order (a sphere's centre last)
+  std::size_t first = 0;       ///< its first part: an index into spheres (a sphere spec) or
+                               ///< planes (a plane spec: one, a box: six)
+  bool sphere = false;         ///< the spec is a sphere
 };
 
 /// An intersection of spheres and half spaces; empty lists mean "no clip" (all of space).

@@ -33,8 +33,8 @@ const char* ease_name(Ease e);
 std::optional<Ease> find_ease(std::string_view name);
 
 /// One animated value: a parameter's, or a camera field's (`azimuth_deg`, `elevation_deg`,
-/// `distance`, `roll_deg`, `fov_deg`, `ortho_height`). Held at the first key's value before it and at the last
-/// key's after it; between two keys it follows the first one's ease.
+/// `distance`, `roll_deg`, `fov_deg`, `ortho_height`). Held at the first key's value before it and
+/// at the last key's after it; between two keys it follows the first one's ease.
 struct KeyTrack {
   std::string name;
   std::vector<double> times;  ///< animation time in [0, 1], strictly increasing
@@ -69,9 +69,9 @@ const std::vector<std::string>& keyframe_camera_fields();
 /// Reads `settings`' "animation"/"keyframes" (none: empty Keyframes) for `surface`: a list of
 /// {"time": T in [0, 1] | "frame": F in [0, frames − 1], "params": {NAME: value, ...},
 /// "camera": {FIELD: value, ..., "projection": "perspective" | "orthographic"}, "ease":
-/// "linear" | "in" | "out" | "in-out"}, in increasing time. Throws BadInput "ORIGIN: /animation/keyframes/i/...: what is wrong" for an unknown
-/// key, parameter or ease, a time out of order, or a camera validate_camera refuses (a
-/// keyframe's distance must be positive).
+/// "linear" | "in" | "out" | "in-out"}, in increasing time. Throws BadInput "ORIGIN:
+/// /animation/keyframes/i/...: what is wrong" for an unknown key, parameter or ease, a time out of
+/// order, or a camera validate_camera refuses (a keyframe's distance must be positive).
 Keyframes read_keyframes(const nlohmann::json& settings, const Surface& surface, int frames,
                          const std::string& origin);
 

@@ -52,8 +52,8 @@ struct SingularSet {
 };
 
 struct SingularSetOptions {
-  int cells = 48;          ///< seed grid cells along the longest side of the clip's box
-  double spacing = 0;      ///< vertex spacing along curves; 0: half a seed cell
+  int cells = 48;                 ///< seed grid cells along the longest side of the clip's box
+  double spacing = 0;             ///< vertex spacing along curves; 0: half a seed cell
   int max_curve_points = 200000;  ///< over all curves: a bound on the work
 };
 
@@ -71,8 +71,7 @@ std::optional<SingularSet> find_singular_set_if_bounded(const Surface& surface,
 /// The warning every command gives when ∇F vanishes on a whole sheet of F = 0 (F is a square
 /// or worse there and never changes sign), or none. `known`: the set already found; without
 /// it a coarse one is searched (24 cells) when the clip is bounded.
-std::optional<std::string> singular_sheet_warning(const Surface& surface,
-                                                  const SingularSet* known);
+std::optional<std::string> singular_sheet_warning(const Surface& surface, const SingularSet* known);
 
 /// The set as JSON: {"points": [{"kind", "position"}], "curves": [{"kind", "closed", "length",
 /// "points"}], "singular_sheet": bool[, "singular_sheet_example"]}, for --json and --stats.

@@ -99,8 +99,10 @@ double secant_bisection(F&& f, double f_lo, double f_hi) {
     if (it % 2) t = 0.5 * (lo + hi);
     const double g = f(t);
     if (g == 0) return t;
-    if (g < 0) lo = t, f_lo = g;
-    else hi = t, f_hi = g;
+    if (g < 0)
+      lo = t, f_lo = g;
+    else
+      hi = t, f_hi = g;
   }
   return 0.5 * (lo + hi);
 }

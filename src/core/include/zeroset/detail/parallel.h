@@ -171,12 +171,13 @@ inline void values_gradients(EvaluatorPool& pool, int workers, std::span<const V
   {
     GradientBatch batch;
 #pragma omp for schedule(static)
-    for (long long c = 0; c < chunks; ++c) trap.run([&] {
-      const size_t b = static_cast<size_t>(c * kChunk);
-      const size_t m = static_cast<size_t>(std::min(n, (c + 1) * kChunk)) - b;
-      batch.evaluate(pool.local(), m, [&](size_t q) -> const Vec3& { return pts[b + q]; });
-      for (size_t q = 0; q < m; ++q) f[b + q] = batch.f[q], g[b + q] = batch.gradient(q);
-    });
+    for (long long c = 0; c < chunks; ++c)
+      trap.run([&] {
+        const size_t b = static_cast<size_t>(c * kChunk);
+        const size_t m = static_cast<size_t>(std::min(n, (c + 1) * kChunk)) - b;
+        batch.evaluate(pool.local(), m, [&](size_t q) -> const Vec3& { return pts[b + q]; });
+        for (size_t q = 0; q < m; ++q) f[b + q] = batch.f[q], g[b + q] = batch.gradient(q);
+      });
   }
   trap.rethrow();
 }
