@@ -18,15 +18,13 @@
 namespace zeroset {
 namespace {
 
+using detail::directed_edge_key;
+using detail::edge_key;
 using detail::kNone;
 // A rim that turns back this many tube radii or less before a curve's free end (a pinch
 // point) is joined to the end: towards a pinch point the sheets close like a book, and the
 // grid loses them a few cells before it.
 constexpr double kFreeEndReach = 4.0;
-
-std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
-  return (static_cast<std::uint64_t>(a) << 32) | b;
-}
 
 // The singular curves as a graph whose vertices become mesh vertices. Only the crossing
 // curves' edges are in `adj` (the strips are joined to them); isolated curves share vertices
@@ -376,21 +374,18 @@ std::vector<Chain> rim_chains(const std::vector<std::array<std::uint32_t, 2>>& e
 // it, until none is left; edges along the curves are never split. Returns the vertices added.
 long long refine_strips(Mesh& mesh, size_t first_added, double limit, const Surface& surface,
                         const std::unordered_set<std::uint64_t>& curve_edges) {
-  auto undirected = [](std::uint32_t a, std::uint32_t b) {
-    return edge_key(std::min(a, b), std::max(a, b));
-  };
   std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> on_edge;
   auto file = [&](std::uint32_t t) {
     const auto& tri = mesh.triangles[t];
     for (int k = 0; k < 3; ++k)
-      on_edge[undirected(tri[static_cast<size_t>(k)], tri[static_cast<size_t>((k + 1) % 3)])]
+      on_edge[edge_key(tri[static_cast<size_t>(k)], tri[static_cast<size_t>((k + 1) % 3)])]
           .push_back(t);
   };
   auto unfile = [&](std::uint32_t t) {
     const auto& tri = mesh.triangles[t];
     for (int k = 0; k < 3; ++k) {
       auto& list =
-          on_edge[undirected(tri[static_cast<size_t>(k)], tri[static_cast<size_t>((k + 1) % 3)])];
+          on_edge[edge_key(tri[static_cast<size_t>(k)], tri[static_cast<size_t>((k + 1) % 3)])];
       list.erase(std::remove(list.begin(), list.end(), t), list.end());
     }
   };
@@ -423,13 +418,13 @@ long long refine_strips(Mesh& mesh, size_t first_added, double limit, const Surf
       const std::uint32_t a = tri[static_cast<size_t>(k)],
                           b = tri[static_cast<size_t>((k + 1) % 3)];
       const double len = (P[a] - P[b]).norm();
-      if (len > longest_len && !curve_edges.count(undirected(a, b))) longest = k, longest_len = len;
+      if (len > longest_len && !curve_edges.count(edge_key(a, b))) longest = k, longest_len = len;
     }
     // A triangle with no area has no inside to fill: splitting it would not shorten its edges.
     if (longest < 0 || !(area2 > 1e-6 * longest_len * longest_len)) continue;
     const std::uint32_t a = tri[static_cast<size_t>(longest)],
                         b = tri[static_cast<size_t>((longest + 1) % 3)];
-    const std::vector<std::uint32_t> sharing = on_edge[undirected(a, b)];
+    const std::vector<std::uint32_t> sharing = on_edge[edge_key(a, b)];
     if (sharing.empty() || sharing.size() > 2) continue;
     Vec3 m = 0.5 * (P[a] + P[b]);
     const bool border = sharing.size() == 1 && mesh.is_boundary[a] && mesh.is_boundary[b];
@@ -554,8 +549,8 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
       if (near[t[0]] || near[t[1]] || near[t[2]]) {
         ++stats.removed_triangles;
         for (int k = 0; k < 3; ++k)
-          removed_edges.insert(
-              edge_key(t[static_cast<size_t>(k)], t[static_cast<size_t>((k + 1) % 3)]));
+          removed_edges.insert(directed_edge_key(t[static_cast<size_t>(k)],
+                                                 t[static_cast<size_t>((k + 1) % 3)]));
       } else {
         kept.push_back(t);
       }
@@ -589,7 +584,7 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
         const auto& t = kept[i];
         int on_rim = 0;
         for (int k = 0; k < 3; ++k)
-          on_rim += removed_edges.count(edge_key(t[static_cast<size_t>((k + 1) % 3)],
+          on_rim += removed_edges.count(directed_edge_key(t[static_cast<size_t>((k + 1) % 3)],
                                                  t[static_cast<size_t>(k)])) > 0;
         if (on_rim >= 2 && !near_free_end(t)) tips.push_back(i);
       }
@@ -599,8 +594,8 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
         ++stats.removed_triangles;
         const auto& t = kept[i];
         for (int k = 0; k < 3; ++k)
-          removed_edges.insert(
-              edge_key(t[static_cast<size_t>(k)], t[static_cast<size_t>((k + 1) % 3)]));
+          removed_edges.insert(directed_edge_key(t[static_cast<size_t>(k)],
+                                                 t[static_cast<size_t>((k + 1) % 3)]));
       }
     }
     {
@@ -614,7 +609,7 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
     for (const auto& t : kept)
       for (int k = 0; k < 3; ++k) {
         const std::uint32_t u = t[static_cast<size_t>(k)], v = t[static_cast<size_t>((k + 1) % 3)];
-        if (removed_edges.count(edge_key(v, u))) rim.push_back({u, v});
+        if (removed_edges.count(directed_edge_key(v, u))) rim.push_back({u, v});
       }
     // Each rim edge u → v and the graph path between the vertices its ends are joined to
     // bound a polygon (v, u, a_0 … a_k), fanned from u over the path's first part and from v
@@ -673,8 +668,7 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
       std::unordered_set<std::uint64_t> curve_edges;
       for (const auto& c : net.curves)
         for (size_t i = 0; i + 1 < c.verts.size(); ++i)
-          curve_edges.insert(edge_key(std::min(c.verts[i], c.verts[i + 1]) + base,
-                                      std::max(c.verts[i], c.verts[i + 1]) + base));
+          curve_edges.insert(edge_key(c.verts[i] + base, c.verts[i + 1] + base));
       stats.strip_vertices =
           refine_strips(mesh, first_added, options.split_edges * mean_edge, surface, curve_edges);
       stats.added_triangles = static_cast<long long>(mesh.triangles.size() - first_added);

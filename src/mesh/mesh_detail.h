@@ -17,6 +17,16 @@ namespace zeroset::detail {
 // No vertex, triangle or curve: the index the mesh code stores where there is none.
 inline constexpr std::uint32_t kNone = 0xffffffffu;
 
+// A half-edge a → b as one integer (a in the high word), for hash sets and maps.
+inline std::uint64_t directed_edge_key(std::uint32_t a, std::uint32_t b) {
+  return (static_cast<std::uint64_t>(a) << 32) | b;
+}
+
+// An undirected edge {a, b} as one integer: the half-edge from the smaller index.
+inline std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
+  return a < b ? directed_edge_key(a, b) : directed_edge_key(b, a);
+}
+
 struct ClipCutStats {
   long long cut_edges = 0;  // new vertices where an edge crosses G = 0
   long long snapped = 0;    // vertices moved onto the clip curve instead

@@ -63,11 +63,6 @@ constexpr size_t kRenumberVertices = 16384;
 constexpr double kPinchSpringRadius = 9;
 constexpr double kPinchHoldRadius = 6;
 
-inline std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
-  if (a > b) std::swap(a, b);
-  return (static_cast<std::uint64_t>(a) << 32) | b;
-}
-
 inline double min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
   return std::min({corner_angle(a, b, c), corner_angle(b, c, a), corner_angle(c, a, b)});
 }

@@ -6,6 +6,7 @@
 
 #include "zeroset/detail/segment.h"
 #include "zeroset/expr/field.h"
+#include "zeroset/surface/analysis.h"
 #include "zeroset/surface/clip.h"
 #include "zeroset/surface/singular_set.h"
 #include "zeroset/types.h"
@@ -28,6 +29,26 @@ struct Converged {
   Vec3 p = Vec3::Zero();
   bool ok = false;
 };
+
+/// One Gauss–Newton step towards the singular set from F, ∇F and ∇²F at a point: the
+/// minimum-norm least-squares solution of J x = r, r = (F/h, ∇F), J = [∇Fᵀ/h; ∇²F], in the
+/// coordinates given by the columns of `basis` (3×N), returned in space (the point moves by
+/// minus it). None where J vanishes.
+template <int N>
+std::optional<Vec3> singular_gauss_newton_step(double f, const Vec3& g, const Mat3& hessian,
+                                               const Eigen::Matrix<double, 3, N>& basis,
+                                               double h) {
+  Eigen::Matrix<double, 4, 3> j;
+  j.row(0) = g.transpose() / h;
+  j.bottomRows<3>() = hessian;
+  Eigen::Vector4d r;
+  r << f / h, g;
+  const Eigen::Matrix<double, 4, N> jb = j * basis;
+  const auto x = min_norm_solve<N>(jb.transpose() * jb, jb.transpose() * r, Spectrum::kGram,
+                                   1e-24, true);
+  if (!x) return std::nullopt;
+  return Vec3(basis * *x);
+}
 
 // Gauss–Newton on (F/h, ∇F) = 0 from `start` with minimum-norm least-squares steps (the system
 // is rank deficient on curves of S). ok when it converges inside `max_move` of `start` to a

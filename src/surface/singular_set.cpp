@@ -83,22 +83,8 @@ double median(std::vector<double> v) {
 // Length of the minimum-norm Gauss–Newton step towards S from a grid node: short steps mark
 // nodes close to S (the first step of detail::converge_to_singular, from the stored samples).
 double first_step_length(double f, const Vec3& g, const Mat3& h, double cell) {
-  Eigen::Matrix<double, 4, 3> j;
-  j.row(0) = g.transpose() / cell;
-  j.bottomRows<3>() = h;
-  Eigen::Vector4d r;
-  r << f / cell, g;
-  const Mat3 a = j.transpose() * j;
-  const Vec3 b = j.transpose() * r;
-  Eigen::SelfAdjointEigenSolver<Mat3> es;
-  es.computeDirect(a);
-  const double top = es.eigenvalues().cwiseAbs().maxCoeff();
-  if (!(top > 0) || !std::isfinite(top)) return std::numeric_limits<double>::infinity();
-  Vec3 x = Vec3::Zero();
-  for (int k = 0; k < 3; ++k)
-    if (es.eigenvalues()[k] > 1e-24 * top)
-      x += (es.eigenvectors().col(k).dot(b) / es.eigenvalues()[k]) * es.eigenvectors().col(k);
-  return x.norm();
+  const auto step = detail::singular_gauss_newton_step<3>(f, g, h, Mat3::Identity(), cell);
+  return step ? step->norm() : std::numeric_limits<double>::infinity();
 }
 
 double distance_to_curves(const Vec3& p, const std::vector<SingularCurve>& curves) {

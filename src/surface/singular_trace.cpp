@@ -16,24 +16,6 @@ constexpr double kStepTolerance = 1e-15;
 // The minimum-norm least-squares solution of (JᵀJ) x = b for symmetric positive semidefinite
 // A = JᵀJ: directions whose eigenvalue is below 1e-24 of the largest (singular values of J
 // below 1e-12 of its largest) are left out.
-template <int N>
-Eigen::Matrix<double, N, 1> min_norm_solve(const Eigen::Matrix<double, N, N>& a,
-                                           const Eigen::Matrix<double, N, 1>& b) {
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> es;
-  if constexpr (N == 3 || N == 2)
-    es.computeDirect(a);
-  else
-    es.compute(a);
-  const auto& lambda = es.eigenvalues();
-  const double top = lambda.cwiseAbs().maxCoeff();
-  Eigen::Matrix<double, N, 1> x = Eigen::Matrix<double, N, 1>::Zero();
-  if (!(top > 0) || !std::isfinite(top)) return x;
-  for (int k = 0; k < N; ++k)
-    if (lambda[k] > 1e-24 * top)
-      x += (es.eigenvectors().col(k).dot(b) / lambda[k]) * es.eigenvectors().col(k);
-  return x;
-}
-
 bool is_singular_here(Evaluator& ev, const Vec3& p, const SingularScales& s) {
   Vec3 g;
   const double f = ev.value_gradient(p, g);
@@ -41,22 +23,15 @@ bool is_singular_here(Evaluator& ev, const Vec3& p, const SingularScales& s) {
          g.norm() <= s.grad_tolerance();
 }
 
-// One Gauss–Newton iteration on r = (F/h, ∇F) with J = [∇Fᵀ/h; H], in the coordinates given
-// by the columns of `basis` (3×N). Returns the step in space, or NaN when F is undefined.
+// One Gauss–Newton iteration at p (singular_gauss_newton_step), or NaN when F is undefined.
 template <int N>
 Vec3 gauss_newton_step(Evaluator& ev, const Vec3& p, const Eigen::Matrix<double, 3, N>& basis,
                        double h) {
   const FieldSample fs = ev.sample(p, true, false);
   if (!std::isfinite(fs.value) || !fs.gradient.allFinite() || !fs.hessian.allFinite())
     return Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
-  Eigen::Matrix<double, 4, 3> j;
-  j.row(0) = fs.gradient.transpose() / h;
-  j.bottomRows<3>() = fs.hessian;
-  Eigen::Vector4d r;
-  r << fs.value / h, fs.gradient;
-  const Eigen::Matrix<double, 4, N> jb = j * basis;
-  const Eigen::Matrix<double, N, 1> x = min_norm_solve<N>(jb.transpose() * jb, jb.transpose() * r);
-  return basis * x;
+  return singular_gauss_newton_step<N>(fs.value, fs.gradient, fs.hessian, basis, h)
+      .value_or(Vec3::Zero());
 }
 
 template <int N>

@@ -207,6 +207,43 @@ inline double singular_distance(const Vec3& gradient, const Mat3& hessian) {
   return c.reaches ? c.step.norm() : std::numeric_limits<double>::infinity();
 }
 
+/// Which eigenvalues of a symmetric matrix min_norm_solve() keeps: those of magnitude above
+/// the cutoff (any symmetric matrix, e.g. a Hessian), or those above it with their sign (a Gram
+/// matrix JᵀJ, positive semidefinite, whose rounding may leave tiny negative eigenvalues that
+/// must not be inverted).
+enum class Spectrum { kSymmetric, kGram };
+
+/// The minimum-norm least-squares solution x = A⁺b of a symmetric N×N system, from A's
+/// eigendecomposition: components along eigenvectors whose eigenvalue is at most
+/// `cutoff`·max|λ| (see Spectrum) are left out. `closed_form`: Eigen's closed-form 2×2/3×3
+/// eigensolver (computeDirect), else the iterative one; each caller keeps the one its results
+/// were measured with. None when A is zero or not finite. The one home of this solve: the
+/// improver's and the singular-set search's Newton steps use it.
+template <int N>
+std::optional<Eigen::Matrix<double, N, 1>> min_norm_solve(const Eigen::Matrix<double, N, N>& a,
+                                                          const Eigen::Matrix<double, N, 1>& b,
+                                                          Spectrum spectrum, double cutoff,
+                                                          bool closed_form) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> es;
+  if constexpr (N == 2 || N == 3) {
+    if (closed_form)
+      es.computeDirect(a);
+    else
+      es.compute(a);
+  } else {
+    es.compute(a);
+  }
+  const auto& lambda = es.eigenvalues();
+  const double top = lambda.cwiseAbs().maxCoeff();
+  if (!(top > 0) || !std::isfinite(top)) return std::nullopt;
+  Eigen::Matrix<double, N, 1> x = Eigen::Matrix<double, N, 1>::Zero();
+  for (int k = 0; k < N; ++k) {
+    const double l = spectrum == Spectrum::kGram ? lambda[k] : std::abs(lambda[k]);
+    if (l > cutoff * top) x += (es.eigenvectors().col(k).dot(b) / lambda[k]) * es.eigenvectors().col(k);
+  }
+  return x;
+}
+
 /// The improver's step towards ∇F = 0: the least-squares solution of F_xx r = F_x over the
 /// eigendirections with |λ| > 1e-9 of the largest (the full iterative eigensolver), whether or
 /// not ∇F has a component along the others, so a singular Hessian gives a long, not an
@@ -217,15 +254,8 @@ inline double singular_distance(const Vec3& gradient, const Mat3& hessian) {
 inline Vec3 pseudo_inverse_step(const Vec3& gradient, const Mat3& hessian) {
   constexpr double kInf = std::numeric_limits<double>::infinity();
   if (!hessian.allFinite() || !gradient.allFinite()) return Vec3::Constant(kInf);
-  Eigen::SelfAdjointEigenSolver<Mat3> es(hessian);
-  const Vec3 lam = es.eigenvalues();
-  const double lmax = lam.cwiseAbs().maxCoeff();
-  if (!(lmax > 0)) return Vec3::Constant(kInf);
-  Vec3 r = Vec3::Zero();
-  for (int k = 0; k < 3; ++k)
-    if (std::abs(lam[k]) > 1e-9 * lmax)
-      r += (es.eigenvectors().col(k).dot(gradient) / lam[k]) * es.eigenvectors().col(k);
-  return r;
+  return min_norm_solve<3>(hessian, gradient, Spectrum::kSymmetric, 1e-9, false)
+      .value_or(Vec3::Constant(kInf));
 }
 
 /// How find_critical_point() searches.
