@@ -133,7 +133,7 @@ void run_eval(const SurfaceArgs& args, const std::vector<std::string>& at, bool 
   nlohmann::json out = nlohmann::json::array();
   for (const auto& text : at) {
     const Vec3 p = parse_point(text);
-    const FieldSample r = ev.sample(p, true, true);
+    const FieldSample r = ev.sample(p, Derivatives::kAll);
     if (as_json) {
       nlohmann::json j;
       j["point"] = json_read::from_vec3(p);

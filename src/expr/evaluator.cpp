@@ -256,7 +256,9 @@ double Evaluator::value_gradient(const Vec3& p, Vec3& gradient) {
   return output(program.outputs[0], s, u);
 }
 
-FieldSample Evaluator::sample(const Vec3& p, bool hessian, bool parameter_derivatives) {
+FieldSample Evaluator::sample(const Vec3& p, Derivatives what) {
+  const bool hessian = includes(what, Derivatives::kHessian);
+  const bool parameter_derivatives = includes(what, Derivatives::kParameters);
   double* s = scratch_->single.data();
   s[0] = p.x();
   s[1] = p.y();

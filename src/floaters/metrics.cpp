@@ -186,7 +186,7 @@ SampleMetrics measure_samples(const Surface& surface, std::span<const Vec3> samp
 
   if (options.band_halfwidth > 0) {
     auto in_band = [&](const Vec3& p) {
-      const FieldSample s = ev.sample(p, true, false);
+      const FieldSample s = ev.sample(p, Derivatives::kHessian);
       return singular_distance(s.gradient, s.hessian) < options.band_halfwidth;
     };
     std::size_t ref_in = 0, sample_in = 0;

@@ -324,7 +324,7 @@ void parameter_terms(FloaterState& sys, std::span<const double> qdot) {
   if (std::all_of(qdot.begin(), qdot.end(), [](double v) { return v == 0; })) return;
   parallel_chunks(sys, n, [&](std::size_t b, std::size_t e, Evaluator& ev) {
     for (std::size_t i = b; i < e; ++i) {
-      const FieldSample s = ev.sample(sys.pos[i], false, true);
+      const FieldSample s = ev.sample(sys.pos[i], Derivatives::kParameters);
       double d = 0;
       for (std::size_t k = 0; k < qdot.size() && k < s.dq.size(); ++k) d += s.dq[k] * qdot[k];
       sys.fq[i] = std::isfinite(d) ? d : 0;

@@ -140,7 +140,7 @@ std::vector<int> match_points(const std::vector<Vec3>& from, const std::vector<V
 // least-squares steps of critical_step() slide it across the curve, not along it.
 bool project_onto_singular_curve(Evaluator& ev, Vec3& p, double tolerance) {
   for (int it = 0; it < kCurveNewtonSteps; ++it) {
-    const FieldSample s = ev.sample(p, true, false);
+    const FieldSample s = ev.sample(p, Derivatives::kHessian);
     if (!std::isfinite(s.value) || !s.gradient.allFinite()) return false;
     const CriticalStep c = critical_step(s.gradient, s.hessian);
     if (!c.step.allFinite()) return false;
@@ -282,7 +282,7 @@ CarryResult carry_mesh(const Mesh& mesh, const Surface& from, const Surface& to,
         }
         Vec3 term = Vec3::Zero();
         if (w < 1) {
-          const FieldSample s = old_pool.local().sample(start, false, true);
+          const FieldSample s = old_pool.local().sample(start, Derivatives::kParameters);
           double fq = 0;
           for (size_t k = 0; k < dq.size() && k < s.dq.size(); ++k) fq += s.dq[k] * dq[k];
           const double g2 = s.gradient.squaredNorm();

@@ -186,7 +186,7 @@ struct MeshImprover::State {
     for (long long v = 0; v < n; ++v)
       trap.run([&] {
         const FieldSample s =
-            pool.local().sample(mesh.positions[static_cast<size_t>(v)], true, false);
+            pool.local().sample(mesh.positions[static_cast<size_t>(v)], Derivatives::kHessian);
         const double r = pseudo_inverse_step(s.gradient, s.hessian).norm();
         step_to_critical[static_cast<size_t>(v)] = r;
         beta[static_cast<size_t>(v)] =

@@ -119,7 +119,7 @@ void gradient(RayCaster& rc, const Vec3& p, Vec3& g) {
 /// Hessian's principal eigenvector is the normal of the underlying smooth sheet when F is
 /// a square; otherwise face the viewer.
 Vec3 fallback_normal(RayCaster& rc, const Vec3& p, const Vec3& dir) {
-  const FieldSample s = rc.evaluator.sample(p, true, false);
+  const FieldSample s = rc.evaluator.sample(p, Derivatives::kHessian);
   if (s.hessian.allFinite() && s.hessian.norm() > 0) {
     Eigen::SelfAdjointEigenSolver<Mat3> eig(s.hessian);
     const Eigen::Vector3d ev = eig.eigenvalues().cwiseAbs();

@@ -139,7 +139,7 @@ std::vector<Vec3> triple_points_on(Evaluator& ev, const SingularCurve& curve,
   const auto& pts = curve.points;
   const size_t n = pts.size();
   std::vector<double> norm(n);
-  for (size_t i = 0; i < n; ++i) norm[i] = ev.sample(pts[i], true, false).hessian.norm();
+  for (size_t i = 0; i < n; ++i) norm[i] = ev.sample(pts[i], Derivatives::kHessian).hessian.norm();
   std::vector<Vec3> found;
   for (size_t k = 0; k < n; ++k) {
     const bool local_min =
@@ -153,7 +153,7 @@ std::vector<Vec3> triple_points_on(Evaluator& ev, const SingularCurve& curve,
     auto h_at = [&](double u) {
       const detail::Converged c = detail::converge_in_plane(ev, a + u * dir, dir, s, spacing);
       if (!c.ok) return std::numeric_limits<double>::infinity();
-      const double v = ev.sample(c.p, true, false).hessian.norm();
+      const double v = ev.sample(c.p, Derivatives::kHessian).hessian.norm();
       best = c.p;
       return v;
     };
@@ -209,7 +209,8 @@ std::vector<SingularCurve> split_by_kind(Evaluator& ev, const SingularCurve& cur
   };
   std::vector<double> det(n);
   for (size_t i = 0; i < n; ++i)
-    det[i] = detail::normal_form_det(ev.sample(pts[i], true, false).hessian, tangent_at(i), s.hess);
+    det[i] = detail::normal_form_det(ev.sample(pts[i], Derivatives::kHessian).hessian,
+                                     tangent_at(i), s.hess);
 
   std::vector<SingularCurve> pieces;
   SingularCurve cur;
@@ -226,7 +227,7 @@ std::vector<SingularCurve> split_by_kind(Evaluator& ev, const SingularCurve& cur
             detail::converge_in_plane(ev, 0.5 * (lo + hi), t, s, (hi - lo).norm());
         if (!m.ok) break;
         const double dm =
-            detail::normal_form_det(ev.sample(m.p, true, false).hessian, t, s.hess, true);
+            detail::normal_form_det(ev.sample(m.p, Derivatives::kHessian).hessian, t, s.hess, true);
         if (dm == 0) {
           lo = hi = m.p;
           break;
@@ -249,7 +250,7 @@ std::vector<SingularCurve> split_by_kind(Evaluator& ev, const SingularCurve& cur
     double sum_neg = 0, sum_pos = 0;
     for (size_t k = 0; k < piece.points.size(); ++k) {
       const double d = detail::normal_form_det(
-          ev.sample(piece.points[k], true, false).hessian,
+          ev.sample(piece.points[k], Derivatives::kHessian).hessian,
           (piece.points[std::min(k + 1, piece.points.size() - 1)] - piece.points[k > 0 ? k - 1 : 0])
               .normalized(),
           s.hess);
@@ -412,7 +413,8 @@ SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& 
       return (q.position - c.p).norm() < same_point;
     });
     if (known) continue;
-    const detail::HessianShape shape = detail::hessian_shape(ev.sample(c.p, true, false).hessian);
+    const detail::HessianShape shape =
+        detail::hessian_shape(ev.sample(c.p, Derivatives::kHessian).hessian);
     const int nullity = shape.nullity(s.hess);
     if (nullity == 0) {
       out.points.push_back({c.p, SingularPointKind::kNode});
@@ -461,7 +463,7 @@ SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& 
   for (const Vec3& q : deferred) {
     if (distance_to_curves(q, out.curves) <= spacing) {
       // A point with H = 0 on a curve where no second curve was found (e.g. a curve's cusp).
-      if (detail::hessian_shape(ev.sample(q, true, false).hessian).nullity(s.hess) == 3)
+      if (detail::hessian_shape(ev.sample(q, Derivatives::kHessian).hessian).nullity(s.hess) == 3)
         add_point(out.points, q, SingularPointKind::kTriple, 0.5 * spacing);
       continue;
     }

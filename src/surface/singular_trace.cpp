@@ -27,7 +27,7 @@ bool is_singular_here(Evaluator& ev, const Vec3& p, const SingularScales& s) {
 template <int N>
 Vec3 gauss_newton_step(Evaluator& ev, const Vec3& p, const Eigen::Matrix<double, 3, N>& basis,
                        double h) {
-  const FieldSample fs = ev.sample(p, true, false);
+  const FieldSample fs = ev.sample(p, Derivatives::kHessian);
   if (!std::isfinite(fs.value) || !fs.gradient.allFinite() || !fs.hessian.allFinite())
     return Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   return singular_gauss_newton_step<N>(fs.value, fs.gradient, fs.hessian, basis, h)
@@ -150,7 +150,7 @@ std::vector<Vec3> walk_curve(Evaluator& ev, const Clip& clip, const Vec3& start,
     const Vec3 q = p + step * t;
     const Converged c = converge_in_plane(ev, q, t, s, 0.5 * step);
     Vec3 next_t = Vec3::Zero();
-    if (c.ok) next_t = curve_tangent(ev.sample(c.p, true, false).hessian, t, s.hess);
+    if (c.ok) next_t = curve_tangent(ev.sample(c.p, Derivatives::kHessian).hessian, t, s.hess);
     if (!c.ok || next_t.isZero() || next_t.dot(t) < cos_limit) {
       step *= 0.5;
       if (step < min_step) {

@@ -89,7 +89,7 @@ TEST(Field, ParameterDerivativesMatchFiniteDifferences) {
     Evaluator ev(field);
     Evaluator shifted(field);
     for (const Vec3& p : random_points(20, 1.5, 13)) {
-      const FieldSample s = ev.sample(p, false, true);
+      const FieldSample s = ev.sample(p, Derivatives::kParameters);
       ASSERT_EQ(s.dq.size(), field.parameter_names().size());
       for (std::size_t k = 0; k < s.dq.size(); ++k) {
         const double q = field.parameter_values()[k];
@@ -122,7 +122,7 @@ TEST(Field, SampleAgreesWithValueAndGradient) {
       const double f = ev.value_gradient(p, g);
       EXPECT_TRUE(same_value(f, ev.value(p)));
       for (const bool hessian : {false, true}) {
-        const FieldSample s = ev.sample(p, hessian, true);
+        const FieldSample s = ev.sample(p, hessian ? Derivatives::kAll : Derivatives::kParameters);
         EXPECT_TRUE(same_value(s.value, f));
         for (int k = 0; k < 3; ++k) EXPECT_TRUE(same_value(s.gradient[k], g[k]));
       }
@@ -224,7 +224,7 @@ TEST(Field, BatchedHessiansEqualSampledHessians) {
     for (auto& entry : h) entry.resize(n);
     ev.values_gradients_hessians(x, y, z, v, gx, gy, gz, {h[0], h[1], h[2], h[3], h[4], h[5]});
     for (std::size_t i = 0; i < n; ++i) {
-      const FieldSample s = ev.sample(points[i], true, false);
+      const FieldSample s = ev.sample(points[i], Derivatives::kHessian);
       ASSERT_TRUE(same_value(v[i], s.value)) << i;
       ASSERT_TRUE(same_value(gx[i], s.gradient.x()) && same_value(gy[i], s.gradient.y()) &&
                   same_value(gz[i], s.gradient.z()))

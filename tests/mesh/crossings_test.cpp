@@ -96,7 +96,7 @@ double mean_edge(const Mesh& m) {
 // The two directions of the sheets through a crossing point p (tangent t): the null lines of
 // the Hessian restricted to the plane normal to t.
 std::array<Vec3, 2> sheet_directions(Evaluator& ev, const Vec3& p, const Vec3& t) {
-  const Mat3 h = ev.sample(p, true, false).hessian;
+  const Mat3 h = ev.sample(p, Derivatives::kHessian).hessian;
   Vec3 u = t.unitOrthogonal(), v = t.cross(u).normalized();
   Eigen::Matrix2d q;
   q << u.dot(h * u), u.dot(h * v), v.dot(h * u), v.dot(h * v);
@@ -222,7 +222,7 @@ void check_crossing_mesh(const Surface& s, int cells, const Expect& expect = {})
   for (size_t v = 0; v < m.positions.size(); ++v) {
     const Vec3& p = m.positions[v];
     if (set.distance(p) < 2 * e || near_special(p)) continue;
-    const FieldSample fs = ev.sample(p, true, false);
+    const FieldSample fs = ev.sample(p, Derivatives::kHessian);
     if (fs.gradient.norm() > 0) worst = std::max(worst, std::abs(fs.value) / fs.gradient.norm());
   }
   EXPECT_LE(worst, 1e-9);
@@ -232,7 +232,7 @@ void check_crossing_mesh(const Surface& s, int cells, const Expect& expect = {})
     if (set.distance(c) < 2 * e || near_special(c)) continue;
     const Vec3 n =
         (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]);
-    if (n.dot(ev.sample(c, true, false).gradient) < 0) ++flipped;
+    if (n.dot(ev.sample(c, Derivatives::kHessian).gradient) < 0) ++flipped;
   }
   EXPECT_LE(flipped, expect.max_flipped);
   const MeshQuality q = measure_quality(m, s);

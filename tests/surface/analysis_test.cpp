@@ -27,7 +27,7 @@ TEST(CriticalStep, ReachesTheConeTip) {
   // F = x² + y² − z²: ∇F = 2(x, y, −z), Hessian diag(2, 2, −2): r = p exactly.
   Evaluator ev(compile_field("x^2 + y^2 - z^2"));
   const Vec3 p(0.3, -0.2, 0.5);
-  const FieldSample s = ev.sample(p, true, false);
+  const FieldSample s = ev.sample(p, Derivatives::kHessian);
   const CriticalStep c = critical_step(s.gradient, s.hessian);
   EXPECT_TRUE(c.reaches);
   EXPECT_NEAR((c.step - p).norm(), 0, 1e-14);

@@ -112,7 +112,7 @@ TEST(Catalog, GradientsAndHessiansAgreeWithFiniteDifferences) {
     std::uniform_real_distribution<double> u(0, 1);
     for (int trial = 0; trial < 50; ++trial) {
       const Vec3 p = b.lo + Vec3(u(rng), u(rng), u(rng)).cwiseProduct(b.size());
-      const FieldSample fs = ev.sample(p, true, false);
+      const FieldSample fs = ev.sample(p, Derivatives::kHessian);
       const double h = 1e-5 * std::max(1.0, p.norm());
       Vec3 g_fd;
       Mat3 h_fd;

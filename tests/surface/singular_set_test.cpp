@@ -23,7 +23,7 @@ void expect_on_singular_set(const Surface& s, const SingularSet& set) {
   const double r = s.scene_radius();
   for (const SingularCurve& c : set.curves)
     for (const Vec3& p : c.points) {
-      const FieldSample fs = ev.sample(p, true, false);
+      const FieldSample fs = ev.sample(p, Derivatives::kHessian);
       const double h = std::max(fs.hessian.norm(), 1e-300);
       EXPECT_LE(fs.gradient.norm() / h, 1e-12 * r) << p.transpose();
     }

@@ -90,6 +90,20 @@ struct FieldSample {
   std::vector<double> dq;        ///< ∂F/∂q_k for every parameter (only when requested)
 };
 
+/// What Evaluator::sample() computes besides the value and the gradient; combine with |.
+enum class Derivatives : unsigned {
+  kGradient = 0,    ///< value and gradient only
+  kHessian = 1,     ///< ∇_x² F
+  kParameters = 2,  ///< ∂F/∂q_k
+  kAll = 3,
+};
+constexpr Derivatives operator|(Derivatives a, Derivatives b) {
+  return static_cast<Derivatives>(static_cast<unsigned>(a) | static_cast<unsigned>(b));
+}
+constexpr bool includes(Derivatives set, Derivatives what) {
+  return (static_cast<unsigned>(set) & static_cast<unsigned>(what)) != 0;
+}
+
 /// Evaluates a Field. Owns scratch memory: one per thread, never shared. Holds a copy of the
 /// field (cheap), so later changes to the caller's Field do not reach it; use
 /// `set_parameter` or `reset` for that. Throws InvalidArgument at construction when a
@@ -108,8 +122,9 @@ class Evaluator {
 
   double value(const Vec3& p);
   double value_gradient(const Vec3& p, Vec3& gradient);
-  /// Value, gradient, and (on request) Hessian and parameter derivatives.
-  FieldSample sample(const Vec3& p, bool hessian = true, bool parameter_derivatives = true);
+  /// Value, gradient, and the derivatives asked for (the Hessian and parameter derivatives
+  /// by default).
+  FieldSample sample(const Vec3& p, Derivatives what = Derivatives::kAll);
 
   /// Batched, structure of arrays: out[i] = F(x[i], y[i], z[i]). All spans the same length.
   void values(std::span<const double> x, std::span<const double> y, std::span<const double> z,

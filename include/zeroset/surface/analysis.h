@@ -239,7 +239,8 @@ std::optional<Eigen::Matrix<double, N, 1>> min_norm_solve(const Eigen::Matrix<do
   Eigen::Matrix<double, N, 1> x = Eigen::Matrix<double, N, 1>::Zero();
   for (int k = 0; k < N; ++k) {
     const double l = spectrum == Spectrum::kGram ? lambda[k] : std::abs(lambda[k]);
-    if (l > cutoff * top) x += (es.eigenvectors().col(k).dot(b) / lambda[k]) * es.eigenvectors().col(k);
+    if (l > cutoff * top)
+      x += (es.eigenvectors().col(k).dot(b) / lambda[k]) * es.eigenvectors().col(k);
   }
   return x;
 }
@@ -288,7 +289,7 @@ struct CriticalPoint {
     Evaluator& ev, const Vec3& start, const CriticalSearch& search) {
   Vec3 q = start;
   for (int it = 0; it < search.iterations; ++it) {
-    const FieldSample fs = ev.sample(q, true, false);
+    const FieldSample fs = ev.sample(q, Derivatives::kHessian);
     if (search.min_conditioning > 0) {
       const CriticalStep c = critical_step(fs.gradient, fs.hessian);
       if (!c.reaches || !(c.smallest > search.min_conditioning * c.largest)) return std::nullopt;
