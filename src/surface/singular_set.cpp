@@ -325,26 +325,26 @@ double SingularSet::distance(const Vec3& p) const {
   return best;
 }
 
-SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& options,
-                              std::stop_token stop) {
-  if (options.cells < 4 || options.cells > 1024)
-    throw InvalidArgument("singular set cells", std::to_string(options.cells),
-                          "must be between 4 and 1024");
-  const Box3 box = surface.bounds();
-  const double radius = surface.scene_radius();
-  const GridSamples grid = sample_grid(surface.field, box, options.cells, stop);
-  const Clip& clip = surface.clip;
-  if (stop.stop_requested()) return {};
+namespace {
 
+// The search's fixed quantities, shared by its phases.
+struct Search {
+  const Clip& clip;
+  const GridSamples& grid;
   SingularScales s;
-  s.radius = radius;
-  s.cell = grid.cell;
-  // The scales of ∇F and the Hessian near F = 0: at the nodes next to a sign change of F (a
-  // grid edge that F = 0 crosses), or where there is none (F = G², no sign change), at the
-  // nodes within a cell of F = 0 to first order. The sign change comes first because the
-  // first-order distance |F|/|∇F| can mislead by orders of magnitude: for (x²+y²+z²)^1000 − 1
-  // it is r/2000 at every node outside the sphere, whose gradients reach 10³⁰⁰, and a scale
-  // taken from them makes every point within 17% of the sphere look singular.
+  double radius = 0;
+  double spacing = 0;     // vertex spacing along curves
+  double same_point = 0;  // points closer than this are one
+};
+
+// Phase 1: the scales of ∇F and the Hessian near F = 0: at the nodes next to a sign change of
+// F (a grid edge that F = 0 crosses), or where there is none (F = G², no sign change), at the
+// nodes within a cell of F = 0 to first order. The sign change comes first because the
+// first-order distance |F|/|∇F| can mislead by orders of magnitude: for (x²+y²+z²)^1000 − 1 it
+// is r/2000 at every node outside the sphere, whose gradients reach 10³⁰⁰, and a scale taken
+// from them makes every point within 17% of the sphere look singular. Returns false when F
+// and ∇F vanish at every node (F ≡ 0).
+bool measure_scales(const GridSamples& grid, SingularScales& s) {
   std::vector<double> grads, hesses, near_grads, near_hesses;
   bool all_zero = true;
   const size_t nx = static_cast<size_t>(grid.n[0]), nxy = nx * static_cast<size_t>(grid.n[1]);
@@ -371,13 +371,8 @@ SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& 
       near_hesses.push_back(grid.h[i].norm());
     }
   }
+  if (all_zero) return false;
   if (grads.empty()) grads.swap(near_grads), hesses.swap(near_hesses);
-  SingularSet out;
-  if (all_zero) {  // F ≡ 0: every point is singular
-    out.has_singular_sheet = true;
-    out.singular_sheet_example = box.center();
-    return out;
-  }
   s.grad = median(grads);
   s.hess = median(hesses);
   if (!(s.grad > 0)) {
@@ -389,15 +384,18 @@ SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& 
         s.hess = std::max(s.hess, grid.h[i].norm());
       }
   }
-  if (!(s.grad > 0) || !(s.hess > 0) || !std::isfinite(s.grad)) return out;
+  return true;
+}
 
-  const double spacing = options.spacing > 0 ? options.spacing : 0.5 * grid.cell;
-  Evaluator ev(surface.field);
-  int budget = options.max_curve_points;
+// Phase 2: Gauss–Newton from every grid node whose first step is short; each point reached is
+// a node, a point of a singular sheet, a start of curves traced both ways, or deferred (a
+// singular Hessian and no curve yet: triple or degenerate points, phase 3).
+void search_from_nodes(Evaluator& ev, const Search& z, int max_curve_points, std::stop_token stop,
+                       SingularSet& out, std::vector<Vec3>& deferred) {
+  const GridSamples& grid = z.grid;
+  const Clip& clip = z.clip;
+  int budget = max_curve_points;
   int sheet_hits = 0;
-  std::vector<Vec3> deferred;  // singular points with a singular Hessian and no curve (yet)
-  const double same_point = 1e-6 * radius;
-
   for (size_t i = 0; i < grid.f.size(); ++i) {
     if (stop.stop_requested() || budget <= 0) break;
     const Vec3 node = grid.point(i);
@@ -406,25 +404,25 @@ SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& 
           1.5 * kSqrt3 * grid.cell))
       continue;
     ++out.seeds;
-    const detail::Converged c = detail::converge_to_singular(ev, node, s, 3 * grid.cell);
-    if (!c.ok || (!clip.is_empty_spec() && !clip.contains(c.p, 1e-9 * radius))) continue;
-    if (distance_to_curves(c.p, out.curves) <= spacing) continue;
+    const detail::Converged c = detail::converge_to_singular(ev, node, z.s, 3 * grid.cell);
+    if (!c.ok || (!clip.is_empty_spec() && !clip.contains(c.p, 1e-9 * z.radius))) continue;
+    if (distance_to_curves(c.p, out.curves) <= z.spacing) continue;
     const bool known = std::any_of(out.points.begin(), out.points.end(), [&](const auto& q) {
-      return (q.position - c.p).norm() < same_point;
+      return (q.position - c.p).norm() < z.same_point;
     });
     if (known) continue;
     const detail::HessianShape shape =
         detail::hessian_shape(ev.sample(c.p, Derivatives::kHessian).hessian);
-    const int nullity = shape.nullity(s.hess);
+    const int nullity = shape.nullity(z.s.hess);
     if (nullity == 0) {
       out.points.push_back({c.p, SingularPointKind::kNode});
       continue;
     }
-    if (nullity == 2 && on_singular_sheet(ev, c.p, shape, s)) {
+    if (nullity == 2 && on_singular_sheet(ev, c.p, shape, z.s)) {
       if (++sheet_hits == 1) out.singular_sheet_example = c.p;
       if (sheet_hits >= 8) {
         out.has_singular_sheet = true;
-        break;
+        return;
       }
       continue;
     }
@@ -434,7 +432,8 @@ SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& 
     }
     bool traced = false;
     for (int k = 3 - nullity; k < 3 && !traced; ++k) {
-      SingularCurve curve = trace_through(ev, clip, c.p, shape.vectors.col(k), s, spacing, budget);
+      SingularCurve curve =
+          trace_through(ev, clip, c.p, shape.vectors.col(k), z.s, z.spacing, budget);
       if (curve.points.size() >= 2) {
         out.curves.push_back(std::move(curve));
         traced = true;
@@ -442,52 +441,91 @@ SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& 
     }
     if (!traced) deferred.push_back(c.p);
   }
+}
+
+// Phase 3: triple points, where curves meet (each becomes a vertex of every curve through it),
+// and the deferred points: on a curve with H = 0 a triple point, off every curve degenerate.
+void add_triple_points(Evaluator& ev, const Search& z, const std::vector<Vec3>& deferred,
+                       SingularSet& out) {
+  std::vector<Vec3> triples;
+  for (const SingularCurve& c : out.curves)
+    for (const Vec3& q : triple_points_on(ev, c, z.s, z.spacing))
+      if (std::none_of(triples.begin(), triples.end(),
+                       [&](const Vec3& p) { return (p - q).norm() < 0.5 * z.spacing; }))
+        triples.push_back(q);
+  for (const Vec3& q : triples) {
+    add_point(out.points, q, SingularPointKind::kTriple, z.same_point);
+    for (SingularCurve& c : out.curves) insert_vertex(c, q, 0.3 * z.spacing);
+  }
+  for (const Vec3& q : deferred) {
+    if (distance_to_curves(q, out.curves) <= z.spacing) {
+      // A point with H = 0 on a curve where no second curve was found (e.g. a curve's cusp).
+      if (detail::hessian_shape(ev.sample(q, Derivatives::kHessian).hessian).nullity(z.s.hess) == 3)
+        add_point(out.points, q, SingularPointKind::kTriple, 0.5 * z.spacing);
+      continue;
+    }
+    add_point(out.points, q, SingularPointKind::kDegenerate, 0.5 * z.spacing);
+  }
+}
+
+// Phase 4: pinch points split curves by kind; curve ends on the clip are named.
+void split_and_name_ends(Evaluator& ev, const Search& z, SingularSet& out) {
+  std::vector<SingularCurve> pieces;
+  std::vector<Vec3> pinches;
+  for (const SingularCurve& c : out.curves)
+    for (SingularCurve& piece : split_by_kind(ev, c, z.s, pinches))
+      pieces.push_back(std::move(piece));
+  out.curves = std::move(pieces);
+  for (const Vec3& q : pinches)
+    add_point(out.points, q, SingularPointKind::kPinch, 0.5 * z.spacing);
+  for (const SingularCurve& c : out.curves) {
+    if (c.closed || z.clip.is_empty_spec()) continue;
+    for (const Vec3& end : {c.points.front(), c.points.back()})
+      if (std::abs(z.clip.value(end)) <= 1e-9 * z.radius)
+        add_point(out.points, end, SingularPointKind::kClipEnd, z.same_point);
+  }
+}
+
+}  // namespace
+
+SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& options,
+                              std::stop_token stop) {
+  if (options.cells < 4 || options.cells > 1024)
+    throw InvalidArgument("singular set cells", std::to_string(options.cells),
+                          "must be between 4 and 1024");
+  const Box3 box = surface.bounds();
+  const GridSamples grid = sample_grid(surface.field, box, options.cells, stop);
+  if (stop.stop_requested()) return {};
+  const double radius = surface.scene_radius();
+  SingularScales scales;
+  scales.radius = radius;
+  scales.cell = grid.cell;
+  Search z{.clip = surface.clip,
+           .grid = grid,
+           .s = scales,
+           .radius = radius,
+           .spacing = options.spacing > 0 ? options.spacing : 0.5 * grid.cell,
+           .same_point = 1e-6 * radius};
+  SingularSet out;
+  if (!measure_scales(grid, z.s)) {  // F ≡ 0: every point is singular
+    out.has_singular_sheet = true;
+    out.singular_sheet_example = box.center();
+    return out;
+  }
+  if (!(z.s.grad > 0) || !(z.s.hess > 0) || !std::isfinite(z.s.grad)) return out;
+  Evaluator ev(surface.field);
+  std::vector<Vec3> deferred;
+  search_from_nodes(ev, z, options.max_curve_points, stop, out, deferred);
   if (out.has_singular_sheet) {
     out.curves.clear();
     out.points.clear();
     return out;
   }
   if (stop.stop_requested()) return out;
-
-  // Triple points: where curves meet. Each becomes a vertex of every curve through it.
-  std::vector<Vec3> triples;
-  for (const SingularCurve& c : out.curves)
-    for (const Vec3& q : triple_points_on(ev, c, s, spacing))
-      if (std::none_of(triples.begin(), triples.end(),
-                       [&](const Vec3& p) { return (p - q).norm() < 0.5 * spacing; }))
-        triples.push_back(q);
-  for (const Vec3& q : triples) {
-    add_point(out.points, q, SingularPointKind::kTriple, same_point);
-    for (SingularCurve& c : out.curves) insert_vertex(c, q, 0.3 * spacing);
-  }
-  for (const Vec3& q : deferred) {
-    if (distance_to_curves(q, out.curves) <= spacing) {
-      // A point with H = 0 on a curve where no second curve was found (e.g. a curve's cusp).
-      if (detail::hessian_shape(ev.sample(q, Derivatives::kHessian).hessian).nullity(s.hess) == 3)
-        add_point(out.points, q, SingularPointKind::kTriple, 0.5 * spacing);
-      continue;
-    }
-    add_point(out.points, q, SingularPointKind::kDegenerate, 0.5 * spacing);
-  }
-
-  // Pinch points split curves by kind; curve ends on the clip are named.
-  std::vector<SingularCurve> pieces;
-  std::vector<Vec3> pinches;
-  for (const SingularCurve& c : out.curves)
-    for (SingularCurve& piece : split_by_kind(ev, c, s, pinches))
-      pieces.push_back(std::move(piece));
-  out.curves = std::move(pieces);
-  for (const Vec3& q : pinches) add_point(out.points, q, SingularPointKind::kPinch, 0.5 * spacing);
-  for (const SingularCurve& c : out.curves) {
-    if (c.closed || clip.is_empty_spec()) continue;
-    for (const Vec3& end : {c.points.front(), c.points.back()})
-      if (std::abs(clip.value(end)) <= 1e-9 * radius)
-        add_point(out.points, end, SingularPointKind::kClipEnd, same_point);
-  }
+  add_triple_points(ev, z, deferred, out);
+  split_and_name_ends(ev, z, out);
   return out;
 }
-
-namespace {}  // namespace
 
 std::optional<SingularSet> find_singular_set_if_bounded(const Surface& surface,
                                                         std::stop_token stop) {
