@@ -479,6 +479,212 @@ long long refine_strips(Mesh& mesh, size_t first_added, double limit, const Surf
   return added;
 }
 
+double mean_edge_length(const Mesh& mesh) {
+  const auto& p = mesh.positions;
+  double sum = 0;
+  for (const auto& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k)
+      sum += (p[t[static_cast<size_t>(k)]] - p[t[static_cast<size_t>((k + 1) % 3)]]).norm();
+  return sum / (3.0 * static_cast<double>(mesh.triangles.size()));
+}
+
+// The crossing curves of the network alone, for nearest-segment queries, and the network
+// curve each one is.
+struct CrossingCurves {
+  SingularSet set;
+  std::vector<std::uint32_t> curve_of;
+};
+
+CrossingCurves crossing_curves_of(const Network& net) {
+  CrossingCurves out;
+  for (std::uint32_t c = 0; c < net.curves.size(); ++c) {
+    if (net.curves[c].kind != CurveKind::kCrossing) continue;
+    SingularCurve sc;
+    for (std::uint32_t v : net.curves[c].verts) sc.points.push_back(net.pos[v]);
+    out.set.curves.push_back(std::move(sc));
+    out.curve_of.push_back(c);
+  }
+  return out;
+}
+
+// The mesh with the tube around the crossing curves cut out: the triangles kept and the
+// half-edges of those removed.
+struct TubeCut {
+  std::vector<std::array<std::uint32_t, 3>> kept;
+  std::unordered_set<std::uint64_t> removed_edges;
+};
+
+// Cuts out the triangles with a corner closer than `tube` to a crossing curve. A kept tongue
+// one triangle wide (along the bisector of a narrow sector of a sheet between two curves that
+// meet) would be joined from each of its sides to the curve across it, and some of the joining
+// triangles would turn over: triangles with two or three edges on the cut (the tongue's tip,
+// then the next one) are cut too. Not near a free end of a curve (a pinch point), where the two
+// sheets fold together and marching cubes has lost one of them: cutting there would take the
+// other away too.
+TubeCut cut_tube(const Mesh& mesh, const Network& net, const SingularSetIndex& index, double tube,
+                 long long& removed_triangles) {
+  const size_t nv = mesh.positions.size();
+  std::vector<std::uint8_t> near(nv, 0), reachable(nv, 0);
+  for (size_t v = 0; v < nv; ++v) {
+    const double d = index.distance(mesh.positions[v]);
+    near[v] = d < tube;
+    reachable[v] = std::isfinite(d);
+  }
+  TubeCut cut;
+  auto remove = [&](const std::array<std::uint32_t, 3>& t) {
+    ++removed_triangles;
+    for (int k = 0; k < 3; ++k)
+      cut.removed_edges.insert(
+          directed_edge_key(t[static_cast<size_t>(k)], t[static_cast<size_t>((k + 1) % 3)]));
+  };
+  for (const auto& t : mesh.triangles) {
+    if (near[t[0]] || near[t[1]] || near[t[2]])
+      remove(t);
+    else
+      cut.kept.push_back(t);
+  }
+  std::vector<Vec3> free_ends;
+  for (std::uint32_t v = 0; v < net.pos.size(); ++v)
+    if (net.free_end[v]) free_ends.push_back(net.pos[v]);
+  auto near_free_end = [&](const std::array<std::uint32_t, 3>& t) {
+    for (const Vec3& q : free_ends)
+      for (std::uint32_t v : t)
+        if ((mesh.positions[v] - q).norm() < kFreeEndReach * tube) return true;
+    return false;
+  };
+  // Only triangles with a corner within the index's reach of a curve can be on the cut.
+  std::vector<size_t> candidates;
+  for (size_t i = 0; i < cut.kept.size(); ++i)
+    if (std::any_of(cut.kept[i].begin(), cut.kept[i].end(),
+                    [&](std::uint32_t v) { return reachable[v]; }))
+      candidates.push_back(i);
+  std::vector<std::uint8_t> tip(cut.kept.size(), 0);
+  for (int pass = 0; pass < 16; ++pass) {
+    std::vector<size_t> tips;
+    for (size_t i : candidates) {
+      if (tip[i]) continue;
+      const auto& t = cut.kept[i];
+      int on_rim = 0;
+      for (int k = 0; k < 3; ++k)
+        on_rim += cut.removed_edges.count(directed_edge_key(t[static_cast<size_t>((k + 1) % 3)],
+                                                            t[static_cast<size_t>(k)])) > 0;
+      if (on_rim >= 2 && !near_free_end(t)) tips.push_back(i);
+    }
+    if (tips.empty()) break;
+    for (size_t i : tips) {
+      tip[i] = 1;
+      remove(cut.kept[i]);
+    }
+  }
+  size_t w = 0;
+  for (size_t i = 0; i < cut.kept.size(); ++i)
+    if (!tip[i]) cut.kept[w++] = cut.kept[i];
+  cut.kept.resize(w);
+  return cut;
+}
+
+// Joins the rim of the cut to the crossing curves: each rim edge u → v and the graph path
+// between the vertices its ends are joined to bound a polygon (v, u, a_0 … a_k), fanned from u
+// over the path's first part and from v over the rest: triangles run like the kept triangle's,
+// so each half-sheet keeps its side. Returns the triangles (vertex base + i is graph vertex i),
+// or sets `failure`.
+std::vector<std::array<std::uint32_t, 3>> join_rim(const Mesh& mesh, const TubeCut& cut,
+                                                   const Network& net,
+                                                   const SingularSetIndex& index,
+                                                   const CrossingCurves& crossing, double reach,
+                                                   std::string& failure) {
+  const std::uint32_t base = static_cast<std::uint32_t>(mesh.positions.size());
+  // The rim: edges of kept triangles whose other triangle was removed.
+  std::vector<std::array<std::uint32_t, 2>> rim;
+  for (const auto& t : cut.kept)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t u = t[static_cast<size_t>(k)], v = t[static_cast<size_t>((k + 1) % 3)];
+      if (cut.removed_edges.count(directed_edge_key(v, u))) rim.push_back({u, v});
+    }
+  std::vector<std::array<std::uint32_t, 3>> added;
+  std::vector<std::uint32_t> path;
+  for (const Chain& ch : rim_chains(rim)) {
+    std::vector<Anchor> anchors;
+    for (std::uint32_t v : ch.verts) {
+      anchors.push_back(anchor_of(net, index, crossing.curve_of, mesh.positions[v], reach));
+      if (!anchors.back().ok()) {
+        failure = fmt::format(
+            "a vertex of the cut at ({:.4g}, {:.4g}, {:.4g}) is far from every crossing curve",
+            mesh.positions[v].x(), mesh.positions[v].y(), mesh.positions[v].z());
+        return {};
+      }
+    }
+    std::vector<std::uint32_t> verts = ch.verts;
+    std::vector<Vec3> points;
+    for (std::uint32_t v : verts) points.push_back(mesh.positions[v]);
+    if (ch.closed) start_at_run(verts, points, anchors);
+    merge_short_runs(net, points, ch.closed, reach, index.reach(), anchors);
+    if (ch.closed) start_at_run(verts, points, anchors);
+    const std::vector<std::uint32_t> target = chain_targets(net, anchors, ch.closed, reach);
+    const size_t edges = ch.closed ? verts.size() : verts.size() - 1;
+    for (size_t e = 0; e < edges; ++e) {
+      const size_t j = (e + 1) % verts.size();
+      const std::uint32_t u = verts[e], v = verts[j];
+      if (!graph_path(net, target[e], target[j], 512, path)) {
+        failure =
+            fmt::format("the cut near ({:.4g}, {:.4g}, {:.4g}) could not be joined to a curve",
+                        mesh.positions[u].x(), mesh.positions[u].y(), mesh.positions[u].z());
+        return {};
+      }
+      size_t m = 0;  // path[0 .. m] fan from u, path[m .. k] from v
+      for (size_t i = 1; i < path.size(); ++i)
+        if ((net.pos[path[i]] - mesh.positions[u]).norm() <
+            (net.pos[path[i]] - mesh.positions[v]).norm())
+          m = i;
+      for (size_t i = 0; i < m; ++i) added.push_back({u, base + path[i], base + path[i + 1]});
+      added.push_back({u, base + path[m], v});
+      for (size_t i = m; i + 1 < path.size(); ++i)
+        added.push_back({v, base + path[i], base + path[i + 1]});
+    }
+  }
+  return added;
+}
+
+// The network's vertices join the mesh (their indices are base + graph vertex).
+void append_network_vertices(Mesh& mesh, const Network& net, const Surface& surface) {
+  const size_t base = mesh.positions.size();
+  mesh.positions.insert(mesh.positions.end(), net.pos.begin(), net.pos.end());
+  if (mesh.is_boundary.size() != base) mesh.is_boundary.assign(base, 0);
+  for (const Vec3& p : net.pos)
+    mesh.is_boundary.push_back(!surface.clip.is_empty_spec() &&
+                               std::abs(surface.clip.value(p)) <= 1e-9 * surface.scene_radius());
+}
+
+// Sheets meet on the crossing curves: the tube around them is cut out and its rim joined to
+// the curves, then the joining strips are refined. Returns false (with stats.failure) when the
+// join fails; the mesh is then untouched.
+bool join_sheets_on_curves(Mesh& mesh, const Surface& surface, const Network& net, double cell_size,
+                           double mean_edge, const CrossingOptions& options, CrossingStats& stats) {
+  const double tube = options.tube_cells * cell_size;
+  const CrossingCurves crossing = crossing_curves_of(net);
+  // A rim vertex is within a tube's radius plus an edge of the curve, well inside the reach.
+  const SingularSetIndex index(crossing.set, 3 * tube);
+  TubeCut cut = cut_tube(mesh, net, index, tube, stats.removed_triangles);
+  const auto added = join_rim(mesh, cut, net, index, crossing, tube, stats.failure);
+  if (!stats.failure.empty()) {
+    stats.removed_triangles = 0;
+    return false;
+  }
+  const std::uint32_t base = static_cast<std::uint32_t>(mesh.positions.size());
+  mesh.triangles = std::move(cut.kept);
+  const size_t first_added = mesh.triangles.size();
+  mesh.triangles.insert(mesh.triangles.end(), added.begin(), added.end());
+  append_network_vertices(mesh, net, surface);
+  std::unordered_set<std::uint64_t> curve_edges;
+  for (const auto& c : net.curves)
+    for (size_t i = 0; i + 1 < c.verts.size(); ++i)
+      curve_edges.insert(edge_key(c.verts[i] + base, c.verts[i + 1] + base));
+  stats.strip_vertices =
+      refine_strips(mesh, first_added, options.split_edges * mean_edge, surface, curve_edges);
+  stats.added_triangles = static_cast<long long>(mesh.triangles.size() - first_added);
+  return true;
+}
+
 }  // namespace
 
 CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_size,
@@ -487,12 +693,7 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
   const auto t0 = std::chrono::steady_clock::now();
   CrossingStats stats;
   if (mesh.triangles.empty() || !(cell_size > 0)) return stats;
-  const auto& P0 = mesh.positions;
-  double edge_sum = 0;
-  for (const auto& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k)
-      edge_sum += (P0[t[static_cast<size_t>(k)]] - P0[t[static_cast<size_t>((k + 1) % 3)]]).norm();
-  const double mean_edge = edge_sum / (3.0 * static_cast<double>(mesh.triangles.size()));
+  const double mean_edge = mean_edge_length(mesh);
   const double spacing = options.spacing_edges * mean_edge;
 
   SingularSetOptions so;
@@ -514,178 +715,15 @@ CrossingStats mesh_crossings(Mesh& mesh, const Surface& surface, double cell_siz
     (c.kind == CurveKind::kCrossing ? stats.crossing_curves : stats.isolated_curves)++;
   if (net.curves.empty()) return finish();
 
-  auto on_clip = [&](const Vec3& p) -> std::uint8_t {
-    return !surface.clip.is_empty_spec() &&
-           std::abs(surface.clip.value(p)) <= 1e-9 * surface.scene_radius();
-  };
   const std::uint32_t base = static_cast<std::uint32_t>(mesh.positions.size());
-  std::vector<std::array<std::uint32_t, 3>> added;
-
+  bool crossings = true;
   if (stats.crossing_curves > 0) {
-    const double tube = options.tube_cells * cell_size;
-    // The crossing curves alone, for nearest-segment queries; curve_of maps them back.
-    SingularSet crossing;
-    std::vector<std::uint32_t> curve_of;
-    for (std::uint32_t c = 0; c < net.curves.size(); ++c) {
-      if (net.curves[c].kind != CurveKind::kCrossing) continue;
-      SingularCurve sc;
-      for (std::uint32_t v : net.curves[c].verts) sc.points.push_back(net.pos[v]);
-      crossing.curves.push_back(std::move(sc));
-      curve_of.push_back(c);
-    }
-    // A rim vertex is within a tube's radius plus an edge of the curve, well inside the reach.
-    const SingularSetIndex index(crossing, 3 * tube);
-    // The tube: triangles with a corner closer than `tube` to a crossing curve.
-    const size_t nv = mesh.positions.size();
-    std::vector<std::uint8_t> near(nv, 0), reachable(nv, 0);
-    for (size_t v = 0; v < nv; ++v) {
-      const double d = index.distance(mesh.positions[v]);
-      near[v] = d < tube;
-      reachable[v] = std::isfinite(d);
-    }
-    std::vector<std::array<std::uint32_t, 3>> kept;
-    std::unordered_set<std::uint64_t> removed_edges;
-    for (const auto& t : mesh.triangles) {
-      if (near[t[0]] || near[t[1]] || near[t[2]]) {
-        ++stats.removed_triangles;
-        for (int k = 0; k < 3; ++k)
-          removed_edges.insert(directed_edge_key(t[static_cast<size_t>(k)],
-                                                 t[static_cast<size_t>((k + 1) % 3)]));
-      } else {
-        kept.push_back(t);
-      }
-    }
-    // A kept tongue one triangle wide (along the bisector of a narrow sector of a sheet
-    // between two curves that meet) would be joined from each of its sides to the curve
-    // across it, and some of the joining triangles would turn over: triangles with two or
-    // three edges on the cut (the tongue's tip, then the next one) are cut too. Not near a
-    // free end of a curve (a pinch point), where the two sheets fold together and marching
-    // cubes has lost one of them: cutting there would take the other away too.
-    std::vector<Vec3> free_ends;
-    for (std::uint32_t v = 0; v < net.pos.size(); ++v)
-      if (net.free_end[v]) free_ends.push_back(net.pos[v]);
-    auto near_free_end = [&](const std::array<std::uint32_t, 3>& t) {
-      for (const Vec3& q : free_ends)
-        for (std::uint32_t v : t)
-          if ((mesh.positions[v] - q).norm() < kFreeEndReach * tube) return true;
-      return false;
-    };
-    // Only triangles with a corner within the index's reach of a curve can be on the cut.
-    std::vector<size_t> candidates;
-    for (size_t i = 0; i < kept.size(); ++i)
-      if (std::any_of(kept[i].begin(), kept[i].end(),
-                      [&](std::uint32_t v) { return reachable[v]; }))
-        candidates.push_back(i);
-    std::vector<std::uint8_t> cut(kept.size(), 0);
-    for (int pass = 0; pass < 16; ++pass) {
-      std::vector<size_t> tips;
-      for (size_t i : candidates) {
-        if (cut[i]) continue;
-        const auto& t = kept[i];
-        int on_rim = 0;
-        for (int k = 0; k < 3; ++k)
-          on_rim += removed_edges.count(directed_edge_key(t[static_cast<size_t>((k + 1) % 3)],
-                                                 t[static_cast<size_t>(k)])) > 0;
-        if (on_rim >= 2 && !near_free_end(t)) tips.push_back(i);
-      }
-      if (tips.empty()) break;
-      for (size_t i : tips) {
-        cut[i] = 1;
-        ++stats.removed_triangles;
-        const auto& t = kept[i];
-        for (int k = 0; k < 3; ++k)
-          removed_edges.insert(directed_edge_key(t[static_cast<size_t>(k)],
-                                                 t[static_cast<size_t>((k + 1) % 3)]));
-      }
-    }
-    {
-      size_t w = 0;
-      for (size_t i = 0; i < kept.size(); ++i)
-        if (!cut[i]) kept[w++] = kept[i];
-      kept.resize(w);
-    }
-    // The rim: edges of kept triangles whose other triangle was removed.
-    std::vector<std::array<std::uint32_t, 2>> rim;
-    for (const auto& t : kept)
-      for (int k = 0; k < 3; ++k) {
-        const std::uint32_t u = t[static_cast<size_t>(k)], v = t[static_cast<size_t>((k + 1) % 3)];
-        if (removed_edges.count(directed_edge_key(v, u))) rim.push_back({u, v});
-      }
-    // Each rim edge u → v and the graph path between the vertices its ends are joined to
-    // bound a polygon (v, u, a_0 … a_k), fanned from u over the path's first part and from v
-    // over the rest: triangles run like the kept triangle's, so each half-sheet keeps its side.
-    const double reach = tube;
-    std::vector<std::uint32_t> path;
-    for (const Chain& ch : rim_chains(rim)) {
-      std::vector<Anchor> anchors;
-      for (std::uint32_t v : ch.verts) {
-        anchors.push_back(anchor_of(net, index, curve_of, mesh.positions[v], reach));
-        if (!anchors.back().ok()) {
-          stats.failure = fmt::format(
-              "a vertex of the cut at ({:.4g}, {:.4g}, {:.4g}) is far from every crossing curve",
-              mesh.positions[v].x(), mesh.positions[v].y(), mesh.positions[v].z());
-          break;
-        }
-      }
-      if (!stats.failure.empty()) break;
-      std::vector<std::uint32_t> verts = ch.verts;
-      std::vector<Vec3> points;
-      for (std::uint32_t v : verts) points.push_back(mesh.positions[v]);
-      if (ch.closed) start_at_run(verts, points, anchors);
-      merge_short_runs(net, points, ch.closed, reach, index.reach(), anchors);
-      if (ch.closed) start_at_run(verts, points, anchors);
-      const std::vector<std::uint32_t> target = chain_targets(net, anchors, ch.closed, reach);
-      const size_t edges = ch.closed ? verts.size() : verts.size() - 1;
-      for (size_t e = 0; e < edges; ++e) {
-        const size_t j = (e + 1) % verts.size();
-        const std::uint32_t u = verts[e], v = verts[j];
-        if (!graph_path(net, target[e], target[j], 512, path)) {
-          stats.failure =
-              fmt::format("the cut near ({:.4g}, {:.4g}, {:.4g}) could not be joined to a curve",
-                          mesh.positions[u].x(), mesh.positions[u].y(), mesh.positions[u].z());
-          break;
-        }
-        size_t m = 0;  // path[0 .. m] fan from u, path[m .. k] from v
-        for (size_t i = 1; i < path.size(); ++i)
-          if ((net.pos[path[i]] - mesh.positions[u]).norm() <
-              (net.pos[path[i]] - mesh.positions[v]).norm())
-            m = i;
-        for (size_t i = 0; i < m; ++i) added.push_back({u, base + path[i], base + path[i + 1]});
-        added.push_back({u, base + path[m], v});
-        for (size_t i = m; i + 1 < path.size(); ++i)
-          added.push_back({v, base + path[i], base + path[i + 1]});
-      }
-      if (!stats.failure.empty()) break;
-    }
-    if (stats.failure.empty()) {
-      mesh.triangles = std::move(kept);
-      const size_t first_added = mesh.triangles.size();
-      mesh.triangles.insert(mesh.triangles.end(), added.begin(), added.end());
-      // The curves' vertices join the mesh now (their indices are base + graph vertex).
-      mesh.positions.insert(mesh.positions.end(), net.pos.begin(), net.pos.end());
-      if (mesh.is_boundary.size() != base) mesh.is_boundary.assign(base, 0);
-      for (const Vec3& p : net.pos) mesh.is_boundary.push_back(on_clip(p));
-      std::unordered_set<std::uint64_t> curve_edges;
-      for (const auto& c : net.curves)
-        for (size_t i = 0; i + 1 < c.verts.size(); ++i)
-          curve_edges.insert(edge_key(c.verts[i] + base, c.verts[i + 1] + base));
-      stats.strip_vertices =
-          refine_strips(mesh, first_added, options.split_edges * mean_edge, surface, curve_edges);
-      stats.added_triangles = static_cast<long long>(mesh.triangles.size() - first_added);
-    } else {
-      stats.removed_triangles = 0;
-      if (stats.isolated_curves == 0) return finish();  // the mesh is untouched so far
-    }
+    crossings = join_sheets_on_curves(mesh, surface, net, cell_size, mean_edge, options, stats);
+    if (!crossings && stats.isolated_curves == 0) return finish();  // the mesh is untouched
   }
-
   // The curves' vertices join the mesh (if the join did not already add them); a failed join
   // keeps only the isolated curves.
-  const bool crossings = stats.failure.empty();
-  if (mesh.positions.size() == base) {
-    mesh.positions.insert(mesh.positions.end(), net.pos.begin(), net.pos.end());
-    if (mesh.is_boundary.size() != base) mesh.is_boundary.assign(base, 0);
-    for (const Vec3& p : net.pos) mesh.is_boundary.push_back(on_clip(p));
-  }
+  if (mesh.positions.size() == base) append_network_vertices(mesh, net, surface);
   if (!mesh.normals.empty()) mesh.normals.resize(mesh.positions.size(), Vec3::Zero());
   for (const auto& c : net.curves) {
     if (c.kind == CurveKind::kCrossing && !crossings) continue;
