@@ -179,6 +179,217 @@ std::string_view to_string(CarryFailure failure) {
   return "?";
 }
 
+namespace {
+
+// The old and the new singular points, matched, and the vertex that sits on each old one.
+struct NodeMatch {
+  const CarrySingularSet& old_set;
+  const CarrySingularSet& new_set;
+  std::vector<int> match;    // old point k -> new point match[k]
+  std::vector<int> node_of;  // vertex -> old point, -1 for none
+
+  const Vec3& new_point_of_vertex(size_t v) const {
+    return new_set.points[static_cast<size_t>(match[static_cast<size_t>(node_of[v])])];
+  }
+};
+
+// The vertex at each old singular point (within 1e-3 edges).
+long long find_node_vertices(const Mesh& mesh, double h, NodeMatch& nodes) {
+  const size_t nv = mesh.vertex_count();
+  nodes.node_of.assign(nv, -1);
+  long long found = 0;
+  for (size_t k = 0; k < nodes.old_set.points.size(); ++k) {
+    size_t best = nv;
+    double best_d = 1e-3 * h;
+    for (size_t v = 0; v < nv; ++v) {
+      const double d = (mesh.positions[v] - nodes.old_set.points[k]).norm();
+      if (d <= best_d) best_d = d, best = v;
+    }
+    if (best < nv) nodes.node_of[best] = static_cast<int>(k), ++found;
+  }
+  return found;
+}
+
+// The first vertex that could not be moved, and why.
+struct MoveFailure {
+  CarryFailure why = CarryFailure::kNone;
+  long long vertex = -1;
+};
+
+// Moves every vertex onto the new surface: a node vertex to its partner, a curve vertex onto
+// the new curve by Newton's method, any other by the first-order predictor (the parameter term
+// F_q·Δq, blended into the nearest node's own move near a node) then projected onto F = 0 (onto
+// the clip curve for a boundary vertex). `moved`: each vertex's move.
+MoveFailure move_vertices(const Mesh& mesh, Mesh& out, const Surface& from, const Surface& to,
+                          const CarryOptions& options, const VertexFrame& fr,
+                          const NodeMatch& nodes, detail::EvaluatorPool& old_pool,
+                          detail::EvaluatorPool& new_pool, int workers,
+                          std::vector<double>& moved) {
+  const size_t nv = mesh.vertex_count();
+  const double h = fr.mean_edge;
+  const std::vector<double>& q0 = from.field.parameter_values();
+  const std::vector<double>& q1 = to.field.parameter_values();
+  std::vector<double> dq(q0.size());
+  for (size_t k = 0; k < q0.size(); ++k) dq[k] = q1[k] - q0[k];
+  std::atomic<int> failure{static_cast<int>(CarryFailure::kNone)};
+  std::atomic<long long> failed_vertex{-1};
+  moved.assign(nv, 0);
+  const double tolerance = kProjectionTolerance * h;
+  const bool has_clip = !to.clip.is_empty_spec();
+  detail::ExceptionTrap trap;
+  const long long n = static_cast<long long>(nv);
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 256)
+  for (long long vv = 0; vv < n; ++vv)
+    trap.run([&] {
+      if (failure.load(std::memory_order_relaxed) != 0) return;
+      const size_t v = static_cast<size_t>(vv);
+      const Vec3 start = mesh.positions[v];
+      Vec3 p = start, predicted = start;
+      const double limit = options.max_move_edges * fr.edge[v];
+      auto fail = [&](CarryFailure why) {
+        int none = 0;
+        if (failure.compare_exchange_strong(none, static_cast<int>(why))) failed_vertex = vv;
+      };
+      const int nearest = fr.nearest_node[v];
+      if (nodes.node_of[v] >= 0) {
+        p = nodes.new_point_of_vertex(v);
+      } else if (fr.on_curve[v]) {
+        if (!project_onto_singular_curve(new_pool.local(), p, tolerance))
+          return fail(CarryFailure::kProjection);
+      } else {
+        // The predictor: the parameter term, blended into the node's own move within
+        // kNodeReach edges of a node (fully the node's within half of that), so that
+        // neighbours do not get moves of a different kind.
+        double w = 0;
+        Vec3 node_move = Vec3::Zero();
+        if (nearest >= 0) {
+          const size_t k = static_cast<size_t>(nearest);
+          node_move =
+              nodes.new_set.points[static_cast<size_t>(nodes.match[k])] - nodes.old_set.points[k];
+          const double d = (start - nodes.old_set.points[k]).norm(), reach = kNodeReach * h;
+          w = std::clamp(2 * (reach - d) / reach, 0.0, 1.0);
+        }
+        Vec3 term = Vec3::Zero();
+        if (w < 1) {
+          const FieldSample s = old_pool.local().sample(start, Derivatives::kParameters);
+          double fq = 0;
+          for (size_t k = 0; k < dq.size() && k < s.dq.size(); ++k) fq += s.dq[k] * dq[k];
+          const double g2 = s.gradient.squaredNorm();
+          if (g2 > 0 && std::isfinite(fq) && std::isfinite(g2)) term = -(fq / g2) * s.gradient;
+        }
+        p += w * node_move + (1 - w) * term;
+        predicted = p;
+        const bool on_clip = out.is_boundary.size() == nv && out.is_boundary[v] && has_clip &&
+                             std::abs(from.clip.value(start)) <= 1e-7 * (1 + start.norm());
+        if (on_clip) {
+          p = project_onto_clip_curve(new_pool.local(), to.clip, p, limit);
+          Vec3 g;
+          const double f = new_pool.local().value_gradient(p, g);
+          if (!has_residual(f, g.norm()) || residual(f, g.norm()) > options.max_residual_edges * h)
+            return fail(CarryFailure::kClip);
+        } else if (!project_onto_surface(new_pool.local(), p, tolerance, 2 * limit)) {
+          return fail(CarryFailure::kProjection);
+        }
+      }
+      // The prediction is first order: where Newton has to correct it by more than a fraction
+      // of an edge, the surface did not just move here (a new sheet, a pinch) or moved too far.
+      moved[v] = (p - start).norm();
+      if (!((p - predicted).norm() <= limit) && nodes.node_of[v] < 0)
+        return fail(CarryFailure::kLongMove);
+      if (has_clip && !(out.is_boundary.size() == nv && out.is_boundary[v]) &&
+          to.clip.value(p) > 1e-9 * (1 + p.norm()))
+        return fail(CarryFailure::kClip);
+      out.positions[v] = p;
+    });
+  trap.rethrow();
+  return {static_cast<CarryFailure>(failure.load()), failed_vertex.load()};
+}
+
+// A few improver steps on the new surface, then its final projection; node vertices stay on
+// their nodes. False when stopped.
+bool improve_carried(Mesh& out, const Surface& to, const CarryOptions& options, int workers,
+                     const NodeMatch& nodes, ImproveStats& stats, std::stop_token stop) {
+  ImproveOptions improve = options.improve;
+  improve.threads = workers;  // its final normals too: not every core for a small mesh
+  improve.max_steps = options.improve_steps;
+  // Edge flips are the dearest part of a step (a serial pass over every edge): one pass undoes
+  // the stretching of a small move; the springs do the rest.
+  improve.flip_steps = std::min(improve.flip_steps, 1);
+  MeshImprover improver(std::move(out), to, improve);
+  for (int i = 0; i < options.improve_steps && !improver.converged() && !stop.stop_requested(); ++i)
+    improver.step();
+  if (stop.stop_requested()) return false;
+  improver.finish();
+  stats = improver.stats();
+  out = improver.take_mesh();
+  // The improver holds the singular points it finds itself; one it missed may have let its
+  // vertex drift. Node vertices stay on their nodes (the checks see any harm).
+  bool node_moved = false;
+  for (size_t v = 0; v < nodes.node_of.size(); ++v) {
+    if (nodes.node_of[v] < 0) continue;
+    const Vec3& node = nodes.new_point_of_vertex(v);
+    node_moved |= out.positions[v] != node;
+    out.positions[v] = node;
+  }
+  if (node_moved) compute_field_normals(out, to, workers);
+  return true;
+}
+
+// The checks away from the singular set (its neighbourhood as the new points give it): the
+// largest residual, triangles facing against ∇F and the smallest angle, before and after.
+struct CarryChecks {
+  double worst_residual = 0;
+  long long flipped_triangles = 0;
+  double smallest_before = 180, smallest_after = 180;
+  bool any_checked = false;
+};
+
+CarryChecks check_carried(const Mesh& mesh, const Mesh& out, const std::vector<Vec3>& new_points,
+                          detail::EvaluatorPool& pool, int workers) {
+  CarryChecks c;
+  const VertexFrame fr = vertex_frame(out, new_points);
+  std::vector<double> f;
+  std::vector<Vec3> g;
+  detail::values_gradients(pool, workers, out.positions, f, g);
+  // As measure_quality() does: whatever lies within kNodeReach mean edges of a singular point.
+  auto near_point = [&](const Vec3& p) {
+    for (const Vec3& q : new_points)
+      if ((p - q).norm() < kNodeReach * fr.mean_edge) return true;
+    return false;
+  };
+  for (size_t v = 0; v < out.vertex_count(); ++v) {
+    if (fr.near_curve[v] || near_point(out.positions[v])) continue;
+    c.worst_residual = std::max(c.worst_residual, residual(f[v], g[v].norm()));
+  }
+  std::vector<Vec3> centroids;
+  std::vector<std::uint32_t> checked;
+  for (size_t t = 0; t < out.triangles.size(); ++t) {
+    const auto& tri = out.triangles[t];
+    if (fr.near_curve[tri[0]] || fr.near_curve[tri[1]] || fr.near_curve[tri[2]]) continue;
+    const Vec3 &a = out.positions[tri[0]], &b = out.positions[tri[1]], &d = out.positions[tri[2]];
+    if (near_point((a + b + d) / 3)) continue;
+    centroids.push_back((a + b + d) / 3);
+    checked.push_back(static_cast<std::uint32_t>(t));
+    c.smallest_after = std::min(c.smallest_after, triangle_min_angle_deg(a, b, d));
+    c.smallest_before = std::min(
+        c.smallest_before, triangle_min_angle_deg(mesh.positions[tri[0]], mesh.positions[tri[1]],
+                                                  mesh.positions[tri[2]]));
+  }
+  std::vector<double> fc;
+  std::vector<Vec3> gc;
+  detail::values_gradients(pool, workers, centroids, fc, gc);
+  for (size_t i = 0; i < checked.size(); ++i) {
+    const auto& tri = out.triangles[checked[i]];
+    const Vec3 normal =
+        detail::area_normal(out.positions[tri[0]], out.positions[tri[1]], out.positions[tri[2]]);
+    if (gc[i].allFinite() && normal.dot(gc[i]) < 0) ++c.flipped_triangles;
+  }
+  c.any_checked = !checked.empty();
+  return c;
+}
+
+}  // namespace
+
 CarryResult carry_mesh(const Mesh& mesh, const Surface& from, const Surface& to,
                        const CarryOptions& options, std::stop_token stop) {
   const auto t0 = Clock::now();
@@ -213,187 +424,44 @@ CarryResult carry_mesh(const Mesh& mesh, const Surface& from, const Surface& to,
   if (old_set.curves != new_set.curves)
     return failed_after(CarryFailure::kSingularSet,
                         fmt::format("singular curves: {} → {}", old_set.curves, new_set.curves));
-  VertexFrame fr = vertex_frame(mesh, old_set.points);
+  const VertexFrame fr = vertex_frame(mesh, old_set.points);
   const double h = fr.mean_edge;
-  const std::vector<int> match =
-      match_points(old_set.points, new_set.points, options.max_move_edges * h * 4);
-  if (match.size() != old_set.points.size())
+  NodeMatch nodes{old_set,
+                  new_set,
+                  match_points(old_set.points, new_set.points, options.max_move_edges * h * 4),
+                  {}};
+  if (nodes.match.size() != old_set.points.size())
     return failed_after(CarryFailure::kSingularSet, "a singular point jumped");
   if (stop.stop_requested()) return failed_after(CarryFailure::kStopped, "stopped");
 
-  const std::vector<double>& q0 = from.field.parameter_values();
-  const std::vector<double>& q1 = to.field.parameter_values();
-  std::vector<double> dq(q0.size());
-  for (size_t k = 0; k < q0.size(); ++k) dq[k] = q1[k] - q0[k];
-
-  // The node vertices: the vertex at each old singular point goes to its partner.
-  std::vector<int> node_of(nv, -1);
   CarryResult r;
   r.singular = new_set;
-  for (size_t k = 0; k < old_set.points.size(); ++k) {
-    size_t best = nv;
-    double best_d = 1e-3 * h;
-    for (size_t v = 0; v < nv; ++v) {
-      const double d = (mesh.positions[v] - old_set.points[k]).norm();
-      if (d <= best_d) best_d = d, best = v;
-    }
-    if (best < nv) node_of[best] = static_cast<int>(k), ++r.node_vertices;
-  }
-
+  r.node_vertices = find_node_vertices(mesh, h, nodes);
   Mesh out = mesh;
   const int workers = detail::improver_workers(options.threads, nv);
   detail::EvaluatorPool old_pool(from.field, workers), new_pool(to.field, workers);
-  std::atomic<int> failure{static_cast<int>(CarryFailure::kNone)};
-  std::atomic<long long> failed_vertex{-1};
-  std::vector<double> moved(nv, 0);
-  const double tolerance = kProjectionTolerance * h;
-  const bool has_clip = !to.clip.is_empty_spec();
-  detail::ExceptionTrap trap;
-  const long long n = static_cast<long long>(nv);
-#pragma omp parallel for num_threads(workers) schedule(dynamic, 256)
-  for (long long vv = 0; vv < n; ++vv)
-    trap.run([&] {
-      if (failure.load(std::memory_order_relaxed) != 0) return;
-      const size_t v = static_cast<size_t>(vv);
-      const Vec3 start = mesh.positions[v];
-      Vec3 p = start, predicted = start;
-      const double limit = options.max_move_edges * fr.edge[v];
-      auto fail = [&](CarryFailure why) {
-        int none = 0;
-        if (failure.compare_exchange_strong(none, static_cast<int>(why))) failed_vertex = vv;
-      };
-      const int nearest = fr.nearest_node[v];
-      if (node_of[v] >= 0) {
-        p = new_set.points[static_cast<size_t>(match[static_cast<size_t>(node_of[v])])];
-      } else if (fr.on_curve[v]) {
-        if (!project_onto_singular_curve(new_pool.local(), p, tolerance))
-          return fail(CarryFailure::kProjection);
-      } else {
-        // The predictor: the parameter term, blended into the node's own move within
-        // kNodeReach edges of a node (fully the node's within half of that), so that
-        // neighbours do not get moves of a different kind.
-        double w = 0;
-        Vec3 node_move = Vec3::Zero();
-        if (nearest >= 0) {
-          const size_t k = static_cast<size_t>(nearest);
-          node_move = new_set.points[static_cast<size_t>(match[k])] - old_set.points[k];
-          const double d = (start - old_set.points[k]).norm(), reach = kNodeReach * h;
-          w = std::clamp(2 * (reach - d) / reach, 0.0, 1.0);
-        }
-        Vec3 term = Vec3::Zero();
-        if (w < 1) {
-          const FieldSample s = old_pool.local().sample(start, Derivatives::kParameters);
-          double fq = 0;
-          for (size_t k = 0; k < dq.size() && k < s.dq.size(); ++k) fq += s.dq[k] * dq[k];
-          const double g2 = s.gradient.squaredNorm();
-          if (g2 > 0 && std::isfinite(fq) && std::isfinite(g2)) term = -(fq / g2) * s.gradient;
-        }
-        p += w * node_move + (1 - w) * term;
-        predicted = p;
-        const bool on_clip = out.is_boundary.size() == nv && out.is_boundary[v] && has_clip &&
-                             std::abs(from.clip.value(start)) <= 1e-7 * (1 + start.norm());
-        if (on_clip) {
-          p = project_onto_clip_curve(new_pool.local(), to.clip, p, limit);
-          Vec3 g;
-          const double f = new_pool.local().value_gradient(p, g);
-          if (!has_residual(f, g.norm()) || residual(f, g.norm()) > options.max_residual_edges * h)
-            return fail(CarryFailure::kClip);
-        } else if (!project_onto_surface(new_pool.local(), p, tolerance, 2 * limit)) {
-          return fail(CarryFailure::kProjection);
-        }
-      }
-      // The prediction is first order: where Newton has to correct it by more than a fraction
-      // of an edge, the surface did not just move here (a new sheet, a pinch) or moved too far.
-      moved[v] = (p - start).norm();
-      if (!((p - predicted).norm() <= limit) && node_of[v] < 0)
-        return fail(CarryFailure::kLongMove);
-      if (has_clip && !(out.is_boundary.size() == nv && out.is_boundary[v]) &&
-          to.clip.value(p) > 1e-9 * (1 + p.norm()))
-        return fail(CarryFailure::kClip);
-      out.positions[v] = p;
-    });
-  trap.rethrow();
-  if (const auto why = static_cast<CarryFailure>(failure.load()); why != CarryFailure::kNone) {
-    const long long v = failed_vertex.load();
-    const char* what = why == CarryFailure::kLongMove ? "was corrected by more than {} edge"
-                       : why == CarryFailure::kClip   ? "left the clip curve"
-                                                      : "found no surface nearby";
+  std::vector<double> moved;
+  const MoveFailure failure =
+      move_vertices(mesh, out, from, to, options, fr, nodes, old_pool, new_pool, workers, moved);
+  if (failure.why != CarryFailure::kNone) {
+    const char* what = failure.why == CarryFailure::kLongMove ? "was corrected by more than {} edge"
+                       : failure.why == CarryFailure::kClip   ? "left the clip curve"
+                                                              : "found no surface nearby";
     return failed_after(
-        why, fmt::format(fmt::runtime(fmt::format("a vertex {}", what)), options.max_move_edges) +
-                 (v >= 0 ? fmt::format(" (vertex {})", v) : std::string()));
+        failure.why,
+        fmt::format(fmt::runtime(fmt::format("a vertex {}", what)), options.max_move_edges) +
+            (failure.vertex >= 0 ? fmt::format(" (vertex {})", failure.vertex) : std::string()));
   }
   for (size_t v = 0; v < nv; ++v)
     r.max_move_edges = std::max(r.max_move_edges, moved[v] / fr.edge[v]);
   if (stop.stop_requested()) return failed_after(CarryFailure::kStopped, "stopped");
+  if (!improve_carried(out, to, options, workers, nodes, r.improve, stop))
+    return failed_after(CarryFailure::kStopped, "stopped");
 
-  // A few improver steps on the new surface, then its final projection.
-  ImproveOptions improve = options.improve;
-  improve.threads = workers;  // its final normals too: not every core for a small mesh
-  improve.max_steps = options.improve_steps;
-  // Edge flips are the dearest part of a step (a serial pass over every edge): one pass undoes
-  // the stretching of a small move; the springs do the rest.
-  improve.flip_steps = std::min(improve.flip_steps, 1);
-  MeshImprover improver(std::move(out), to, improve);
-  for (int i = 0; i < options.improve_steps && !improver.converged() && !stop.stop_requested(); ++i)
-    improver.step();
-  if (stop.stop_requested()) return failed_after(CarryFailure::kStopped, "stopped");
-  improver.finish();
-  r.improve = improver.stats();
-  out = improver.take_mesh();
-  // The improver holds the singular points it finds itself; one it missed may have let its
-  // vertex drift. Node vertices stay on their nodes (the checks below see any harm).
-  bool node_moved = false;
-  for (size_t v = 0; v < nv; ++v) {
-    if (node_of[v] < 0) continue;
-    const Vec3& node = new_set.points[static_cast<size_t>(match[static_cast<size_t>(node_of[v])])];
-    node_moved |= out.positions[v] != node;
-    out.positions[v] = node;
-  }
-  if (node_moved) compute_field_normals(out, to, workers);
-
-  // The checks away from the singular set (its neighbourhood as the new points give it).
-  fr = vertex_frame(out, new_set.points);
-  std::vector<double> f;
-  std::vector<Vec3> g;
-  detail::values_gradients(new_pool, workers, out.positions, f, g);
-  double worst = 0;
-  // As measure_quality() does: whatever lies within kNodeReach mean edges of a singular point.
-  auto near_point = [&](const Vec3& p) {
-    for (const Vec3& c : new_set.points)
-      if ((p - c).norm() < kNodeReach * fr.mean_edge) return true;
-    return false;
-  };
-  for (size_t v = 0; v < nv; ++v) {
-    if (fr.near_curve[v] || near_point(out.positions[v])) continue;
-    const double gn = g[v].norm();
-    worst = std::max(worst, residual(f[v], gn));
-  }
-  r.max_residual = worst;
-  std::vector<Vec3> centroids;
-  std::vector<std::uint32_t> checked;
-  double smallest_before = 180, smallest_after = 180;
-  for (size_t t = 0; t < out.triangles.size(); ++t) {
-    const auto& tri = out.triangles[t];
-    if (fr.near_curve[tri[0]] || fr.near_curve[tri[1]] || fr.near_curve[tri[2]]) continue;
-    const Vec3 &a = out.positions[tri[0]], &b = out.positions[tri[1]], &c = out.positions[tri[2]];
-    if (near_point((a + b + c) / 3)) continue;
-    centroids.push_back((a + b + c) / 3);
-    checked.push_back(static_cast<std::uint32_t>(t));
-    smallest_after = std::min(smallest_after, triangle_min_angle_deg(a, b, c));
-    smallest_before = std::min(
-        smallest_before, triangle_min_angle_deg(mesh.positions[tri[0]], mesh.positions[tri[1]],
-                                                mesh.positions[tri[2]]));
-  }
-  std::vector<double> fc;
-  std::vector<Vec3> gc;
-  detail::values_gradients(new_pool, workers, centroids, fc, gc);
-  for (size_t i = 0; i < checked.size(); ++i) {
-    const auto& tri = out.triangles[checked[i]];
-    const Vec3 normal =
-        detail::area_normal(out.positions[tri[0]], out.positions[tri[1]], out.positions[tri[2]]);
-    if (gc[i].allFinite() && normal.dot(gc[i]) < 0) ++r.flipped_triangles;
-  }
-  r.smallest_angle_deg = checked.empty() ? 0 : smallest_after;
+  const CarryChecks c = check_carried(mesh, out, new_set.points, new_pool, workers);
+  r.max_residual = c.worst_residual;
+  r.flipped_triangles = c.flipped_triangles;
+  r.smallest_angle_deg = c.any_checked ? c.smallest_after : 0;
   r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   auto refuse = [&](CarryFailure why, std::string reason) {
     CarryResult bad = r;
@@ -404,12 +472,13 @@ CarryResult carry_mesh(const Mesh& mesh, const Surface& from, const Surface& to,
   if (r.flipped_triangles > 0)
     return refuse(CarryFailure::kFlipped,
                   fmt::format("{} triangles face against ∇F", r.flipped_triangles));
-  if (smallest_after < options.min_angle_deg && smallest_after < smallest_before)
+  if (c.smallest_after < options.min_angle_deg && c.smallest_after < c.smallest_before)
     return refuse(CarryFailure::kAngle, fmt::format("smallest angle {:.2g}° (was {:.2g}°)",
-                                                    smallest_after, smallest_before));
-  if (!(worst <= options.max_residual_edges * h))
+                                                    c.smallest_after, c.smallest_before));
+  if (!(c.worst_residual <= options.max_residual_edges * h))
     return refuse(CarryFailure::kResidual,
-                  fmt::format("|F|/|∇F| = {:.2g} edge lengths left", h > 0 ? worst / h : worst));
+                  fmt::format("|F|/|∇F| = {:.2g} edge lengths left",
+                              h > 0 ? c.worst_residual / h : c.worst_residual));
   r.mesh = std::move(out);
   return r;
 }
