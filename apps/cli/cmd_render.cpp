@@ -304,6 +304,13 @@ void run_animate(const SurfaceArgs& args, const LookArgs& look, const AnimateArg
   if (a.frame_range_opt->count() > 0 && a.frame_range.empty())
     throw InvalidArgument("--frame-range", "''", "expected FIRST-LAST, e.g. 0-9");
   const FrameRange range = parse_frame_range(a.frame_range, a.frames, "--frame-range");
+  // Each frame is a file of the run's one transaction, and the video one more.
+  if (range.count() > kMaxPendingOutputs - 1)
+    throw InvalidArgument(a.frame_range.empty() ? "--frames" : "--frame-range",
+                          a.frame_range.empty() ? std::to_string(a.frames) : a.frame_range,
+                          fmt::format("at most {} frames in one run; render the animation in "
+                                      "parts with --frame-range FIRST-LAST",
+                                      kMaxPendingOutputs - 1));
   check_flag_range("--fps", a.fps, 1, 240);  // CLI::Range lets NaN through
   // A part of the animation makes no video; the frames are joined once all parts are done.
   const bool whole = range.count() == a.frames;

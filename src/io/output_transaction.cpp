@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstdlib>
@@ -28,7 +29,7 @@ namespace fs = std::filesystem;
 // both, whichever thread the signal lands on.
 namespace {
 
-constexpr int kFileSlots = 1 << 16;
+constexpr int kFileSlots = kMaxPendingOutputs;
 constexpr int kDirSlots = 256;
 std::atomic<char*> g_files[kFileSlots];
 std::atomic<char*> g_dirs[kDirSlots];
@@ -123,6 +124,14 @@ CheckedPath check_output_path(const std::string& path) {
     throw IoError(path, "directory '" + dir.string() + "' does not exist");
   if (::access(dir.c_str(), W_OK) != 0)
     throw IoError(path, "directory '" + dir.string() + "' is not writable");
+  // A name the file system cannot hold would fail only when the finished file is moved into
+  // place, after the work.
+  const std::string name = c.target.filename().string();
+  const long name_max = ::pathconf(dir.c_str(), _PC_NAME_MAX);
+  if (name_max > 0 && name.size() > static_cast<std::size_t>(name_max))
+    throw IoError(path, "the file name is " + std::to_string(name.size()) +
+                            " bytes long; the directory allows at most " +
+                            std::to_string(name_max));
   return c;
 }
 
@@ -218,7 +227,10 @@ void OutputTransaction::declare(const std::string& path, const std::string& flag
   o.path = path;
   o.flag = flag;
   o.target = c.target;
-  outputs_.reserve(outputs_.size() + 1);  // the push_back below does not throw
+  // The push_back below must not throw; capacity grows geometrically (an animation declares
+  // every frame: reserving one more each time would copy them all each time).
+  if (outputs_.size() == outputs_.capacity())
+    outputs_.reserve(std::max<std::size_t>(16, 2 * outputs_.capacity()));
   if (!c.direct) {
     // The temp file is made now, before any work, under a name nobody can guess and never
     // through a symbolic link (a path where it cannot be made is bad input). It replaces an

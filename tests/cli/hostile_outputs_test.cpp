@@ -127,6 +127,29 @@ TEST(HostileOutputs, TwoOutputsNamingOneFileAreRefusedBeforeAnyWork) {
   EXPECT_TRUE(fs::is_symlink(d + "/m.json"));
 }
 
+TEST(HostileOutputs, NamesTooLongAndTooManyFramesAreRefusedBeforeAnyWork) {
+  const std::string d = fresh_dir("hostile-limits");
+  const std::string long_name = d + "/" + std::string(256, 'a');
+  const std::vector<std::string> cases = {
+      "mesh kummer -r 96 -o " + long_name + ".obj",
+      "render kummer --size 64x64 -o " + long_name + ".png",
+      "mesh sphere -r 8 -o " + d + "/ok.obj --stats " + long_name + ".json",
+      // Every frame is a pending file of the run's one transaction.
+      "animate kummer --param mu=1:2 --frames 70000 --size 8x8 -o " + d + "/frames"};
+  for (const std::string& args : cases) {
+    const auto start = std::chrono::steady_clock::now();
+    const auto r = run_command(zs(args));
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+    EXPECT_TRUE(r.output.find("bytes long") != std::string::npos ||
+                r.output.find("at most 65535 frames") != std::string::npos)
+        << args << "\n" << r.output;
+    EXPECT_LT(seconds, 5) << args;  // refused, not attempted
+  }
+  EXPECT_TRUE(contents(d).empty());
+}
+
 // ---- symbolic links ---------------------------------------------------------------------------
 
 TEST(HostileOutputs, AnOutputThroughASymbolicLinkReplacesItsTargetAndTheLinkStays) {

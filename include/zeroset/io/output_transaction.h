@@ -34,6 +34,10 @@ namespace zeroset {
 /// goes beside the link's final target and replaces that, the link stays. A target that exists
 /// and is not a regular file (/dev/null, /dev/stdout, a FIFO) cannot be replaced by a rename:
 /// it is written directly, at write time.
+/// The most files all transactions of a process may have pending at once (the signal handler
+/// removes them from a fixed table): a command that would declare more refuses before its work.
+inline constexpr int kMaxPendingOutputs = 1 << 16;
+
 class OutputTransaction {
  public:
   OutputTransaction();
