@@ -49,58 +49,54 @@ struct MeshArgs {
   double curvature_weight = MeshSettings{}.curvature_weight;
 };
 
-// The flags of the paper's own settings (kPaperOnlyMeshKeys). With the remesher they would do
-// nothing, so one given explicitly is refused rather than ignored.
-void refuse_paper_only_flags(const MeshArgs& a, const MeshSettings& m) {
-  const std::pair<bool, const char*> flags[] = {
-      {a.no_curvature, "--no-curvature"},
-      {a.curvature_weight_opt->count() > 0, "--curvature-weight"},
-      {a.no_singularity, "--no-singularity"},
-      {a.no_flips, "--no-flips"}};
-  static_assert(std::size(flags) == kPaperOnlyMeshKeys.size());
-  if (m.improver != Improver::kRemesh) return;
-  for (const auto& [given, flag] : flags)
-    if (given)
-      throw InvalidArgument(
-          fmt::format("{} sets the paper's improver, but the improver is "
-                      "remesh: add --improver paper",
-                      flag));
-}
+// Each mesh setting's flag (a key of the scene file's "mesh" object, docs/meshing.md).
+const FlagNames kMeshFlags = {{"cells", "--resolution"},
+                              {"improve", "--improve"},
+                              {"boundary", "--boundary"},
+                              {"improver", "--improver"},
+                              {"grid", "--grid"},
+                              {"refine_steps", "--refine-steps"},
+                              {"curvature_weight", "--curvature-weight"},
+                              {"curvature", "--no-curvature"},
+                              {"singularity", "--no-singularity"},
+                              {"flips", "--no-flips"},
+                              {"find_singular", "--no-find-singular"},
+                              {"crossings", "--no-crossings"},
+                              {"curves", "--no-curves"}};
 
 // Settings from a scene file's "mesh" object (as the viewer saves them, or with improve as
-// --improve takes it); flags given explicitly win. The scene's values are checked as it is
-// read, the flags' here, by the same validator.
+// --improve takes it), then the flags given, as the same keys through the same reader
+// (apply_mesh_options): a bad value gets the same words, named by its flag.
 MeshSettings settings_from(const MeshArgs& a, const Scene& scene) {
   MeshSettings m;
-  m.cells = a.resolution;
   if (scene.settings.contains("mesh"))
     apply_mesh_settings(scene.settings["mesh"], m, "'" + a.surface.spec + "'");
+  nlohmann::json given = nlohmann::json::object();
+  if (a.resolution_opt->count()) given["cells"] = a.resolution;
+  if (a.improve_opt->count()) given["improve"] = a.improve;
+  if (a.boundary_opt->count()) given["boundary"] = a.boundary;
+  if (a.improver_opt->count()) given["improver"] = a.improver;
+  if (a.grid_opt->count()) given["grid"] = a.grid;
+  if (a.refine_steps_opt->count()) given["refine_steps"] = a.refine_steps;
+  if (a.curvature_weight_opt->count()) given["curvature_weight"] = a.curvature_weight;
+  // The switches turn off what the scene may have on.
+  for (const auto& [off, key] :
+       {std::pair{a.no_curvature, "curvature"}, std::pair{a.no_singularity, "singularity"},
+        std::pair{a.no_flips, "flips"}, std::pair{a.no_find_singular, "find_singular"},
+        std::pair{a.no_crossings, "crossings"}, std::pair{a.no_curves, "curves"}})
+    if (off) given[key] = false;
   validate_flags(
       [&] {
-        if (a.resolution_opt->count()) m.cells = a.resolution;
-        if (a.improve_opt->count()) apply_improve(a.improve, m);
-        if (a.boundary_opt->count()) m.boundary = parse_boundary(a.boundary);
-        if (a.improver_opt->count()) m.improver = parse_improver(a.improver);
-        if (a.grid_opt->count()) m.grid = parse_grid(a.grid);
-        if (a.refine_steps_opt->count()) m.refine_steps = a.refine_steps;
-        if (a.curvature_weight_opt->count()) m.curvature_weight = a.curvature_weight;
-        // The switches turn off what the scene may have on.
-        if (a.no_curvature) m.curvature = false;
-        if (a.no_singularity) m.singularity = false;
-        if (a.no_flips) m.flips = false;
-        if (a.no_find_singular) m.find_singular = false;
-        if (a.no_crossings) m.crossings = false;
-        if (a.no_curves) m.curves = false;
-        validate_settings(m);
+        try {
+          apply_mesh_options(given, m);
+        } catch (const SettingError& e) {
+          // The paper's own settings would do nothing with the remesher: say how to choose it.
+          if (e.why() != kPaperOnlyRefusal) throw;
+          throw InvalidArgument(flag_name(kMeshFlags, e.key()) + " " + e.why() +
+                                ": add --improver paper");
+        }
       },
-      {{"cells", "--resolution"},
-       {"improve", "--improve"},
-       {"boundary", "--boundary"},
-       {"improver", "--improver"},
-       {"grid", "--grid"},
-       {"refine_steps", "--refine-steps"},
-       {"curvature_weight", "--curvature-weight"}});
-  refuse_paper_only_flags(a, m);
+      kMeshFlags);
   return m;
 }
 
@@ -240,7 +236,7 @@ void register_mesh_command(CLI::App& app) {
           ->type_name("fix|constrain")
           ->capture_default_str();
   // The paper improver's own flags, in a group of their own in --help (refused with the
-  // remesher, refuse_paper_only_flags).
+  // remesher, apply_mesh_options).
   const std::string paper_only = "Paper improver only (--improver paper)";
   cmd->add_flag("--no-curvature", args->no_curvature,
                 "Springs without the curvature estimator (paper eq. 6)")

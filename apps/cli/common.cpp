@@ -178,11 +178,14 @@ void validate_flags(const std::function<void()>& validate, FlagNames flags) {
   try {
     validate();
   } catch (const SettingError& e) {
-    std::string flag = e.key();
-    for (const auto& [key, name] : flags)
-      if (key == e.key()) flag = name;
-    throw InvalidArgument(flag, e.value(), e.why());
+    throw InvalidArgument(flag_name(flags, e.key()), e.value(), e.why());
   }
+}
+
+std::string flag_name(FlagNames flags, std::string_view key) {
+  for (const auto& [k, name] : flags)
+    if (k == key) return std::string(name);
+  return std::string(key);
 }
 
 std::vector<double> parse_numbers(const std::string& text, const std::string& flag) {

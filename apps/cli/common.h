@@ -69,6 +69,8 @@ using FlagNames = std::initializer_list<std::pair<std::string_view, std::string_
 /// naming the flag that sets the key (the key itself when no flag does), with the validator's
 /// words, so a flag and a scene file's entry are refused alike.
 void validate_flags(const std::function<void()>& validate, FlagNames flags);
+/// The flag `flags` gives for a setting's key (the key itself when it has none).
+std::string flag_name(FlagNames flags, std::string_view key);
 
 /// Comma-separated finite numbers ("1,2.5,-3"); InvalidArgument naming `flag` otherwise.
 std::vector<double> parse_numbers(const std::string& text, const std::string& flag);

@@ -35,35 +35,32 @@ struct MeshArgs {
   int threads = 0;
 };
 
-// As `zeroset mesh`: the scene file's "mesh" object, then the arguments given.
+// As `zeroset mesh`: the scene file's "mesh" object, then the arguments given, as the same
+// keys through the same reader (apply_mesh_options).
 MeshSettings settings_from(const MeshArgs& a, const PySurface& s) {
   MeshSettings m;
   if (s.scene.settings.contains("mesh"))
     apply_mesh_settings(s.scene.settings["mesh"], m, "'" + s.spec + "'");
-  if (a.resolution) m.cells = *a.resolution;
-  if (a.improve) apply_improve(*a.improve, m);
-  if (a.boundary) m.boundary = parse_boundary(*a.boundary);
-  if (a.improver) m.improver = parse_improver(*a.improver);
-  if (a.grid) m.grid = parse_grid(*a.grid);
-  if (a.refine_steps) m.refine_steps = *a.refine_steps;
-  if (a.curvature_weight) m.curvature_weight = *a.curvature_weight;
-  for (auto [given, setting] :
-       {std::pair{&a.curvature, &m.curvature}, std::pair{&a.singularity, &m.singularity},
-        std::pair{&a.flips, &m.flips}, std::pair{&a.find_singular, &m.find_singular},
-        std::pair{&a.crossings, &m.crossings}, std::pair{&a.curves, &m.curves}})
-    if (*given) *setting = **given;
-  validate_settings(m);
-  // As `zeroset mesh` refuses their flags: the paper's own settings (kPaperOnlyMeshKeys) do
-  // nothing with the remesher, so one given explicitly is refused rather than ignored.
-  if (m.improver == Improver::kRemesh)
-    for (auto [given, name] : {std::pair{a.curvature.has_value(), "curvature"},
-                               std::pair{a.curvature_weight.has_value(), "curvature_weight"},
-                               std::pair{a.singularity.has_value(), "singularity"},
-                               std::pair{a.flips.has_value(), "flips"}})
-      if (given)
-        throw InvalidArgument(std::string(name) +
-                              " sets the paper's improver, but the improver is remesh: add "
-                              "improver=\"paper\"");
+  nlohmann::json given = nlohmann::json::object();
+  if (a.resolution) given["cells"] = *a.resolution;
+  if (a.improve) given["improve"] = *a.improve;
+  if (a.boundary) given["boundary"] = *a.boundary;
+  if (a.improver) given["improver"] = *a.improver;
+  if (a.grid) given["grid"] = *a.grid;
+  if (a.refine_steps) given["refine_steps"] = *a.refine_steps;
+  if (a.curvature_weight) given["curvature_weight"] = *a.curvature_weight;
+  for (const auto& [value, key] :
+       {std::pair{&a.curvature, "curvature"}, std::pair{&a.singularity, "singularity"},
+        std::pair{&a.flips, "flips"}, std::pair{&a.find_singular, "find_singular"},
+        std::pair{&a.crossings, "crossings"}, std::pair{&a.curves, "curves"}})
+    if (*value) given[key] = **value;
+  try {
+    apply_mesh_options(given, m);
+  } catch (const SettingError& e) {
+    // The paper's own settings would do nothing with the remesher: say how to choose it.
+    if (e.why() != kPaperOnlyRefusal) throw;
+    throw InvalidArgument(e.key() + " " + e.why() + ": add improver=\"paper\"");
+  }
   return m;
 }
 

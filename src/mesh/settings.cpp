@@ -2,7 +2,10 @@
 
 #include <fmt/core.h>
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
 
@@ -125,57 +128,95 @@ std::string_view to_string(GridMode mode) {
   return "auto";
 }
 
+namespace {
+
+constexpr std::array<const char*, 13> kMeshKeys = {
+    "cells",     "improve",          "boundary",    "grid",  "refine_steps",
+    "curvature", "curvature_weight", "singularity", "flips", "find_singular",
+    "crossings", "curves",           "improver"};
+
+// The value of `key` in `mesh` as the type its setting takes; SettingError (naming the key) for
+// another type.
+const json& entry(const json& mesh, const char* key, bool (json::*is)() const noexcept,
+                  const char* expected) {
+  const json& v = mesh[key];
+  if (!(v.*is)()) throw SettingError(key, v.dump(), expected);
+  return v;
+}
+
+int whole_number(const json& mesh, const char* key) {
+  const json& v = mesh[key];
+  const double c = v.is_number() ? v.get<double>() : std::nan("");
+  if (!(c == std::floor(c))) throw SettingError(key, v.dump(), "expected a whole number");
+  // Far outside the rule stays so (validate_settings says the rule).
+  return static_cast<int>(std::clamp(c, -1e9, 1e9));
+}
+
+// Reads the entries of a "mesh" object into `m` and validates the result: the one reader of
+// mesh settings, behind scene files, flags and keywords alike. SettingError names the key.
+void read_mesh_object(const json& mesh, MeshSettings& m) {
+  for (const auto& [key, value] : mesh.items())
+    if (std::none_of(kMeshKeys.begin(), kMeshKeys.end(), [&](const char* k) { return key == k; }))
+      throw SettingError(key, value.dump(), "is not a mesh setting");
+  if (mesh.contains("cells")) m.cells = whole_number(mesh, "cells");
+  if (mesh.contains("improve")) {
+    const json& v = mesh["improve"];
+    if (v.is_boolean())
+      apply_improve(v.get<bool>() ? "auto" : "off", m);
+    else if (v.is_string())
+      apply_improve(v.get<std::string>(), m);
+    else if (v.is_number_integer())
+      set_steps(v.get<long long>(), std::to_string(v.get<long long>()), m);
+    else
+      throw SettingError("improve", v.dump(),
+                         "expected true, false, \"auto\", \"off\" or a number of steps");
+  }
+  const auto text = [&](const char* key) {
+    return entry(mesh, key, &json::is_string, "expected a string").get<std::string>();
+  };
+  if (mesh.contains("boundary")) m.boundary = parse_boundary(text("boundary"));
+  if (mesh.contains("improver")) m.improver = parse_improver(text("improver"));
+  if (mesh.contains("grid")) m.grid = parse_grid(text("grid"));
+  if (mesh.contains("refine_steps")) m.refine_steps = whole_number(mesh, "refine_steps");
+  if (mesh.contains("curvature_weight")) {
+    const double w =
+        entry(mesh, "curvature_weight", &json::is_number, "expected a number").get<double>();
+    if (!std::isfinite(w))
+      throw SettingError("curvature_weight", fmt::format("{}", w), "expected a finite number");
+    m.curvature_weight = w;
+  }
+  for (auto [key, flag] :
+       {std::pair{"curvature", &m.curvature}, std::pair{"singularity", &m.singularity},
+        std::pair{"flips", &m.flips}, std::pair{"find_singular", &m.find_singular},
+        std::pair{"crossings", &m.crossings}, std::pair{"curves", &m.curves}})
+    if (mesh.contains(key))
+      *flag = entry(mesh, key, &json::is_boolean, "expected true or false").get<bool>();
+  validate_settings(m);
+}
+
+}  // namespace
+
 void apply_mesh_settings(const json& mesh, MeshSettings& settings, const std::string& origin) {
   const std::string base = "/mesh";
   if (!mesh.is_object()) json_read::fail(origin, base, "expected an object");
-  json_read::known_keys(
-      mesh,
-      {"cells", "improve", "boundary", "grid", "refine_steps", "curvature", "curvature_weight",
-       "singularity", "flips", "find_singular", "crossings", "curves", "improver"},
-      origin, base);
+  json_read::known_keys(mesh, kMeshKeys, origin, base);
   MeshSettings m = settings;
   try {
-    // The types here; the ranges are validate_settings' (the same for every entry point).
-    // Whole numbers; far outside the rule stays so (validate_settings says the rule).
-    auto whole_number = [&](const char* key) {
-      const json& v = mesh[key];
-      const double c = v.is_number() ? v.get<double>() : std::nan("");
-      if (!(c == std::floor(c)))
-        json_read::fail(origin, base + "/" + key, "expected a whole number");
-      return static_cast<int>(std::clamp(c, -1e9, 1e9));
-    };
-    if (mesh.contains("cells")) m.cells = whole_number("cells");
-    if (mesh.contains("improve")) {
-      const json& v = mesh["improve"];
-      if (v.is_boolean())
-        apply_improve(v.get<bool>() ? "auto" : "off", m);
-      else if (v.is_string())
-        apply_improve(v.get<std::string>(), m);
-      else if (v.is_number_integer())
-        set_steps(v.get<long long>(), std::to_string(v.get<long long>()), m);
-      else
-        json_read::fail(origin, base + "/improve",
-                        "expected true, false, \"auto\", \"off\" or a number of steps");
-    }
-    if (mesh.contains("boundary"))
-      m.boundary = parse_boundary(json_read::string(mesh["boundary"], origin, base + "/boundary"));
-    if (mesh.contains("improver"))
-      m.improver = parse_improver(json_read::string(mesh["improver"], origin, base + "/improver"));
-    if (mesh.contains("grid"))
-      m.grid = parse_grid(json_read::string(mesh["grid"], origin, base + "/grid"));
-    if (mesh.contains("refine_steps")) m.refine_steps = whole_number("refine_steps");
-    if (mesh.contains("curvature_weight"))
-      m.curvature_weight =
-          json_read::number(mesh["curvature_weight"], origin, base + "/curvature_weight");
-    for (auto [key, flag] :
-         {std::pair{"curvature", &m.curvature}, std::pair{"singularity", &m.singularity},
-          std::pair{"flips", &m.flips}, std::pair{"find_singular", &m.find_singular},
-          std::pair{"crossings", &m.crossings}, std::pair{"curves", &m.curves}})
-      if (mesh.contains(key)) *flag = json_read::boolean(mesh[key], origin, base + "/" + key);
-    validate_settings(m);
+    read_mesh_object(mesh, m);
   } catch (const SettingError& e) {
     json_read::fail(origin, base + "/" + e.key(), e.why());
   }
+  settings = m;
+}
+
+void apply_mesh_options(const json& given, MeshSettings& settings) {
+  MeshSettings m = settings;
+  read_mesh_object(given, m);
+  if (m.improver == Improver::kRemesh)
+    for (std::string_view key : kPaperOnlyMeshKeys)
+      if (given.contains(key))
+        throw SettingError(std::string(key), given[std::string(key)].dump(),
+                           std::string(kPaperOnlyRefusal));
   settings = m;
 }
 

@@ -60,8 +60,8 @@ Vec3 vec3(const json& j, const std::string& origin, const std::string& where) {
 
 json from_vec3(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
-void known_keys(const json& object, std::initializer_list<const char*> known,
-                const std::string& origin, const std::string& where) {
+void known_keys(const json& object, std::span<const char* const> known, const std::string& origin,
+                const std::string& where) {
   for (auto it = object.begin(); it != object.end(); ++it) {
     const std::string& key = it.key();  // not a structured binding: lambdas capture it
     if (std::find_if(known.begin(), known.end(), [&](const char* k) { return key == k; }) !=

@@ -114,5 +114,41 @@ TEST(MeshSettings, MalformedEntriesAreRefusedWithTheirPointer) {
   }
 }
 
+TEST(MeshSettings, GivenOptionsGoThroughTheOneReaderAndNameTheirKey) {
+  MeshSettings m;
+  apply_mesh_options({{"cells", 40}, {"improve", "12"}, {"crossings", false}}, m);
+  EXPECT_EQ(m.cells, 40);
+  EXPECT_EQ(m.max_improve_steps, 12);
+  EXPECT_FALSE(m.crossings);
+  auto refusal = [](const nlohmann::json& given) -> std::pair<std::string, std::string> {
+    MeshSettings s;
+    const MeshSettings before = s;
+    try {
+      apply_mesh_options(given, s);
+    } catch (const SettingError& e) {
+      EXPECT_EQ(mesh_settings_to_json(s), mesh_settings_to_json(before));  // all or nothing
+      return {e.key(), e.why()};
+    }
+    return {};
+  };
+  EXPECT_EQ(refusal({{"cells", 0}}).first, "cells");
+  EXPECT_EQ(refusal({{"cells", "64"}}),
+            (std::pair<std::string, std::string>{"cells", "expected a whole number"}));
+  EXPECT_EQ(refusal({{"flips", 1}}).second, "expected true or false");
+  EXPECT_EQ(refusal({{"grid", "coarse"}}).first, "grid");
+  EXPECT_EQ(refusal({{"cellz", 3}}).second, "is not a mesh setting");
+  // The paper's own settings would do nothing with the remesher: refused when given...
+  for (const char* key : {"curvature", "singularity", "flips"})
+    EXPECT_EQ(refusal({{key, false}}),
+              (std::pair<std::string, std::string>{key, std::string(kPaperOnlyRefusal)}));
+  EXPECT_EQ(refusal({{"curvature_weight", 3}}).second, kPaperOnlyRefusal);
+  // ... and taken with the paper's improver, given with it or chosen before.
+  EXPECT_EQ(refusal({{"flips", false}, {"improver", "paper"}}).first, "");
+  MeshSettings paper;
+  paper.improver = Improver::kPaper;
+  apply_mesh_options({{"flips", false}}, paper);
+  EXPECT_FALSE(paper.flips);
+}
+
 }  // namespace
 }  // namespace zeroset

@@ -111,6 +111,19 @@ std::string_view to_string(GridMode mode);
 void apply_mesh_settings(const nlohmann::json& mesh, MeshSettings& settings,
                          const std::string& origin);
 
+/// Why apply_mesh_options refuses a key only the paper's improver reads, given with the
+/// remesher (a front end adds how to choose the paper's improver in its own words).
+inline constexpr std::string_view kPaperOnlyRefusal =
+    "sets the paper's improver, but the improver is remesh";
+
+/// Applies the options a user gave, only those given, as an object with the keys above (a
+/// front end's flags or keywords: {"cells": 64, "flips": false}), then validates: the one way
+/// from a front end's options into the settings. Throws SettingError naming the key, for a
+/// value of the wrong type or outside its rule, an unknown key, or a key only the paper's
+/// improver reads given with the remesher (why: "sets the paper's improver, but the improver
+/// is remesh"; scene files keep such keys, see kPaperOnlyMeshKeys).
+void apply_mesh_options(const nlohmann::json& given, MeshSettings& settings);
+
 /// The "mesh" object for `settings`.
 nlohmann::json mesh_settings_to_json(const MeshSettings& settings);
 

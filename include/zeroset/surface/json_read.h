@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <initializer_list>
 #include <nlohmann/json.hpp>
+#include <span>
 #include <string>
 #include <string_view>
 
@@ -51,7 +52,11 @@ Vec3 vec3(const nlohmann::json& j, const std::string& origin, const std::string&
 nlohmann::json from_vec3(const Vec3& v);
 
 /// Every key of `object` must be among `known`: a misspelt key would otherwise be ignored.
-void known_keys(const nlohmann::json& object, std::initializer_list<const char*> known,
+void known_keys(const nlohmann::json& object, std::span<const char* const> known,
                 const std::string& origin, const std::string& where);
+inline void known_keys(const nlohmann::json& object, std::initializer_list<const char*> known,
+                       const std::string& origin, const std::string& where) {
+  known_keys(object, std::span<const char* const>(known.begin(), known.size()), origin, where);
+}
 
 }  // namespace zeroset::json_read
