@@ -121,7 +121,8 @@ void run_mesh(const MeshArgs& a) {
       throw InvalidArgument(flag, path, "use a .png name");
   if (!a.stats.empty() && file_extension(a.stats) != "json")
     throw InvalidArgument("--stats", a.stats, "use a .json name");
-  const auto [width, height] = parse_size(a.size, "--size");
+  const std::pair<int, int> size = parse_size(a.size, "--size");
+  const int width = size.first, height = size.second;  // not a binding: a lambda uses them
   OutputTransaction outputs;  // every file or none (docs/architecture.md, "Errors")
   for (const auto& [flag, path] :
        {std::pair{"--output", a.output}, std::pair{"--png-raw", a.png_raw},

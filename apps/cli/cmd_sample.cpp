@@ -66,40 +66,54 @@ struct SampleArgs {
   CLI::Option* estimator_interval_opt = nullptr;
 };
 
-// Settings from a scene file's "floaters" object (keys named as the FloaterOptions fields);
-// command-line flags given explicitly win. The scene's values are checked as it is read, the
-// flags' here, by the same validator.
+// Each floater setting's flag (a key of the scene file's "floaters" object).
+const FlagNames kFloaterFlags = {{"radius", "--radius"},
+                                 {"max_count", "--max-count"},
+                                 {"seed_count", "--seed-count"},
+                                 {"seed", "--seed"},
+                                 {"cos_weight", "--no-cos-weight"},
+                                 {"clip_projection", "--no-clip-projection"},
+                                 {"snap_to_nodes", "--no-snap"},
+                                 {"scaled_repulsion", "--plain-repulsion"},
+                                 {"clip_newton", "--no-clip-newton"},
+                                 {"average_radius_factor", "--no-average-mu"},
+                                 {"local_nominal_radius", "--no-local-radius"},
+                                 {"energy_taper", "--no-taper"},
+                                 {"fission_offset", "--no-fission-offset"},
+                                 {"radius_grading", "--grading"},
+                                 {"feedback", "--feedback"},
+                                 {"equilibrium_speed", "--equilibrium-speed"},
+                                 {"estimator_interval", "--estimator-interval"},
+                                 {"radius_adapt", "--radius-adapt"}};
+
+// Settings from a scene file's "floaters" object, then the flags given, as the same keys
+// through the same reader (apply_floater_options): a bad value gets the same words, named by
+// its flag.
 FloaterOptions options_from(const SampleArgs& a, const Scene& scene) {
   FloaterOptions o;
   if (scene.settings.contains("floaters"))
     apply_floater_settings(scene.settings["floaters"], o, "'" + a.surface.spec + "'");
-  if (a.radius_opt->count()) o.radius = a.radius;
-  if (a.max_count_opt->count()) o.max_count = a.max_count;
-  if (a.seed_count_opt->count()) o.seed_count = a.seed_count;
-  if (a.seed_opt->count()) o.seed = a.seed;
-  if (a.no_cos_weight) o.cos_weight = false;
-  if (a.no_clip_projection) o.clip_projection = false;
-  if (a.no_snap) o.snap_to_nodes = false;
-  if (a.plain_repulsion) o.scaled_repulsion = false;
-  if (a.no_clip_newton) o.clip_newton = false;
-  if (a.no_average_mu) o.average_radius_factor = false;
-  if (a.no_local_radius) o.local_nominal_radius = false;
-  if (a.no_taper) o.energy_taper = false;
-  if (a.no_fission_offset) o.fission_offset = false;
-  if (a.grading_opt->count()) o.radius_grading = a.grading;
-  if (a.feedback_opt->count()) o.feedback = a.feedback;
-  if (a.equilibrium_speed_opt->count()) o.equilibrium_speed = a.equilibrium_speed;
-  if (a.estimator_interval_opt->count()) o.estimator_interval = a.estimator_interval;
-  if (!a.radius_adapt.empty())
-    o.radius_adapt = parse_radius_adapt(a.radius_adapt, "--radius-adapt");
-  validate_flags([&] { validate_settings(o); }, {{"radius", "--radius"},
-                                                 {"max_count", "--max-count"},
-                                                 {"seed_count", "--seed-count"},
-                                                 {"seed", "--seed"},
-                                                 {"radius_grading", "--grading"},
-                                                 {"feedback", "--feedback"},
-                                                 {"equilibrium_speed", "--equilibrium-speed"},
-                                                 {"estimator_interval", "--estimator-interval"}});
+  nlohmann::json given = nlohmann::json::object();
+  if (a.radius_opt->count()) given["radius"] = a.radius;
+  if (a.max_count_opt->count()) given["max_count"] = a.max_count;
+  if (a.seed_count_opt->count()) given["seed_count"] = a.seed_count;
+  if (a.seed_opt->count()) given["seed"] = a.seed;
+  if (a.grading_opt->count()) given["radius_grading"] = a.grading;
+  if (a.feedback_opt->count()) given["feedback"] = a.feedback;
+  if (a.equilibrium_speed_opt->count()) given["equilibrium_speed"] = a.equilibrium_speed;
+  if (a.estimator_interval_opt->count()) given["estimator_interval"] = a.estimator_interval;
+  if (!a.radius_adapt.empty()) given["radius_adapt"] = a.radius_adapt;
+  // The switches turn off what the scene may have on.
+  for (const auto& [off, key] :
+       {std::pair{a.no_cos_weight, "cos_weight"},
+        std::pair{a.no_clip_projection, "clip_projection"}, std::pair{a.no_snap, "snap_to_nodes"},
+        std::pair{a.plain_repulsion, "scaled_repulsion"},
+        std::pair{a.no_clip_newton, "clip_newton"},
+        std::pair{a.no_average_mu, "average_radius_factor"},
+        std::pair{a.no_local_radius, "local_nominal_radius"}, std::pair{a.no_taper, "energy_taper"},
+        std::pair{a.no_fission_offset, "fission_offset"}})
+    if (off) given[key] = false;
+  validate_flags([&] { apply_floater_options(given, o); }, kFloaterFlags);
   o.threads = global_flags().threads;
   check_floater_memory(o, o.seed_count > o.max_count ? "--seed-count" : "--max-count");
   return o;

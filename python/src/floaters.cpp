@@ -60,7 +60,7 @@ FloaterOptions options_from(const PySurface& s, const std::string& given, int th
   FloaterOptions o;
   if (s.scene.settings.contains("floaters"))
     apply_floater_settings(s.scene.settings["floaters"], o, "'" + s.spec + "'");
-  apply_floater_settings(nlohmann::json::parse(given), o, "sample()");
+  apply_floater_options(nlohmann::json::parse(given), o);
   o.threads = threads;
   check_floater_memory(o, o.seed_count > o.max_count ? "seed_count" : "max_count");
   return o;

@@ -91,68 +91,88 @@ void validate_settings(const FloaterOptions& o) {
   check(o.threads >= 0, "threads", std::to_string(o.threads), "must not be negative");
 }
 
+namespace {
+
+// Reads the entries of a "floaters" object into `o` and validates the result: the one reader of
+// floater settings, behind scene files, flags and keywords alike. SettingError names the key.
+void read_floater_object(const json& floaters, FloaterOptions& o) {
+  using json_read::setting_boolean;
+  using json_read::setting_number;
+  using json_read::setting_whole;
+  // The types here; the ranges are validate_settings' (the same for every entry point).
+  const double most = 1e19;  // any whole number a std::uint64_t holds
+  for (const auto& [key, value] : floaters.items()) {
+    if (key == "max_count")
+      o.max_count = setting_whole(value, key, 0, most);
+    else if (key == "seed_count")
+      o.seed_count = setting_whole(value, key, 0, most);
+    else if (key == "seed")
+      o.seed = setting_whole(value, key, 0, most);
+    else if (key == "radius")
+      o.radius = setting_number(value, key);
+    else if (key == "radius_grading")
+      o.radius_grading = setting_number(value, key);
+    else if (key == "feedback")
+      o.feedback = setting_number(value, key);
+    else if (key == "equilibrium_speed")
+      o.equilibrium_speed = setting_number(value, key);
+    else if (key == "estimator_interval")
+      o.estimator_interval = static_cast<int>(setting_whole(value, key, 0, 1e9));
+    else if (key == "cos_weight")
+      o.cos_weight = setting_boolean(value, key);
+    else if (key == "clip_projection")
+      o.clip_projection = setting_boolean(value, key);
+    else if (key == "snap_to_nodes")
+      o.snap_to_nodes = setting_boolean(value, key);
+    else if (key == "scaled_repulsion")
+      o.scaled_repulsion = setting_boolean(value, key);
+    else if (key == "clip_newton")
+      o.clip_newton = setting_boolean(value, key);
+    else if (key == "average_radius_factor")
+      o.average_radius_factor = setting_boolean(value, key);
+    else if (key == "local_nominal_radius")
+      o.local_nominal_radius = setting_boolean(value, key);
+    else if (key == "energy_taper")
+      o.energy_taper = setting_boolean(value, key);
+    else if (key == "fission_offset")
+      o.fission_offset = setting_boolean(value, key);
+    else if (key == "radius_adapt") {
+      const std::string text = json_read::setting_string(value, key);
+      try {
+        o.radius_adapt = parse_radius_adapt(text, key);
+      } catch (const InvalidArgument&) {
+        throw SettingError(key, text, "expected wh, curvature, singular or mixed");
+      }
+    } else {
+      throw SettingError(
+          key, value.dump(),
+          "unknown key (known: max_count, seed_count, seed, radius, radius_grading, feedback, "
+          "equilibrium_speed, estimator_interval, cos_weight, clip_projection, snap_to_nodes, "
+          "scaled_repulsion, clip_newton, average_radius_factor, local_nominal_radius, "
+          "energy_taper, fission_offset, radius_adapt)");
+    }
+  }
+  validate_settings(o);
+}
+
+}  // namespace
+
 void apply_floater_settings(const json& floaters, FloaterOptions& options,
                             const std::string& origin) {
   const std::string base = "/floaters";
   if (!floaters.is_object()) fail(origin, base, "expected an object");
   FloaterOptions o = options;
-  // The types here; the ranges are validate_settings' (the same for every entry point).
-  const double most = 1e19;  // any whole number a std::uint64_t holds
-  for (const auto& [key, value] : floaters.items()) {
-    const std::string p = base + "/" + json_read::pointer_token(key);
-    if (key == "max_count")
-      o.max_count = whole(value, origin, p, 0, most);
-    else if (key == "seed_count")
-      o.seed_count = whole(value, origin, p, 0, most);
-    else if (key == "seed")
-      o.seed = whole(value, origin, p, 0, most);
-    else if (key == "radius")
-      o.radius = number(value, origin, p);
-    else if (key == "radius_grading")
-      o.radius_grading = number(value, origin, p);
-    else if (key == "feedback")
-      o.feedback = number(value, origin, p);
-    else if (key == "equilibrium_speed")
-      o.equilibrium_speed = number(value, origin, p);
-    else if (key == "estimator_interval")
-      o.estimator_interval = static_cast<int>(whole(value, origin, p, 0, 1e9));
-    else if (key == "cos_weight")
-      o.cos_weight = boolean(value, origin, p);
-    else if (key == "clip_projection")
-      o.clip_projection = boolean(value, origin, p);
-    else if (key == "snap_to_nodes")
-      o.snap_to_nodes = boolean(value, origin, p);
-    else if (key == "scaled_repulsion")
-      o.scaled_repulsion = boolean(value, origin, p);
-    else if (key == "clip_newton")
-      o.clip_newton = boolean(value, origin, p);
-    else if (key == "average_radius_factor")
-      o.average_radius_factor = boolean(value, origin, p);
-    else if (key == "local_nominal_radius")
-      o.local_nominal_radius = boolean(value, origin, p);
-    else if (key == "energy_taper")
-      o.energy_taper = boolean(value, origin, p);
-    else if (key == "fission_offset")
-      o.fission_offset = boolean(value, origin, p);
-    else if (key == "radius_adapt") {
-      try {
-        o.radius_adapt = parse_radius_adapt(json_read::string(value, origin, p), p);
-      } catch (const InvalidArgument&) {
-        fail(origin, p, "expected wh, curvature, singular or mixed");
-      }
-    } else {
-      fail(origin, p,
-           "unknown key (known: max_count, seed_count, seed, radius, radius_grading, feedback, "
-           "equilibrium_speed, estimator_interval, cos_weight, clip_projection, snap_to_nodes, "
-           "scaled_repulsion, clip_newton, average_radius_factor, local_nominal_radius, "
-           "energy_taper, fission_offset, radius_adapt)");
-    }
-  }
   try {
-    validate_settings(o);
+    read_floater_object(floaters, o);
   } catch (const SettingError& e) {
-    fail(origin, base + "/" + e.key(), e.why());
+    fail(origin, base + "/" + json_read::pointer_token(e.key()), e.why());
   }
+  options = o;
+}
+
+void apply_floater_options(const json& given, FloaterOptions& options) {
+  FloaterOptions o = options;
+  read_floater_object(given, o);
   options = o;
 }
 

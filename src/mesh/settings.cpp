@@ -135,15 +135,6 @@ constexpr std::array<const char*, 13> kMeshKeys = {
     "curvature", "curvature_weight", "singularity", "flips", "find_singular",
     "crossings", "curves",           "improver"};
 
-// The value of `key` in `mesh` as the type its setting takes; SettingError (naming the key) for
-// another type.
-const json& entry(const json& mesh, const char* key, bool (json::*is)() const noexcept,
-                  const char* expected) {
-  const json& v = mesh[key];
-  if (!(v.*is)()) throw SettingError(key, v.dump(), expected);
-  return v;
-}
-
 int whole_number(const json& mesh, const char* key) {
   const json& v = mesh[key];
   const double c = v.is_number() ? v.get<double>() : std::nan("");
@@ -155,9 +146,11 @@ int whole_number(const json& mesh, const char* key) {
 // Reads the entries of a "mesh" object into `m` and validates the result: the one reader of
 // mesh settings, behind scene files, flags and keywords alike. SettingError names the key.
 void read_mesh_object(const json& mesh, MeshSettings& m) {
-  for (const auto& [key, value] : mesh.items())
+  for (auto it = mesh.begin(); it != mesh.end(); ++it) {
+    const std::string& key = it.key();  // not a structured binding: the lambda captures it
     if (std::none_of(kMeshKeys.begin(), kMeshKeys.end(), [&](const char* k) { return key == k; }))
-      throw SettingError(key, value.dump(), "is not a mesh setting");
+      throw SettingError(key, it.value().dump(), "is not a mesh setting");
+  }
   if (mesh.contains("cells")) m.cells = whole_number(mesh, "cells");
   if (mesh.contains("improve")) {
     const json& v = mesh["improve"];
@@ -171,26 +164,18 @@ void read_mesh_object(const json& mesh, MeshSettings& m) {
       throw SettingError("improve", v.dump(),
                          "expected true, false, \"auto\", \"off\" or a number of steps");
   }
-  const auto text = [&](const char* key) {
-    return entry(mesh, key, &json::is_string, "expected a string").get<std::string>();
-  };
+  const auto text = [&](const char* key) { return json_read::setting_string(mesh[key], key); };
   if (mesh.contains("boundary")) m.boundary = parse_boundary(text("boundary"));
   if (mesh.contains("improver")) m.improver = parse_improver(text("improver"));
   if (mesh.contains("grid")) m.grid = parse_grid(text("grid"));
   if (mesh.contains("refine_steps")) m.refine_steps = whole_number(mesh, "refine_steps");
-  if (mesh.contains("curvature_weight")) {
-    const double w =
-        entry(mesh, "curvature_weight", &json::is_number, "expected a number").get<double>();
-    if (!std::isfinite(w))
-      throw SettingError("curvature_weight", fmt::format("{}", w), "expected a finite number");
-    m.curvature_weight = w;
-  }
+  if (mesh.contains("curvature_weight"))
+    m.curvature_weight = json_read::setting_number(mesh["curvature_weight"], "curvature_weight");
   for (auto [key, flag] :
        {std::pair{"curvature", &m.curvature}, std::pair{"singularity", &m.singularity},
         std::pair{"flips", &m.flips}, std::pair{"find_singular", &m.find_singular},
         std::pair{"crossings", &m.crossings}, std::pair{"curves", &m.curves}})
-    if (mesh.contains(key))
-      *flag = entry(mesh, key, &json::is_boolean, "expected true or false").get<bool>();
+    if (mesh.contains(key)) *flag = json_read::setting_boolean(mesh[key], key);
   validate_settings(m);
 }
 

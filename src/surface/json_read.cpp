@@ -52,6 +52,31 @@ std::string string(const json& j, const std::string& origin, const std::string& 
   return j.get<std::string>();
 }
 
+double setting_number(const json& j, const std::string& key) {
+  // Only the type: a value that is not finite (a flag's "nan"; JSON text has none) is the
+  // validator's, which says the range it must lie in.
+  if (!j.is_number()) throw SettingError(key, j.dump(), "expected a number");
+  return j.get<double>();
+}
+
+std::uint64_t setting_whole(const json& j, const std::string& key, double lo, double hi) {
+  const double v = j.is_number() ? j.get<double>() : std::nan("");
+  if (!(v >= lo && v <= hi && v == std::floor(v)))
+    throw SettingError(key, j.dump(),
+                       fmt::format("expected a whole number from {:.0f} to {:.0f}", lo, hi));
+  return static_cast<std::uint64_t>(v);
+}
+
+bool setting_boolean(const json& j, const std::string& key) {
+  if (!j.is_boolean()) throw SettingError(key, j.dump(), "expected true or false");
+  return j.get<bool>();
+}
+
+std::string setting_string(const json& j, const std::string& key) {
+  if (!j.is_string()) throw SettingError(key, j.dump(), "expected a string");
+  return j.get<std::string>();
+}
+
 Vec3 vec3(const json& j, const std::string& origin, const std::string& where) {
   if (!j.is_array() || j.size() != 3) fail(origin, where, "expected [x, y, z]");
   return {number(j[0], origin, where + "/0"), number(j[1], origin, where + "/1"),

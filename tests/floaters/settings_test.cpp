@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include "zeroset/error.h"
 
 namespace zeroset {
@@ -86,6 +88,40 @@ TEST(FloaterSettings, MalformedEntriesAreRefusedWithTheirPointer) {
     }
     // Nothing is applied from an object with a bad entry.
     EXPECT_EQ(floater_settings_to_json(o), floater_settings_to_json(before)) << text;
+  }
+}
+
+// A front end's options (flags, keywords) go through the scene file's reader as the same keys,
+// refused with the key's name and the scene file's words, all or nothing.
+TEST(FloaterSettings, GivenOptionsGoThroughTheOneReaderAndNameTheirKey) {
+  FloaterOptions o;
+  apply_floater_options({{"max_count", 500}, {"cos_weight", false}, {"radius_adapt", "wh"}}, o);
+  EXPECT_EQ(o.max_count, 500u);
+  EXPECT_FALSE(o.cos_weight);
+  EXPECT_EQ(o.radius_adapt, RadiusAdapt::kWitkinHeckbert);
+  const json cases[] = {{{"max_count", 0}},       {{"max_count", -3}},
+                        {{"cos_weight", "yes"}},  {{"radius_adapt", "fast"}},
+                        {{"feedback", "strong"}}, {{"radius", -1}},
+                        {{"seed", 0.5}},          {{"max_cuont", 3}}};
+  for (const json& given : cases) {
+    FloaterOptions kept;
+    kept.max_count = 77;
+    const std::string key = given.begin().key();
+    try {
+      apply_floater_options(given, kept);
+      ADD_FAILURE() << given.dump() << " was taken";
+    } catch (const SettingError& e) {
+      EXPECT_EQ(e.key(), key) << given.dump();
+      // The scene file says the same about the same entry.
+      FloaterOptions scene;
+      try {
+        apply_floater_settings(given, scene, "s.json");
+        ADD_FAILURE() << given.dump();
+      } catch (const BadInput& b) {
+        EXPECT_EQ(std::string(b.what()), "s.json: /floaters/" + key + ": " + e.why());
+      }
+    }
+    EXPECT_EQ(kept.max_count, 77u) << "all or nothing: " << given.dump();
   }
 }
 

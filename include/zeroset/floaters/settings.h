@@ -58,6 +58,12 @@ void validate_settings(const FloaterOptions& options);
 void apply_floater_settings(const nlohmann::json& floaters, FloaterOptions& options,
                             const std::string& origin);
 
+/// Applies the options a user gave, only those given, as an object with the keys above (a
+/// front end's flags or keywords: {"max_count": 500, "cos_weight": false}), then validates:
+/// the one way from a front end's options into the settings. Throws SettingError naming the
+/// key, for a value of the wrong type or outside its rule, or an unknown key.
+void apply_floater_options(const nlohmann::json& given, FloaterOptions& options);
+
 /// The "floaters" object for `options`.
 nlohmann::json floater_settings_to_json(const FloaterOptions& options);
 

@@ -48,6 +48,16 @@ bool boolean(const nlohmann::json& j, const std::string& origin, const std::stri
 std::string string(const nlohmann::json& j, const std::string& origin, const std::string& where);
 /// [x, y, z], finite.
 Vec3 vec3(const nlohmann::json& j, const std::string& origin, const std::string& where);
+
+/// The entries of a settings object ("floaters", "mesh"), read for every entry point alike: as
+/// number() (the type only: the settings' validators refuse values that are not finite, with
+/// their range), whole(), boolean() and string() with the same words, but refused with a
+/// SettingError naming `key`, so that each entry point names the setting its own way (a JSON
+/// pointer in a scene file, a flag, a keyword).
+double setting_number(const nlohmann::json& j, const std::string& key);
+std::uint64_t setting_whole(const nlohmann::json& j, const std::string& key, double lo, double hi);
+bool setting_boolean(const nlohmann::json& j, const std::string& key);
+std::string setting_string(const nlohmann::json& j, const std::string& key);
 /// The inverse of vec3: `v` as [x, y, z], as scene and statistics files write points.
 nlohmann::json from_vec3(const Vec3& v);
 
