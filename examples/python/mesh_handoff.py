@@ -14,8 +14,12 @@ def main() -> int:
     resolution = int(sys.argv[2]) if len(sys.argv) > 2 else 64
     s = zeroset.Surface(spec)
     V, F, stats = s.mesh(resolution=resolution)
-    print(f"{s.label}: {len(V)} vertices, {len(F)} triangles, improved in "
-          f"{stats.get('improve', {}).get('steps', 0)} steps")
+    # The stats are `zeroset mesh --stats`: the remesher counts iterations, the paper's
+    # improver steps.
+    improve = stats.get("improve", {})
+    rounds = improve.get("iterations", improve.get("steps", 0))
+    print(f"{s.label}: {len(V)} vertices, {len(F)} triangles, improved in {rounds} "
+          f"{'iterations' if 'iterations' in improve else 'steps'}")
     try:
         import trimesh
     except ImportError:

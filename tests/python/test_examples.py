@@ -1,5 +1,6 @@
 """The Python examples run (and say so when the package they hand over to is missing)."""
 import pathlib
+import re
 import subprocess
 import sys
 
@@ -22,4 +23,6 @@ def test_kummer_grid(tmp_path):
 def test_mesh_handoff():
     out = run(EXAMPLES / "mesh_handoff.py", "kummer", "24")
     assert "vertices" in out
+    # The remesher's iterations, as the stats name them (not a missing key's 0).
+    assert re.search(r"improved in [1-9]\d* iterations", out), out
     assert any(w in out for w in ("trimesh:", "PyVista:", "neither trimesh nor PyVista"))
