@@ -1,6 +1,7 @@
 // zeroset render | animate | export: pictures, animations and POV-Ray scenes of a surface.
 #include <fmt/core.h>
 #include <unistd.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -157,21 +158,16 @@ void run_render(const SurfaceArgs& args, const LookArgs& look, const std::string
         "{}: {} of {} rays gave up after {} interval evaluations each (F undefined "
         "or unbounded along them) and are drawn as misses",
         surface.label(), stats.abandoned_rays, stats.rays, RaycastOptions{}.interval_budget));
-  if (!stats_path.empty())
-    write_json({{"surface", surface.label()},
-                {"width", o.width},
-                {"height", o.height},
-                {"samples", o.samples},
-                {"threads", stats.threads},
-                {"method", method},
-                {"seconds", stats.seconds},
-                {"rays", stats.rays},
-                {"hits", stats.hits},
-                {"singular_normals", stats.singular_normals},
-                {"abandoned_rays", stats.abandoned_rays},
-                {"field", survey_json(survey)},
-                {"singular_set", singular_stats(singular)}},
-               stats_path);
+  if (!stats_path.empty()) {
+    nlohmann::json j = stats.to_json();
+    j.update({{"surface", surface.label()},
+              {"width", o.width},
+              {"height", o.height},
+              {"samples", o.samples},
+              {"field", survey_json(survey)},
+              {"singular_set", singular_stats(singular)}});
+    write_json(j, stats_path);
+  }
   outputs.commit();
   say(fmt::format("wrote {} ({}x{}, {} rays, {:.2f} s, {})", output, o.width, o.height, stats.rays,
                   stats.seconds, method));

@@ -1,5 +1,6 @@
 // Surface.render and Surface.export_pov: the options of `zeroset render` / `zeroset export`
 // (apps/cli/cmd_render.cpp) built the same way, then render_surface or write_pov_scene.
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <tuple>
 
@@ -88,7 +89,6 @@ void bind_render(py::module_& m) {
       [](const PySurface& s, const Look& look, bool show_singular) {
         RenderOptions o = options(s, look);
         Image image;
-        py::dict stats;
         RenderStats rs;
         const Surface surface = s.surface();  // its own copy while the GIL is released
         run_interruptible([&](std::stop_token stop) {
@@ -97,16 +97,9 @@ void bind_render(py::module_& m) {
             o.singular_overlay = SingularOverlay{.set = find_singular_set(surface, {}, stop)};
           if (!stop.stop_requested()) image = render_surface(surface, o, &rs, stop);
         });
-        stats["width"] = o.width;
-        stats["height"] = o.height;
-        stats["samples"] = o.samples;
-        stats["threads"] = rs.threads;
-        stats["method"] = rs.exact ? "polynomial roots" : "interval arithmetic";
-        stats["seconds"] = rs.seconds;
-        stats["rays"] = rs.rays;
-        stats["hits"] = rs.hits;
-        stats["singular_normals"] = rs.singular_normals;
-        return py::make_tuple(to_array(image), stats);
+        nlohmann::json j = rs.to_json();
+        j.update({{"width", o.width}, {"height", o.height}, {"samples", o.samples}});
+        return py::make_tuple(to_array(image), py::module_::import("json").attr("loads")(j.dump()));
       },
       "surface"_a, "look"_a, "show_singular"_a);
   m.def(

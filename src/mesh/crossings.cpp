@@ -21,11 +21,11 @@ namespace {
 
 using detail::CrossingCurves;
 using detail::directed_edge_key;
+using detail::edge_key;
+using detail::kFreeEndReach;
+using detail::kNone;
 using detail::Network;
 using detail::TubeCut;
-using detail::kFreeEndReach;
-using detail::edge_key;
-using detail::kNone;
 
 Network build_network(const SingularSet& set, double spacing, bool isolated) {
   Network net;

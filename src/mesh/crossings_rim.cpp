@@ -12,7 +12,6 @@
 namespace zeroset::detail {
 namespace {
 
-
 // Where a vertex of the cut's rim is joined: a special vertex, or a place along a curve.
 struct Anchor {
   std::uint32_t special = kNone;

@@ -48,8 +48,12 @@ double cast(RayCaster& rc, double s, const RootGuess& guess, int& side) {
   if (const int lane = rc.cast_lane; lane >= 0) {
     if (!rc.packet_open[static_cast<size_t>(lane)]) return kNone;
     double band = 0;
-    const double t = packet_hit(rc, lane, guess, band);
-    const double v = rc.finder.start_value();
+    double t = packet_hit(rc, lane, guess, band);
+    double v = rc.finder.start_value();
+    const size_t i = static_cast<size_t>(lane);
+    if (!std::isnan(t) &&
+        !hit_is_certain(rc, lane_coeffs(rc, lane), t, band, direction(rc, s).norm()))
+      t = accurate_hit(rc, s, rc.packet_t0[i], rc.packet_t1[i], guess, band, v);
     side = std::abs(v) <= band ? 0 : (v > 0 ? 1 : -1);
     return t;
   }
@@ -57,9 +61,11 @@ double cast(RayCaster& rc, double s, const RootGuess& guess, int& side) {
   if (!clip(rc, s, t0, t1)) return kNone;
   if (rc.exact) {
     double band = 0;
-    const double t = exact_hit(rc, s, t0, t1, guess, band);
+    double t = exact_hit(rc, s, t0, t1, guess, band);
+    double v = rc.finder.start_value();
+    if (!std::isnan(t) && !hit_is_certain(rc, rc.coeffs.data(), t, band, direction(rc, s).norm()))
+      t = accurate_hit(rc, s, t0, t1, guess, band, v);
     // F keeps its sign on [t0, hit) since the hit is the first root.
-    const double v = rc.finder.start_value();
     side = std::abs(v) <= band ? 0 : (v > 0 ? 1 : -1);
     return t;
   }
@@ -152,5 +158,6 @@ bool SurfaceRayCaster::intersect_in_row(double s, SurfaceHit& hit, const RootGue
 }
 const RootStats& SurfaceRayCaster::root_stats() const { return impl_->finder.stats(); }
 long long SurfaceRayCaster::abandoned_rays() const { return impl_->abandoned_rays; }
+long long SurfaceRayCaster::accurate_rays() const { return impl_->accurate_rays; }
 
 }  // namespace zeroset

@@ -12,6 +12,7 @@
 #include <span>
 #include <vector>
 
+#include "double_double_detail.h"
 #include "raycast_monomials_detail.h"
 #include "zeroset/expr/interval.h"
 #include "zeroset/expr/polynomial.h"
@@ -61,6 +62,22 @@ struct PlaneRow {
   double n0, n1;  // normal·d = n0 + n1 s
   double g;       // normal·eye − offset
 };
+/// A term of G in double-double (the accurate path): its monomial's position in
+/// RayCaster::row_monomials, its degree, its value and the sum of the magnitudes added into it.
+struct AccurateTerm {
+  int position, degree;
+  DoubleDouble c;
+  double magnitude;
+};
+// A hit stands when its rounding band places it within this fraction of the clip radius
+// (band / |f'| along the ray); others go through the accurate path, or are halved there. The
+// band is a worst case: against the long-double reference (tests/render/record_rays_test.cpp
+// and raycast_test.cpp) the hits it admits lie within 1e-7 of the clip radius, a hundred times
+// closer, while a bound of 1e-7 itself would send half of Barth's sextic through the accurate
+// path (see docs/rendering.md, "Accuracy").
+constexpr double kCertainHit = 1e-5;
+// The accurate path halves a piece of the ray at most this many times (see accurate_hit).
+constexpr int kAccurateDepth = 12;
 /// A piece [a, b] of a ray on the interval path's subdivision stack.
 struct Segment {
   double a, b;
@@ -128,6 +145,15 @@ struct RayCaster {
   std::vector<PlaneRow> plane_rows;
   double s_min = 0, s_max = 0;  // see find_row_extent
 
+  // Accurate path (raycast_accurate.cpp): G in double-double, made on the first ray after
+  // set_eye that needs it, and scratch for one ray's monomials as polynomials in t.
+  double scene_radius = 1;
+  bool accurate_ready = false;
+  std::vector<AccurateTerm> accurate_terms;
+  std::vector<DoubleDouble> accurate_mono;
+  std::vector<double> accurate_abs;
+  long long accurate_rays = 0;  // rays that took the accurate path
+
   // Interval path.
   std::unique_ptr<IntervalEvaluator> intervals;
   std::vector<Segment> segments;  // scratch: the subdivision stack
@@ -192,6 +218,16 @@ bool clip(const RayCaster& rc, double s, double& t0, double& t1);
 /// receives the rounding band used.
 double exact_hit(RayCaster& rc, double s, double t0, double t1, const RootGuess& guess,
                  double& band);
+
+// raycast_accurate.cpp
+/// Whether the fast path's hit at t on a ray with polynomial f (about the ray's origin) and
+/// rounding band `band` is placed within kCertainHit of the clip radius; dir_norm = |dir|.
+bool hit_is_certain(const RayCaster& rc, const double* f, double t, double band, double dir_norm);
+/// The first root on [t0, t1] of the row's ray at s, from F restricted to the ray in
+/// double-double and written on pieces of [t0, t1] before rounding (NaN: none); `band`
+/// receives the rounding band of the piece searched last, `start` F at t0.
+double accurate_hit(RayCaster& rc, double s, double t0, double t1, const RootGuess& guess,
+                    double& band, double& start);
 
 // raycast_packets.cpp
 /// See SurfaceRayCaster::prepare_in_row.

@@ -221,7 +221,11 @@ double exact_hit(RayCaster& rc, double s, double t0, double t1, const RootGuess&
     return rc.finder.find_first_root(std::span<const double>(c, static_cast<size_t>(rc.degree + 1)),
                                      t0, t1, band, guess);
   }
-  const double x = t1 * max_abs_direction(rc, s);
+  // Above the packets' degrees the row's rounding is no longer far below the band: the band
+  // is taken on the scale the expansion in s rounds on, max_i (|base_i| + |s||step_i|).
+  const double x = t1 * (rc.degree <= kPacketDegree
+                             ? max_abs_direction(rc, s)
+                             : (rc.base.cwiseAbs() + std::abs(s) * rc.step.cwiseAbs()).maxCoeff());
   switch (rc.degree) {
     case 1:
       band = restrict_in_row<1>(r, b, rc.degree, s, x, c);

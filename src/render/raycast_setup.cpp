@@ -11,6 +11,7 @@ namespace zeroset::detail {
 
 void set_eye(RayCaster& rc, const Vec3& e) {
   rc.eye = e;
+  rc.accurate_ready = false;
   if (!rc.exact) return;
   // G(p) = F(eye + p). A coefficient that overflowed (huge parameter values, a far eye and a
   // high degree) has no exact restriction: such a field goes through interval arithmetic,
@@ -57,6 +58,7 @@ void set_eye(RayCaster& rc, const Vec3& e) {
 RayCaster::RayCaster(const Surface& s, const Vec3& e, const RaycastOptions& o)
     : surface(s), eye(e), options(o), evaluator(s.field), finder(o.roots) {
   (void)surface.bounds();  // throws BadInput naming the surface when the clip is unbounded
+  scene_radius = surface.scene_radius();
   const Field& field = surface.field;
   exact = !o.force_interval && field.is_expandable() && field.degree() <= RootFinder::kMaxDegree;
   if (exact) {

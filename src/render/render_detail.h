@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "zeroset/render/render.h"
+#include "zeroset/render/roots.h"
 #include "zeroset/render/view.h"
 
 namespace zeroset::detail {
@@ -139,6 +140,12 @@ const GammaTable& gamma_table();
 
 /// Stores a linear colour at (x, y) exactly as Image::set_linear does (see GammaTable).
 void store_linear(Image& image, int x, int y, const Color& c);
+
+/// Where a ray's first hit is expected from its neighbours' hits (pixel coherence): the left
+/// neighbour continued by the step from the upper left to the upper neighbour (a plane
+/// through the three), or linearly along the row, or the nearest neighbour itself. The
+/// spread leaves room for twice the change seen; a guess that is off only costs time.
+RootGuess guess_from_neighbours(double left, double left2, double up, double up_left);
 
 /// Offsets (in pixels, within [0, 1)) of the samples × samples stratified samples of a pixel.
 std::vector<Vec2> sample_offsets(int samples);

@@ -15,18 +15,8 @@
 #include "zeroset/surface/field_survey.h"
 
 namespace zeroset {
-namespace {
 
-constexpr double kNoHit = std::numeric_limits<double>::quiet_NaN();
-// Tiles are bands of whole rows: each row of rays is expanded once (SurfaceRayCaster::
-// begin_row), and 200 bands of an 800-row picture keep two or more workers evenly busy.
-constexpr int kBandRows = 4;
-
-/// Where a ray's first hit is expected from its neighbours' hits (pixel coherence): the left
-/// neighbour continued by the step from the upper left to the upper neighbour (a plane
-/// through the three), or linearly along the row, or the nearest neighbour itself. The
-/// spread leaves room for twice the change seen; a guess that is off only costs time.
-RootGuess guess_from_neighbours(double left, double left2, double up, double up_left) {
+RootGuess detail::guess_from_neighbours(double left, double left2, double up, double up_left) {
   RootGuess g;
   constexpr double kFloor = 1e-4;  // relative to t: room for the curvature of the surface
   if (!std::isnan(left) && !std::isnan(up) && !std::isnan(up_left)) {
@@ -41,6 +31,15 @@ RootGuess guess_from_neighbours(double left, double left2, double up, double up_
   }
   return g;
 }
+
+namespace {
+
+using detail::guess_from_neighbours;
+
+constexpr double kNoHit = std::numeric_limits<double>::quiet_NaN();
+// Tiles are bands of whole rows: each row of rays is expanded once (SurfaceRayCaster::
+// begin_row), and 200 bands of an 800-row picture keep two or more workers evenly busy.
+constexpr int kBandRows = 4;
 
 /// Hits of a row waiting to be shaded four at a time (Shader::shade_rays4): normals and ray
 /// directions component by component, sides, and the pixel (in the band's row) of each.
@@ -351,7 +350,10 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
       stats->hits += w.hits;
       stats->singular_normals += w.singular;
     }
-    for (const SurfaceRayCaster& c : casters) stats->abandoned_rays += c.abandoned_rays();
+    for (const SurfaceRayCaster& c : casters) {
+      stats->abandoned_rays += c.abandoned_rays();
+      stats->accurate_rays += c.accurate_rays();
+    }
     stats->threads = threads;
     stats->exact = casters.front().is_exact();
     stats->seconds =

@@ -99,6 +99,10 @@ class SurfaceRayCaster {
   const RootStats& root_stats() const;
   /// Rays of the interval path given up as misses at RaycastOptions::interval_budget.
   long long abandoned_rays() const;
+  /// Hits of the exact path that its fast restriction could not place within 1e-9 of the clip
+  /// radius, found again from F restricted to the ray in double-double (docs/rendering.md,
+  /// "Accuracy").
+  long long accurate_rays() const;
 
  private:
   struct Impl;

@@ -2,6 +2,7 @@
 /// The CPU renderer (docs/architecture.md, "Modules"): exact ray casting of algebraic surfaces, and
 /// shaded point sets and meshes, so every figure can be made without a GPU.
 #include <functional>
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <span>
 #include <stop_token>
@@ -48,8 +49,13 @@ struct RenderStats {
   long long hits = 0;
   long long singular_normals = 0;  ///< hits where ∇F vanished and the fallback normal was used
   long long abandoned_rays = 0;    ///< interval path: rays given up at the per-ray budget (misses)
+  long long accurate_rays = 0;     ///< exact path: hits placed by the accurate restriction
   int threads = 0;                 ///< worker threads used
   bool exact = false;              ///< polynomial root isolation (else interval arithmetic)
+
+  /// The figures above as the statistics file's keys (with "method" for `exact`), for
+  /// `zeroset render --stats` and Python's render statistics alike.
+  nlohmann::json to_json() const;
 };
 
 /// Ray casts the surface inside its clip. Polynomials: exact restriction to the ray and robust
