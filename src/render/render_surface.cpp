@@ -174,10 +174,12 @@ Image render_surface(const Surface& surface, const RenderOptions& options, Rende
   std::vector<SurfaceRayCaster> casters;
   for (int w = 0; w < threads; ++w) casters.emplace_back(surface, view.eye, cast_options);
   // F ≡ 0: every point of the clip is on F = 0 and there is no surface to see. The polynomial
-  // path already misses every ray (F restricts to the zero polynomial); interval arithmetic
-  // would find "roots" on every ray and draw the clip. The survey (docs/architecture.md) is
-  // the one test of it, so every picture of such a field is empty alike.
-  const bool no_surface = survey_field(surface).vanishes_identically();
+  // path misses every ray (F restricts to the zero polynomial), so only interval arithmetic,
+  // which would find "roots" on every ray and draw the clip, asks the survey
+  // (docs/architecture.md): every picture of such a field is empty alike, and a polynomial
+  // picture does not pay for a survey.
+  const bool no_surface =
+      !casters.front().is_exact() && survey_field(surface).vanishes_identically();
   const ClipBall clip_ball{surface.bounds().center(), surface.scene_radius()};
   struct Worker {
     long long rays = 0, hits = 0, singular = 0;

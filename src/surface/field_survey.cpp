@@ -22,12 +22,15 @@ FieldSurvey survey_field(const Surface& surface, int nodes) {
   if (!(h > 0) || !std::isfinite(h)) return s;
   long long n[3];
   for (int a = 0; a < 3; ++a) n[a] = std::max<long long>(1, std::llround(size[a] / h) + 1);
-  // The nodes inside the clip, row by row through the field's batched evaluation.
+  // The nodes inside the clip through the field's batched evaluation, a few thousand at a
+  // time: the batches stay in the cache (the whole grid would be megabytes of fresh pages).
+  constexpr size_t kBatch = 4096;
   std::vector<double> x, y, z, f;
+  x.reserve(kBatch), y.reserve(kBatch), z.reserve(kBatch);
+  Evaluator eval(surface.field);
   auto flush = [&] {
     if (x.empty()) return;
     f.resize(x.size());
-    Evaluator eval(surface.field);
     eval.values(x, y, z, f);
     for (double v : f) {
       ++s.samples;
@@ -41,6 +44,7 @@ FieldSurvey survey_field(const Surface& surface, int nodes) {
   auto add = [&](const Vec3& p) {
     if (!surface.clip.contains(p)) return;
     x.push_back(p.x()), y.push_back(p.y()), z.push_back(p.z());
+    if (x.size() == kBatch) flush();
   };
   for (long long k = 0; k < n[2]; ++k)
     for (long long j = 0; j < n[1]; ++j)
