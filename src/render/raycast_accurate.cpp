@@ -133,13 +133,33 @@ void restrict_accurately(RayCaster& rc, const Vec3& q, const Vec3& dir, DoubleDo
   }
 }
 
+/// Whether the root of Σ_k c[k] x^k near x (|c| ≤ band there counts as zero) is placed within
+/// `reach` of x: by the slope for a simple root, else by the first derivative that does not
+/// vanish, the distance at which its Taylor term alone exceeds the band (a double root of a
+/// squared surface, a tangent ray).
+bool root_is_placed(const double* c, int d, double x, double band, double reach) {
+  double slope = 0;
+  for (int k = d; k >= 1; --k) slope = std::fma(slope, x, k * c[k]);
+  if (band <= reach * std::abs(slope)) return true;
+  // The Taylor coefficients at x, c(x + h) = Σ_k a_k h^k, by repeated synthetic division.
+  std::array<double, kN> a{};
+  std::copy_n(c, d + 1, a.begin());
+  for (int i = 0; i < d; ++i)
+    for (int k = d - 1; k >= i; --k)
+      a[static_cast<size_t>(k)] =
+          std::fma(a[static_cast<size_t>(k + 1)], x, a[static_cast<size_t>(k)]);
+  for (int k = 2; k <= d; ++k) {
+    const double ak = std::abs(a[static_cast<size_t>(k)]);
+    if (ak > 0) return std::pow(band / ak, 1.0 / k) <= reach;
+  }
+  return false;
+}
+
 }  // namespace
 
 bool hit_is_certain(const RayCaster& rc, const double* f, double t, double band, double dir_norm) {
-  double slope = 0;
-  for (int k = rc.degree; k >= 1; --k) slope = std::fma(slope, t, k * f[k]);
-  // The root lies within band / |f'| of t (in t), the ray's length unit being |dir|.
-  return band * dir_norm <= kCertainHit * rc.scene_radius * std::abs(slope);
+  // The root lies within the returned reach of t (in t), the ray's length unit being |dir|.
+  return root_is_placed(f, rc.degree, t, band, kCertainHit * rc.scene_radius / dir_norm);
 }
 
 double accurate_hit(RayCaster& rc, double s, double t0, double t1, const RootGuess& guess,
@@ -195,9 +215,8 @@ double accurate_hit(RayCaster& rc, double s, double t0, double t1, const RootGue
     const double u = rc.finder.find_first_root(
         std::span<const double>(g.data(), static_cast<size_t>(d + 1)), 0.0, 1.0, band, unit_guess);
     if (std::isnan(u)) continue;  // the band is valid: no root on this piece
-    double slope = 0;
-    for (int k = d; k >= 1; --k) slope = std::fma(slope, u, k * g[static_cast<size_t>(k)]);
-    const bool placed = band * w * dir_norm <= kCertainHit * rc.scene_radius * std::abs(slope);
+    const bool placed = w > 0 && root_is_placed(g.data(), d, u, band,
+                                                kCertainHit * rc.scene_radius / (w * dir_norm));
     if (placed || p.depth == kAccurateDepth || !(w > 0)) return p.a + u * w;
     const double mid = p.a + 0.5 * w;
     stack[static_cast<size_t>(size++)] = {mid, p.b, p.depth + 1};

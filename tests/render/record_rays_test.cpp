@@ -65,12 +65,13 @@ void compare(const Surface& surface, const Vec3& origin, const Vec3& dir, double
 void cast_parallel_picture(const Surface& surface, const View& view, ReferenceCaster& ref,
                            Tally& tally) {
   const double radius = surface.scene_radius();
+  const Vec3 centre = surface.bounds().center();
   SurfaceRayCaster caster(surface, view.eye);
   std::vector<double> above(static_cast<size_t>(view.width) + 2, NAN), current = above;
   for (int y = 0; y < view.height; ++y) {
     Vec3 origin, origin_step;
     view.row_origins(y + 0.5, origin, origin_step);
-    const double ahead = -origin.dot(view.forward) - 1.01 * radius;
+    const double ahead = (centre - origin).dot(view.forward) - 1.01 * radius;
     if (ahead > 0) origin += ahead * view.forward;
     caster.begin_parallel_row(origin, origin_step, view.forward);
     double* t = current.data() + 2;
@@ -135,8 +136,9 @@ class RecordRays : public testing::TestWithParam<test::RecordSurface> {};
 
 TEST_P(RecordRays, PicturesAgreeWithTheReference) {
   const test::RecordSurface& rs = GetParam();
-  Surface surface = surface_from_equation(rs.equation);
-  surface.clip = Clip::sphere(rs.clip_radius);
+  SurfaceOverrides clip;
+  clip.clip_specs = rs.clip;
+  const Surface surface = resolve_surface(rs.equation, clip);
   ASSERT_TRUE(surface.field.is_polynomial());
   ReferenceCaster ref(surface.field.polynomial());
   std::mt19937 rng(std::hash<std::string>{}(rs.name) & 0xffff);
