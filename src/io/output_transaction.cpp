@@ -1,7 +1,11 @@
 #include "zeroset/io/output_transaction.h"
 
 #include <fcntl.h>
+#if defined(__linux__)
+#include <linux/fs.h>
+#endif
 #include <signal.h>
+#include <sys/ioctl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -166,16 +170,57 @@ class FdCloser {
   int fd_;
 };
 
+/// Why `path`, a file of an earlier run that a commit removes, could not be removed (empty:
+/// it can, or it is gone already). Checked when the removal is planned, before any work, and
+/// again before a commit's first rename, so a commit that could not finish changes nothing.
+std::string removal_obstacle(const std::string& path) {
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) != 0) return errno == ENOENT ? "" : errno_text(errno);
+  if (S_ISDIR(st.st_mode)) return "it is a directory";
+  const fs::path dir = parent_or_dot(fs::path(path));
+  struct stat ds {};
+  if (::stat(dir.c_str(), &ds) != 0) return errno_text(errno);
+  if (::access(dir.c_str(), W_OK | X_OK) != 0)
+    return "directory '" + dir.string() + "' is not writable";
+  const uid_t me = ::geteuid();
+  if ((ds.st_mode & S_ISVTX) && me != 0 && st.st_uid != me && ds.st_uid != me)
+    return "it belongs to another user, in a directory with the sticky bit";
+#if defined(__linux__) && defined(FS_IOC_GETFLAGS)
+  if (S_ISREG(st.st_mode)) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+    if (fd >= 0) {
+      int flags = 0;
+      const bool known = ::ioctl(fd, FS_IOC_GETFLAGS, &flags) == 0;
+      ::close(fd);
+      if (known && (flags & (FS_IMMUTABLE_FL | FS_APPEND_FL)))
+        return "it is immutable or append-only (chattr)";
+    }
+  }
+#endif
+  return "";
+}
+
 }  // namespace
 
 void remove_pending_outputs_on_signals() {
-  for (int sig : {SIGINT, SIGTERM}) {
+  // SIGHUP: the terminal closed; SIGQUIT: Ctrl-\; SIGPIPE: an output that is a pipe or FIFO
+  // whose reader quit (the process ends silently, as tools in a pipeline do).
+  for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE}) {
     struct sigaction old {};
     if (::sigaction(sig, nullptr, &old) != 0 || old.sa_handler == SIG_IGN) continue;
     struct sigaction sa {};
     sa.sa_handler = remove_pending_outputs;
     sigemptyset(&sa.sa_mask);
     ::sigaction(sig, &sa, nullptr);
+  }
+  // A write past the file-size limit (ulimit -f) would end the process without a word; ignored,
+  // the write fails with EFBIG instead, which the writer reports ("File too large") and the
+  // transaction cleans up after.
+  struct sigaction xfsz {};
+  if (::sigaction(SIGXFSZ, nullptr, &xfsz) == 0 && xfsz.sa_handler == SIG_DFL) {
+    xfsz.sa_handler = SIG_IGN;
+    sigemptyset(&xfsz.sa_mask);
+    ::sigaction(SIGXFSZ, &xfsz, nullptr);
   }
 }
 
@@ -319,6 +364,8 @@ void OutputTransaction::create_directories(const std::string& dir) {
 }
 
 void OutputTransaction::remove_on_commit(const std::string& path) {
+  if (const std::string why = removal_obstacle(path); !why.empty())
+    throw IoError(path, "this run must remove this file of an earlier run and cannot: " + why);
   remove_at_commit_.push_back(path);
 }
 
@@ -329,6 +376,10 @@ void OutputTransaction::commit() {
     if (!o.written && !(o.external && external_output_exists(o)))
       throw WriteError(o.path, o.external ? "the program that makes it wrote nothing"
                                           : "internal error: declared but never written");
+  // Everything that can fail is checked before the first rename.
+  for (const std::string& p : remove_at_commit_)
+    if (const std::string why = removal_obstacle(p); !why.empty())
+      throw WriteError(p, "this run must remove this file of an earlier run and cannot: " + why);
   for (Output& o : outputs_) {
     if (o.temp.path.empty()) continue;
     if (o.external) {

@@ -13,6 +13,7 @@
 
 #include "singular_detail.h"
 #include "zeroset/error.h"
+#include "zeroset/io/memory.h"
 #include "zeroset/surface/json_read.h"
 
 namespace zeroset {
@@ -37,14 +38,41 @@ struct GridSamples {
   }
 };
 
-// Stops after the row in which `stop` is requested (the samples are then incomplete).
-GridSamples sample_grid(const Field& field, const Box3& box, int cells,
-                        const std::stop_token& stop) {
-  GridSamples gs;
+/// The grid's spacing and node counts for `cells` cells along the box's longest side.
+void size_grid(const Box3& box, int cells, GridSamples& gs) {
   gs.cell = box.size().maxCoeff() / cells;
   for (int a = 0; a < 3; ++a)
     gs.n[static_cast<size_t>(a)] =
         std::max(2, static_cast<int>(std::ceil(box.size()[a] / gs.cell - 1e-9)) + 1);
+}
+
+// Bytes per grid node: F, ∇F and the Hessian.
+constexpr double kBytesPerNode = sizeof(double) + sizeof(Vec3) + sizeof(Mat3);
+
+/// Refuses a grid that does not fit in the memory the process may still take, naming the
+/// largest number of cells that does.
+void check_grid_memory(const Box3& box, int cells) {
+  const MemoryLimit have = available_memory();
+  if (!have.known) return;
+  auto need = [&](int n) {
+    GridSamples gs;
+    size_grid(box, n, gs);
+    return kBytesPerNode * gs.n[0] * static_cast<double>(gs.n[1]) * gs.n[2];
+  };
+  const double needed = need(cells);
+  if (needed <= have.budget()) return;
+  int fits = cells;
+  while (fits > 4 && need(fits) > have.budget()) fits = fits * 4 / 5;
+  throw InvalidArgument("singular set cells", std::to_string(cells),
+                        fmt::format("a grid of {} cells {}; use {} cells or fewer", cells,
+                                    memory_shortfall(needed, have), fits));
+}
+
+// Stops after the row in which `stop` is requested (the samples are then incomplete).
+GridSamples sample_grid(const Field& field, const Box3& box, int cells,
+                        const std::stop_token& stop) {
+  GridSamples gs;
+  size_grid(box, cells, gs);
   gs.origin = box.center() - 0.5 * gs.cell * Vec3(gs.n[0] - 1, gs.n[1] - 1, gs.n[2] - 1);
   const size_t nx = static_cast<size_t>(gs.n[0]);
   const size_t total = nx * static_cast<size_t>(gs.n[1]) * static_cast<size_t>(gs.n[2]);
@@ -494,6 +522,7 @@ SingularSet find_singular_set(const Surface& surface, const SingularSetOptions& 
     throw InvalidArgument("singular set cells", std::to_string(options.cells),
                           "must be between 4 and 1024");
   const Box3 box = surface.bounds();
+  check_grid_memory(box, options.cells);
   const GridSamples grid = sample_grid(surface.field, box, options.cells, stop);
   if (stop.stop_requested()) return {};
   const double radius = surface.scene_radius();

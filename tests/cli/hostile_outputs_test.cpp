@@ -5,6 +5,7 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -67,12 +68,19 @@ void put(const std::string& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
 }
 
-/// Starts `zeroset args...` with the default signal actions, output into `log`.
-pid_t spawn(const std::vector<std::string>& args, const std::string& log) {
+/// Starts `zeroset args...` with the default signal actions, no core files and, when
+/// `file_limit` > 0, that limit on the size of the files it writes (ulimit -f), output into
+/// `log`.
+pid_t spawn(const std::vector<std::string>& args, const std::string& log, rlim_t file_limit = 0) {
   const pid_t pid = ::fork();
   if (pid != 0) return pid;
-  ::signal(SIGINT, SIG_DFL);
-  ::signal(SIGTERM, SIG_DFL);
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE, SIGXFSZ}) ::signal(sig, SIG_DFL);
+  const struct rlimit no_core { 0, 0 };  // SIGQUIT's default action dumps core
+  ::setrlimit(RLIMIT_CORE, &no_core);
+  if (file_limit > 0) {
+    const struct rlimit limit { file_limit, file_limit };
+    ::setrlimit(RLIMIT_FSIZE, &limit);
+  }
   const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   ::dup2(fd, 1);
   ::dup2(fd, 2);
@@ -144,7 +152,8 @@ TEST(HostileOutputs, NamesTooLongAndTooManyFramesAreRefusedBeforeAnyWork) {
     EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
     EXPECT_TRUE(r.output.find("bytes long") != std::string::npos ||
                 r.output.find("at most 65535 frames") != std::string::npos)
-        << args << "\n" << r.output;
+        << args << "\n"
+        << r.output;
     EXPECT_LT(seconds, 5) << args;  // refused, not attempted
   }
   EXPECT_TRUE(contents(d).empty());
@@ -346,10 +355,10 @@ void expect_interrupted_cleanly(const std::string& d, const std::vector<std::str
   EXPECT_EQ(contents(d), before) << output;
 }
 
-TEST(HostileOutputs, SigintAndSigtermDuringALongRenderLeaveTheOldPicture) {
+TEST(HostileOutputs, SignalsDuringALongRenderLeaveTheOldPicture) {
   const std::string d = fresh_dir("hostile-signal-render");
   put(d + "/a.png", "old picture");
-  for (const int sig : {SIGINT, SIGTERM})
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE})
     expect_interrupted_cleanly(d,
                                {"render", "kummer", "--size", "3000x3000", "--aa", "3", "-o",
                                 d + "/a.png", "--stats", d + "/a.json"},
@@ -362,11 +371,31 @@ TEST(HostileOutputs, ASignalWhileAMeshIsStagedRemovesIt) {
   const std::string d = fresh_dir("hostile-signal-mesh");
   put(d + "/m.obj", "old mesh");
   const auto staged = [&] { return has_staged_file(d); };
-  for (const int sig : {SIGINT, SIGTERM})
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE})
     expect_interrupted_cleanly(d,
                                {"mesh", "sphere", "-r", "24", "--improve", "off", "-o",
                                 d + "/m.obj", "--png", d + "/m.png", "--size", "4000x4000"},
                                sig, staged);
+}
+
+TEST(HostileOutputs, AFileSizeLimitIsAnErrorThatLeavesTheOldFile) {
+  // ulimit -f: the write fails with "File too large" instead of SIGXFSZ ending the process
+  // silently with a temp file left behind.
+  const std::string d = fresh_dir("hostile-file-size");
+  put(d + "/m.obj", "old mesh");
+  const std::map<std::string, std::string> before = contents(d);
+  const std::string log = d + ".log";
+  const pid_t pid =
+      spawn({"mesh", "sphere", "-r", "32", "--improve", "off", "-o", d + "/m.obj"}, log, 16 * 1024);
+  ASSERT_GT(pid, 0);
+  const int status = wait_status(pid);
+  std::ifstream in(log);
+  const std::string output{std::istreambuf_iterator<char>(in), {}};
+  EXPECT_NE(status, 0) << output;
+  EXPECT_LT(status, 128) << "ended by a signal: " << output;
+  EXPECT_NE(output.find("File too large"), std::string::npos) << output;
+  EXPECT_FALSE(has_temp_file(d));
+  EXPECT_EQ(contents(d), before) << output;
 }
 
 TEST(HostileOutputs, ASignalWhileFloatersAreStagedRemovesThem) {
@@ -385,6 +414,24 @@ const std::vector<std::string> kAnimate = {"animate", "torus", "--param", "r=0.2
 
 std::string animate(const std::string& extra) {
   return zs("animate torus --param r=0.2:0.9 --size 40x32 --aa 1 --no-video " + extra);
+}
+
+// A stale frame that cannot be removed is refused before any work: the run changes nothing,
+// rather than replacing the frames and then failing.
+TEST(HostileOutputs, AStaleFrameThatCannotBeRemovedIsRefusedBeforeAnyWork) {
+  const std::string d = fresh_dir("hostile-animate-stuck");
+  for (int f = 0; f < 5; ++f) put(d + "/frame_000" + std::to_string(f) + ".png", "old frame");
+  const std::string stuck = d + "/frame_0004.png";
+  if (run_command("chattr +i " + stuck + " 2>&1").exit_code != 0)
+    GTEST_SKIP() << "chattr +i is not permitted here";
+  const std::map<std::string, std::string> before = contents(d);
+  const auto r = run_command(animate("--frames 3 -o " + d));
+  run_command("chattr -i " + stuck);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("frame_0004.png"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("immutable"), std::string::npos) << r.output;
+  EXPECT_EQ(contents(d), before) << "the run changed the directory";
+  EXPECT_FALSE(has_temp_file(d));
 }
 
 // ... nor a stale video: an earlier run's DIR/animation.mp4 goes when this run writes none.

@@ -1,6 +1,7 @@
 """zeroset.Surface: resolving, parameters, info, field evaluation, errors."""
 import json
 import math
+import os
 
 import numpy as np
 import pytest
@@ -88,6 +89,14 @@ def test_singular_curves_come_as_vertex_arrays():
     assert sets["curves"], "Whitney's umbrella has a singular line"
     assert {c["kind"] for c in sets["curves"]} <= {"crossing", "isolated", "degenerate"}
     assert all(c["vertices"].ndim == 2 and c["vertices"].shape[1] == 3 for c in sets["curves"])
+
+
+def test_a_singular_set_grid_beyond_the_memory_is_a_value_error():
+    # 1025^3 nodes of F, its gradient and Hessian: about 112 GB, refused before any is made.
+    if os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") > 1.5e11:
+        pytest.skip("this machine would hold the grid")
+    with pytest.raises(ValueError, match="cells or fewer"):
+        zeroset.Surface("sphere").singular_set(cells=1024)
 
 
 def test_eval_grad_hessian_match_the_cli(cli):

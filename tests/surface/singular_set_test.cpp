@@ -6,6 +6,8 @@
 #include <cmath>
 
 #include "support/equation.h"
+#include "zeroset/error.h"
+#include "zeroset/io/memory.h"
 #include "zeroset/surface/catalog.h"
 #include "zeroset/surface/scene.h"
 
@@ -33,6 +35,20 @@ using test::catalog_surface;
 
 int points_of(const SingularSet& set, SingularPointKind kind) {
   return static_cast<int>(set.points_of(kind).size());
+}
+
+TEST(SingularSet, AGridBeyondTheMemoryIsRefusedNamingWhatFits) {
+  // 1025³ nodes of F, ∇F and the Hessian: about 112 GB.
+  const MemoryLimit have = available_memory();
+  if (!have.known || have.budget() > 1.2e11) GTEST_SKIP() << "this machine would hold the grid";
+  try {
+    find_singular_set(test::catalog_surface("sphere"), {.cells = 1024});
+    FAIL() << "a grid of 112 GB was searched";
+  } catch (const InvalidArgument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("1024"), std::string::npos) << what;
+    EXPECT_NE(what.find("cells or fewer"), std::string::npos) << what;
+  }
 }
 
 TEST(SingularSet, RomanHasThreeCrossingSegmentsATriplePointAndSixPinches) {

@@ -75,6 +75,9 @@ class OutputTransaction {
   void create_directories(const std::string& dir);
 
   /// Removes `path` at commit(), after every output is in place (an earlier run's stale file).
+  /// Throws IoError now when it could not be removed (a directory, a directory that is not
+  /// writable, another user's file under a sticky bit, an immutable file), and commit() checks
+  /// again before its first rename: a commit either finishes or changes nothing.
   void remove_on_commit(const std::string& path);
 
   /// Renames every output into place and removes the files given to remove_on_commit. Throws
@@ -108,12 +111,14 @@ class OutputTransaction {
   OutputTransaction* outer_;
 };
 
-/// Makes SIGINT and SIGTERM remove the temp files and new directories of every pending
-/// transaction of the process, then end it with the signal's default action (exit status
-/// 128 + signal). The handler only calls async-signal-safe functions (unlink, rmdir, sigaction,
-/// raise) on paths registered before. Signals set to be ignored stay ignored. For programs
-/// (the CLI, the viewer); a library embedded elsewhere (the Python module) leaves the
-/// signals to its host, and its transactions clean up when the host's interrupt unwinds them.
+/// Makes SIGINT, SIGTERM, SIGHUP, SIGQUIT and SIGPIPE remove the temp files and new directories
+/// of every pending transaction of the process, then end it with the signal's default action
+/// (exit status 128 + signal); SIGXFSZ (a write beyond `ulimit -f`) is ignored, so the write
+/// fails with a message instead of ending the process silently. The handler only calls
+/// async-signal-safe functions (unlink, rmdir, sigaction, raise) on paths registered before.
+/// Signals set to be ignored stay ignored. For programs (the CLI, the viewer); a library embedded
+/// elsewhere (the Python module) leaves the signals to its host, and its transactions clean up when
+/// the host's interrupt unwinds them.
 void remove_pending_outputs_on_signals();
 
 }  // namespace zeroset
