@@ -691,15 +691,4 @@ Mesh MeshImprover::take_mesh() {
   return m;
 }
 
-ImproveStats improve_mesh(Mesh& mesh, const Surface& surface, const ImproveOptions& options,
-                          std::stop_token stop) {
-  MeshImprover improver(std::move(mesh), surface, options);
-  for (int i = 0; i < options.max_steps && !improver.converged() && !stop.stop_requested(); ++i)
-    improver.step();
-  if (options.final_projection && !stop.stop_requested()) improver.finish();
-  ImproveStats st = improver.stats();
-  mesh = improver.take_mesh();
-  return st;
-}
-
 }  // namespace zeroset

@@ -1,8 +1,11 @@
 // The improver's set-up: its options' rules, how many workers it takes and the mean edge
-// length its thresholds scale with (docs/algorithms.md, the mesh improver).
+// length its thresholds scale with (docs/algorithms.md, the mesh improver); and improve_mesh,
+// the improver run to rest through its public steps.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <stop_token>
+#include <utility>
 
 #include <fmt/core.h>
 
@@ -91,3 +94,18 @@ double improver_mean_edge(const std::vector<Vec3>& positions, const std::vector<
 }
 
 }  // namespace zeroset::detail
+
+namespace zeroset {
+
+ImproveStats improve_mesh(Mesh& mesh, const Surface& surface, const ImproveOptions& options,
+                          std::stop_token stop) {
+  MeshImprover improver(std::move(mesh), surface, options);
+  for (int i = 0; i < options.max_steps && !improver.converged() && !stop.stop_requested(); ++i)
+    improver.step();
+  if (options.final_projection && !stop.stop_requested()) improver.finish();
+  ImproveStats st = improver.stats();
+  mesh = improver.take_mesh();
+  return st;
+}
+
+}  // namespace zeroset
