@@ -137,6 +137,29 @@ bool on_singular_sheet(Evaluator& ev, const Vec3& p, const detail::HessianShape&
   return true;
 }
 
+// The direction of a cuspidal edge (F ≈ u² − v³ across it, so H has rank one all along) through
+// p, where H has two null vectors and p is not on a sheet. The null vectors then mix the
+// tangent with the direction across the cusp, and a walk along either stalls. The curve
+// crosses the plane normal to either null vector d at p + spacing·d unless d is normal to it;
+// the crossing closest to its start (the better conditioned one) gives the chord from p. Zero
+// when the curve crosses neither within reach, or where H there has rank two: p was a pinch
+// point, and the curve through it is traced from other seeds.
+Vec3 probe_curve_direction(Evaluator& ev, const Vec3& p, const detail::HessianShape& shape,
+                           const SingularScales& s, double spacing) {
+  Vec3 best = Vec3::Zero();
+  double best_move = 2 * spacing;
+  for (int k = 1; k < 3; ++k) {
+    const Vec3 d = shape.vectors.col(k);
+    const detail::Converged c = detail::converge_in_plane(ev, p + spacing * d, d, s, best_move);
+    if (c.ok && (c.p - p - spacing * d).norm() < best_move &&
+        detail::rank_one_hessian(ev.sample(c.p, Derivatives::kHessian).hessian, s.hess)) {
+      best_move = (c.p - p - spacing * d).norm();
+      best = (c.p - p).normalized();
+    }
+  }
+  return best;
+}
+
 // Traces the curve of S through p in both directions along t; empty when it does not move.
 SingularCurve trace_through(Evaluator& ev, const Clip& clip, const Vec3& p, const Vec3& t,
                             const SingularScales& s, double spacing, int& budget) {
@@ -158,54 +181,6 @@ SingularCurve trace_through(Evaluator& ev, const Clip& clip, const Vec3& p, cons
   return curve;
 }
 
-// Triple points on a curve: where three or more sheets meet, F vanishes to third order, so the
-// Hessian vanishes too; along the curve ‖H‖ falls to zero there (a V-shaped minimum). Each
-// vertex where ‖H‖ is a small local minimum is refined by golden-section search on ‖H‖ over the
-// curve between its neighbours (points of the curve found in planes normal to that chord).
-std::vector<Vec3> triple_points_on(Evaluator& ev, const SingularCurve& curve,
-                                   const SingularScales& s, double spacing) {
-  const auto& pts = curve.points;
-  const size_t n = pts.size();
-  std::vector<double> norm(n);
-  for (size_t i = 0; i < n; ++i) norm[i] = ev.sample(pts[i], Derivatives::kHessian).hessian.norm();
-  std::vector<Vec3> found;
-  for (size_t k = 0; k < n; ++k) {
-    const bool local_min =
-        (k == 0 || norm[k] <= norm[k - 1]) && (k + 1 == n || norm[k] <= norm[k + 1]);
-    if (!local_min || !(norm[k] < 0.2 * s.hess)) continue;
-    const Vec3 a = pts[k > 0 ? k - 1 : 0], b = pts[std::min(k + 1, n - 1)];
-    const double len = (b - a).norm();
-    if (!(len > 0)) continue;
-    const Vec3 dir = (b - a) / len;
-    Vec3 best = pts[k];
-    auto h_at = [&](double u) {
-      const detail::Converged c = detail::converge_in_plane(ev, a + u * dir, dir, s, spacing);
-      if (!c.ok) return std::numeric_limits<double>::infinity();
-      const double v = ev.sample(c.p, Derivatives::kHessian).hessian.norm();
-      best = c.p;
-      return v;
-    };
-    constexpr double kGolden = 0.6180339887498949;
-    double lo = 0, hi = len;
-    double u1 = hi - kGolden * (hi - lo), u2 = lo + kGolden * (hi - lo);
-    double f1 = h_at(u1), f2 = h_at(u2);
-    for (int it = 0; it < 200 && hi - lo > 1e-15 * s.radius; ++it) {
-      if (f1 <= f2) {
-        hi = u2, u2 = u1, f2 = f1;
-        u1 = hi - kGolden * (hi - lo);
-        f1 = h_at(u1);
-      } else {
-        lo = u1, u1 = u2, f1 = f2;
-        u2 = lo + kGolden * (hi - lo);
-        f2 = h_at(u2);
-      }
-    }
-    const double at = h_at(0.5 * (lo + hi));
-    if (at <= 1e-6 * s.hess) found.push_back(best);
-  }
-  return found;
-}
-
 // Puts `q` into the polyline as a vertex where it lies on it (within `near` of a segment).
 void insert_vertex(SingularCurve& c, const Vec3& q, double near) {
   size_t best = c.points.size();
@@ -223,73 +198,6 @@ void insert_vertex(SingularCurve& c, const Vec3& q, double near) {
   } else {
     c.points.insert(c.points.begin() + static_cast<std::ptrdiff_t>(best + 1), q);
   }
-}
-
-// Splits a curve where the form across it changes sign (pinch points, located by bisection on
-// the curve), and gives each piece its kind. Pinch points found are appended to `pinches`.
-std::vector<SingularCurve> split_by_kind(Evaluator& ev, const SingularCurve& curve,
-                                         const SingularScales& s, std::vector<Vec3>& pinches) {
-  const auto& pts = curve.points;
-  const size_t n = pts.size();
-  auto tangent_at = [&](size_t i) {
-    const Vec3 d = pts[std::min(i + 1, n - 1)] - pts[i > 0 ? i - 1 : 0];
-    return Vec3(d.normalized());
-  };
-  std::vector<double> det(n);
-  for (size_t i = 0; i < n; ++i)
-    det[i] = detail::normal_form_det(ev.sample(pts[i], Derivatives::kHessian).hessian,
-                                     tangent_at(i), s.hess);
-
-  std::vector<SingularCurve> pieces;
-  SingularCurve cur;
-  cur.points.push_back(pts[0]);
-  double last_sign = det[0];
-  for (size_t i = 1; i < n; ++i) {
-    if (det[i] != 0 && last_sign != 0 && (det[i] > 0) != (last_sign > 0)) {
-      // The sign changed on [i - 1, i]: bisect for det Q = 0 on the curve.
-      const Vec3 t = (pts[i] - pts[i - 1]).normalized();
-      Vec3 lo = pts[i - 1], hi = pts[i];
-      const bool lo_positive = last_sign > 0;
-      for (int it = 0; it < 80 && (hi - lo).norm() > 1e-14 * s.radius; ++it) {
-        const detail::Converged m =
-            detail::converge_in_plane(ev, 0.5 * (lo + hi), t, s, (hi - lo).norm());
-        if (!m.ok) break;
-        const double dm =
-            detail::normal_form_det(ev.sample(m.p, Derivatives::kHessian).hessian, t, s.hess, true);
-        if (dm == 0) {
-          lo = hi = m.p;
-          break;
-        }
-        ((dm > 0) == lo_positive ? lo : hi) = m.p;
-      }
-      const Vec3 pinch = 0.5 * (lo + hi);
-      cur.points.push_back(pinch);
-      pieces.push_back(std::move(cur));
-      pinches.push_back(pinch);
-      cur = SingularCurve{};
-      cur.points.push_back(pinch);
-    }
-    cur.points.push_back(pts[i]);
-    if (det[i] != 0) last_sign = det[i];
-  }
-  pieces.push_back(std::move(cur));
-  // Each piece's kind: the sign its vertices share (zeros only at triple points or the ends).
-  for (SingularCurve& piece : pieces) {
-    double sum_neg = 0, sum_pos = 0;
-    for (size_t k = 0; k < piece.points.size(); ++k) {
-      const double d = detail::normal_form_det(
-          ev.sample(piece.points[k], Derivatives::kHessian).hessian,
-          (piece.points[std::min(k + 1, piece.points.size() - 1)] - piece.points[k > 0 ? k - 1 : 0])
-              .normalized(),
-          s.hess);
-      (d < 0 ? sum_neg : sum_pos) += std::abs(d);
-    }
-    piece.kind = sum_neg == 0 && sum_pos == 0 ? CurveKind::kDegenerate
-                 : sum_neg > sum_pos          ? CurveKind::kCrossing
-                                              : CurveKind::kIsolated;
-  }
-  if (pieces.size() == 1) pieces[0].closed = curve.closed;
-  return pieces;
 }
 
 void add_point(std::vector<SingularPoint>& points, const Vec3& p, SingularPointKind kind,
@@ -458,10 +366,19 @@ void search_from_nodes(Evaluator& ev, const Search& z, int max_curve_points, std
       deferred.push_back(c.p);
       continue;
     }
+    std::vector<Vec3> directions;
+    for (int k = 3 - nullity; k < 3; ++k) directions.push_back(shape.vectors.col(k));
     bool traced = false;
-    for (int k = 3 - nullity; k < 3 && !traced; ++k) {
-      SingularCurve curve =
-          trace_through(ev, clip, c.p, shape.vectors.col(k), z.s, z.spacing, budget);
+    for (size_t k = 0; !traced; ++k) {
+      // Along the null vectors first (at a pinch or triple point one of them is the tangent);
+      // where both stall, along the probed direction (a cuspidal edge).
+      if (k == directions.size()) {
+        const Vec3 d =
+            nullity == 2 ? probe_curve_direction(ev, c.p, shape, z.s, z.spacing) : Vec3::Zero();
+        if (d.isZero()) break;
+        directions.push_back(d);
+      }
+      SingularCurve curve = trace_through(ev, clip, c.p, directions[k], z.s, z.spacing, budget);
       if (curve.points.size() >= 2) {
         out.curves.push_back(std::move(curve));
         traced = true;
@@ -477,7 +394,7 @@ void add_triple_points(Evaluator& ev, const Search& z, const std::vector<Vec3>& 
                        SingularSet& out) {
   std::vector<Vec3> triples;
   for (const SingularCurve& c : out.curves)
-    for (const Vec3& q : triple_points_on(ev, c, z.s, z.spacing))
+    for (const Vec3& q : detail::triple_points_on(ev, c, z.s, z.spacing))
       if (std::none_of(triples.begin(), triples.end(),
                        [&](const Vec3& p) { return (p - q).norm() < 0.5 * z.spacing; }))
         triples.push_back(q);
@@ -501,15 +418,18 @@ void split_and_name_ends(Evaluator& ev, const Search& z, SingularSet& out) {
   std::vector<SingularCurve> pieces;
   std::vector<Vec3> pinches;
   for (const SingularCurve& c : out.curves)
-    for (SingularCurve& piece : split_by_kind(ev, c, z.s, pinches))
+    for (SingularCurve& piece : detail::split_by_kind(ev, c, z.s, pinches))
       pieces.push_back(std::move(piece));
   out.curves = std::move(pieces);
   for (const Vec3& q : pinches)
     add_point(out.points, q, SingularPointKind::kPinch, 0.5 * z.spacing);
   for (const SingularCurve& c : out.curves) {
     if (c.closed || z.clip.is_empty_spec()) continue;
+    // A cuspidal edge's points are known across it only to about 1e-8 (docs/singular.md), and
+    // so is where it leaves the clip.
+    const double on_clip = (c.kind == CurveKind::kDegenerate ? 1e-7 : 1e-9) * z.radius;
     for (const Vec3& end : {c.points.front(), c.points.back()})
-      if (std::abs(z.clip.value(end)) <= 1e-9 * z.radius)
+      if (std::abs(z.clip.value(end)) <= on_clip)
         add_point(out.points, end, SingularPointKind::kClipEnd, z.same_point);
   }
 }

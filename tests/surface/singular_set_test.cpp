@@ -150,6 +150,118 @@ TEST(SingularSet, TwoSpheresMeetInACircleAndACuspidalEdgeIsDegenerate) {
   EXPECT_NEAR(cusp.curves[0].length(), 2.0, 1e-9);
 }
 
+// Cuspidal edges: F ≈ u² − v³ across the curve, so Q has rank one all along it and det Q
+// vanishes identically; its measured sign is rounding (the corrector fixes v only to about 1e-8).
+// Each edge must come out as one degenerate curve with no pinch point on it.
+
+// The largest distance from the vertices of the curves of `kind` to a curve given by `distance`.
+template <typename Distance>
+double farthest(const SingularSet& set, CurveKind kind, Distance distance) {
+  double far = 0;
+  for (const SingularCurve& c : set.curves)
+    if (c.kind == kind)
+      for (const Vec3& p : c.points) far = std::max(far, distance(p));
+  return far;
+}
+
+TEST(SingularSet, ACuspidalCylinderIsOneDegenerateCurveAlongItsEdge) {
+  const SingularSet upright = find_singular_set(equation("x^2 - y^3", "box:1"));
+  ASSERT_EQ(upright.curves.size(), 1u);
+  EXPECT_EQ(upright.curves[0].kind, CurveKind::kDegenerate);
+  EXPECT_NEAR(upright.curves[0].length(), 2.0, 1e-9);
+  EXPECT_LT(
+      farthest(upright, CurveKind::kDegenerate, [](const Vec3& p) { return p.head<2>().norm(); }),
+      1e-9);
+  EXPECT_EQ(points_of(upright, SingularPointKind::kPinch), 0);
+
+  // The same cylinder about the diagonal: before Q's rank was judged relative to the rounding
+  // that v's position carries, this edge came out as 48 pieces and 47 pinch points.
+  const Surface s = equation("((x - y)/sqrt(2))^2 - ((x + y - 2*z)/sqrt(6))^3", "box:1");
+  const SingularSet tilted = find_singular_set(s);
+  ASSERT_EQ(tilted.curves.size(), 1u);
+  EXPECT_EQ(tilted.curves[0].kind, CurveKind::kDegenerate);
+  EXPECT_NEAR(tilted.curves[0].length(), 2 * std::sqrt(3.0), 1e-9);
+  const Vec3 axis = Vec3(1, 1, 1).normalized();
+  EXPECT_LT(farthest(tilted, CurveKind::kDegenerate,
+                     [&](const Vec3& p) { return (p - p.dot(axis) * axis).norm(); }),
+            1e-7);
+  EXPECT_TRUE(tilted.points_of(SingularPointKind::kPinch).empty());
+  EXPECT_EQ(points_of(tilted, SingularPointKind::kClipEnd), 2);
+  expect_on_singular_set(s, tilted);
+}
+
+TEST(SingularSet, ACuspidalEdgeAroundACylinderIsOneClosedDegenerateCurve) {
+  // (xy − z³ − 1)² = (1 − x² − y²)³: A² − B³, singular where A = B = 0, i.e. on the closed
+  // curve (cos θ, sin θ, ∛(sin θ cos θ − 1)), a cuspidal edge all round (∇A and ∇B stay
+  // independent there). The surface lies within x² + y² ≤ 1, |z| ≤ ∛2.5, inside the ball of 2.
+  // Besides, the origin is an isolated singular point (F ≈ 3x² − 2xy + 3y² + 2z³ there).
+  const Surface s = equation("(x*y - z^3 - 1)^2 - (1 - x^2 - y^2)^3", "sphere:2");
+  const SingularSet set = find_singular_set(s);
+  ASSERT_EQ(set.curves.size(), 1u);
+  const SingularCurve& edge = set.curves[0];
+  EXPECT_EQ(edge.kind, CurveKind::kDegenerate);
+  EXPECT_TRUE(edge.closed);
+  EXPECT_NEAR(edge.length(), 6.47345, 2e-3);  // the inscribed polygon, 0.01% short
+  EXPECT_LT(farthest(set, CurveKind::kDegenerate,
+                     [](const Vec3& p) {
+                       return std::abs(p.x() * p.y() - std::pow(p.z(), 3) - 1) +
+                              std::abs(1 - p.head<2>().squaredNorm());
+                     }),
+            1e-7);
+  EXPECT_TRUE(set.points_of(SingularPointKind::kPinch).empty());
+  ASSERT_EQ(set.points.size(), 1u);
+  EXPECT_EQ(set.points[0].kind, SingularPointKind::kDegenerate);
+  EXPECT_LT(set.points[0].position.norm(), 1e-7);
+  expect_on_singular_set(s, set);
+}
+
+TEST(SingularSet, TheSwallowtailHasTwoCuspidalEdgesAndADoubleCurve) {
+  // The discriminant of t⁴ + x t² + y t + z. A triple root t = a gives the cuspidal edge
+  // (−6a², 8a³, −3a⁴), two double roots ±a the double curve (−2a², 0, a⁴) where two real sheets
+  // cross, two complex double roots ±ia the isolated curve (2a², 0, a⁴); they meet at the
+  // swallowtail point, the origin, where F vanishes to weighted order 12 and the tolerances
+  // cannot tell S from its neighbourhood within about a grid cell (docs/singular.md, Limits).
+  const Surface s =
+      equation("256*z^3 - 128*x^2*z^2 + 144*x*y^2*z - 27*y^4 + 16*x^4*z - 4*x^3*y^2", "box:1");
+  const SingularSet set = find_singular_set(s);
+  constexpr double kNearOrigin = 0.1;  // 2.4 grid cells (2/48)
+  ASSERT_EQ(set.count(CurveKind::kDegenerate), 2);
+  for (const SingularCurve& c : set.curves) {
+    if (c.kind != CurveKind::kDegenerate) continue;
+    // From the clip (x = −1, a = ±1/√6) to the origin, along one branch a > 0 or a < 0.
+    const Vec3 far_end =
+        c.points.front().x() < c.points.back().x() ? c.points.front() : c.points.back();
+    const Vec3 near_end =
+        c.points.front().x() < c.points.back().x() ? c.points.back() : c.points.front();
+    EXPECT_NEAR(far_end.x(), -1, 1e-7);  // as far as the edge is known across it
+    EXPECT_NEAR(std::abs(far_end.y()), 8 * std::pow(1 / std::sqrt(6.0), 3), 1e-7);
+    EXPECT_LT(near_end.norm(), kNearOrigin);
+    for (const Vec3& p : c.points) {
+      const double a = std::cbrt(p.y() / 8);
+      EXPECT_NEAR(p.x(), -6 * a * a, 1e-7) << p.transpose();
+      EXPECT_NEAR(p.z(), -3 * std::pow(a, 4), 1e-7) << p.transpose();
+    }
+  }
+  for (const Vec3& p : set.points_of(SingularPointKind::kPinch))
+    EXPECT_LT(p.norm(), kNearOrigin)
+        << "a pinch point away from the swallowtail point: " << p.transpose();
+  // The double curve is still a crossing curve, the isolated branch still isolated, each from
+  // the clip to the origin.
+  double crossing = 0, isolated = 0;
+  for (const SingularCurve& c : set.curves)
+    for (size_t i = 0; i + 1 < c.points.size(); ++i) {
+      const Vec3 &p = c.points[i], &q = c.points[i + 1];
+      if (c.kind == CurveKind::kDegenerate || p.norm() < kNearOrigin) continue;
+      EXPECT_NEAR(p.y(), 0, 1e-12);
+      EXPECT_NEAR(p.z(), p.x() * p.x() / 4, 1e-12);
+      EXPECT_EQ(c.kind, p.x() < 0 ? CurveKind::kCrossing : CurveKind::kIsolated) << p.transpose();
+      (p.x() < 0 ? crossing : isolated) += (q - p).norm();
+    }
+  EXPECT_GT(crossing, 0.9);  // the parabola's length from x = −1 to −0.1 is 0.93
+  EXPECT_GT(isolated, 0.9);
+  EXPECT_EQ(points_of(set, SingularPointKind::kClipEnd), 4);
+}
+
 TEST(SingularSet, ConeHasOneNodeAndSmoothSurfacesNone) {
   EXPECT_EQ(points_of(find_singular_set(catalog_surface("cone")), SingularPointKind::kNode), 1);
   EXPECT_TRUE(find_singular_set(catalog_surface("sphere")).empty());
