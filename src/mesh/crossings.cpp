@@ -227,6 +227,7 @@ TubeCut cut_tube(const Mesh& mesh, const Network& net, const SingularSetIndex& i
   TubeCut cut;
   auto remove = [&](const std::array<std::uint32_t, 3>& t) {
     ++removed_triangles;
+    cut.removed.push_back(t);
     for (int k = 0; k < 3; ++k)
       cut.removed_edges.insert(
           directed_edge_key(t[static_cast<size_t>(k)], t[static_cast<size_t>((k + 1) % 3)]));
@@ -277,6 +278,32 @@ TubeCut cut_tube(const Mesh& mesh, const Network& net, const SingularSetIndex& i
   return cut;
 }
 
+// Where a chain of the rim cannot be joined, the tube's triangles within `radius` of the place
+// are put back: that neighbourhood stays as marching cubes made it, its sheets rounded off,
+// and the rim now runs around it (crossing the curve on the restored triangles, where it
+// turns back as around a fold). Returns the triangles put back.
+long long restore_near(TubeCut& cut, const Mesh& mesh, const Vec3& place, double radius) {
+  long long restored = 0;
+  size_t w = 0;
+  for (size_t i = 0; i < cut.removed.size(); ++i) {
+    const auto& t = cut.removed[i];
+    const bool near = std::any_of(t.begin(), t.end(), [&](std::uint32_t v) {
+      return (mesh.positions[v] - place).norm() < radius;
+    });
+    if (!near) {
+      cut.removed[w++] = t;
+      continue;
+    }
+    for (int k = 0; k < 3; ++k)
+      cut.removed_edges.erase(
+          directed_edge_key(t[static_cast<size_t>(k)], t[static_cast<size_t>((k + 1) % 3)]));
+    cut.kept.push_back(t);
+    ++restored;
+  }
+  cut.removed.resize(w);
+  return restored;
+}
+
 // The network's vertices join the mesh (their indices are base + graph vertex).
 void append_network_vertices(Mesh& mesh, const Network& net, const Surface& surface) {
   const size_t base = mesh.positions.size();
@@ -287,21 +314,11 @@ void append_network_vertices(Mesh& mesh, const Network& net, const Surface& surf
                                std::abs(surface.clip.value(p)) <= 1e-9 * surface.scene_radius());
 }
 
-// Sheets meet on the crossing curves: the tube around them is cut out and its rim joined to
-// the curves, then the joining strips are refined. Returns false (with stats.failure) when the
-// join fails; the mesh is then untouched.
-bool join_sheets_on_curves(Mesh& mesh, const Surface& surface, const Network& net, double cell_size,
-                           double mean_edge, const CrossingOptions& options, CrossingStats& stats) {
-  const double tube = options.tube_cells * cell_size;
-  const CrossingCurves crossing = crossing_curves_of(net);
-  // A rim vertex is within a tube's radius plus an edge of the curve, well inside the reach.
-  const SingularSetIndex index(crossing.set, 3 * tube);
-  TubeCut cut = cut_tube(mesh, net, index, tube, stats.removed_triangles);
-  const auto added = detail::join_rim(mesh, cut, net, index, crossing, tube, stats.failure);
-  if (!stats.failure.empty()) {
-    stats.removed_triangles = 0;
-    return false;
-  }
+// The join's result goes into the mesh: the kept triangles, the strips and the network's
+// vertices; then the strips are refined.
+void finish_join(Mesh& mesh, const Surface& surface, const Network& net, TubeCut cut,
+                 std::vector<std::array<std::uint32_t, 3>> added, double mean_edge,
+                 const CrossingOptions& options, CrossingStats& stats) {
   const std::uint32_t base = static_cast<std::uint32_t>(mesh.positions.size());
   mesh.triangles = std::move(cut.kept);
   const size_t first_added = mesh.triangles.size();
@@ -314,6 +331,55 @@ bool join_sheets_on_curves(Mesh& mesh, const Surface& surface, const Network& ne
   stats.strip_vertices =
       refine_strips(mesh, first_added, options.split_edges * mean_edge, surface, curve_edges);
   stats.added_triangles = static_cast<long long>(mesh.triangles.size() - first_added);
+}
+
+// Sheets meet on the crossing curves: the tube around them is cut out and its rim joined to
+// the curves, then the joining strips are refined. A place where the rim cannot be joined is
+// put back as marching cubes made it (restore_near), and the join is tried again: the first
+// time within kRestoreTubes tube radii of the place, each further failure there doubles the
+// radius. Returns false (with stats.failure; the mesh untouched) only when failures remain
+// after kRestoreRounds rounds.
+constexpr double kRestoreTubes = 3;
+constexpr int kRestoreRounds = 24;
+
+bool join_sheets_on_curves(Mesh& mesh, const Surface& surface, const Network& net, double cell_size,
+                           double mean_edge, const CrossingOptions& options, CrossingStats& stats) {
+  const double tube = options.tube_cells * cell_size;
+  const CrossingCurves crossing = crossing_curves_of(net);
+  // A rim vertex is within a tube's radius plus an edge of the curve, well inside the reach.
+  const SingularSetIndex index(crossing.set, 3 * tube);
+  TubeCut cut = cut_tube(mesh, net, index, tube, stats.removed_triangles);
+  std::vector<std::array<std::uint32_t, 3>> added;
+  for (int round = 0;; ++round) {
+    std::vector<detail::JoinFailure> failures;
+    added = detail::join_rim(mesh, surface, cut, net, index, crossing, tube, failures);
+    if (failures.empty()) break;
+    if (round == kRestoreRounds) {
+      stats.failure = failures.front().what;
+      stats.removed_triangles = 0;
+      stats.left_as_marching_cubes.clear();
+      return false;
+    }
+    // A failure at a place put back in an earlier round doubles that place's radius (once a
+    // round); any other starts a place of its own.
+    auto& places = stats.left_as_marching_cubes;
+    const size_t earlier = places.size();
+    std::vector<std::uint8_t> grown(earlier, 0);
+    for (const detail::JoinFailure& f : failures) {
+      size_t k = 0;
+      while (k < places.size() && !((places[k].at - f.where).norm() < places[k].radius + tube)) ++k;
+      if (k == places.size()) {
+        places.push_back({f.where, kRestoreTubes * tube});
+      } else if (k < earlier && !grown[k]) {
+        grown[k] = 1;
+        places[k].radius *= 2;
+      } else {
+        continue;
+      }
+      stats.removed_triangles -= restore_near(cut, mesh, places[k].at, places[k].radius);
+    }
+  }
+  finish_join(mesh, surface, net, std::move(cut), std::move(added), mean_edge, options, stats);
   return true;
 }
 

@@ -12,6 +12,7 @@
 #include "zeroset/mesh/mesh.h"
 #include "zeroset/surface/singular_index.h"
 #include "zeroset/surface/singular_set.h"
+#include "zeroset/surface/surface.h"
 
 namespace zeroset::detail {
 
@@ -59,18 +60,25 @@ struct CrossingCurves {
 // half-edges of those removed.
 struct TubeCut {
   std::vector<std::array<std::uint32_t, 3>> kept;
+  std::vector<std::array<std::uint32_t, 3>> removed;
   std::unordered_set<std::uint64_t> removed_edges;
+};
+
+// Where and why a chain of the cut's rim could not be joined to the curves.
+struct JoinFailure {
+  Vec3 where = Vec3::Zero();
+  std::string what;
 };
 
 // Joins the rim of the cut to the crossing curves: each rim edge u → v and the graph path
 // between the vertices its ends are joined to bound a polygon (v, u, a_0 … a_k), fanned from u
 // over the path's first part and from v over the rest: triangles run like the kept triangle's,
-// so each half-sheet keeps its side. Returns the triangles (vertex base + i is graph vertex i),
-// or sets `failure`.
-std::vector<std::array<std::uint32_t, 3>> join_rim(const Mesh& mesh, const TubeCut& cut,
-                                                   const Network& net,
+// so each half-sheet keeps its side. Returns the triangles (vertex base + i is graph vertex i);
+// the chains that cannot be joined add nothing and are listed in `failures`.
+std::vector<std::array<std::uint32_t, 3>> join_rim(const Mesh& mesh, const Surface& surface,
+                                                   const TubeCut& cut, const Network& net,
                                                    const SingularSetIndex& index,
                                                    const CrossingCurves& crossing, double reach,
-                                                   std::string& failure);
+                                                   std::vector<JoinFailure>& failures);
 
 }  // namespace zeroset::detail

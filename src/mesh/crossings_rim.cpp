@@ -20,30 +20,10 @@ struct Anchor {
   bool ok() const { return special != kNone || curve != kNone; }
 };
 
-Anchor anchor_of(const Network& net, const SingularSetIndex& index,
-                 const std::vector<std::uint32_t>& curve_of, const Vec3& p, double reach) {
-  const SingularSetIndex::Nearest hit = index.nearest(p);
-  if (hit.curve < 0) return {};
-  const std::uint32_t c = curve_of[static_cast<size_t>(hit.curve)];
-  const std::uint32_t i = hit.segment;
-  const Network::Curve& curve = net.curves[c];
-  const double arc = curve.arc[i] + hit.t * (curve.arc[i + 1] - curve.arc[i]);
-  // The nearest special vertex along the curve within `reach` wins: the rim turns around it.
-  std::uint32_t best = kNone;
-  double best_d = std::numeric_limits<double>::infinity();
-  for (size_t k = 0; k < curve.verts.size(); ++k) {
-    const std::uint32_t v = curve.verts[k];
-    if (!net.special[v]) continue;
-    double d = std::abs(curve.arc[k] - arc);
-    if (curve.closed) d = std::min(d, curve.length() - d);
-    if (d <= reach && d < best_d) best_d = d, best = v;
-  }
-  if (best != kNone) return {.special = best};
-  return {.curve = c, .arc = arc};
-}
-
-// The place on curve c nearest to p, when within `reach` (the plain loop over its segments).
-Anchor anchor_on_curve(const Network& net, std::uint32_t c, const Vec3& p, double reach) {
+// The place on curve c nearest to p, when within `reach` (the plain loop over its segments);
+// its distance in `distance`.
+Anchor anchor_on_curve(const Network& net, std::uint32_t c, const Vec3& p, double reach,
+                       double* distance = nullptr) {
   const Network::Curve& curve = net.curves[c];
   Anchor best;
   double best_d = reach;
@@ -56,7 +36,60 @@ Anchor anchor_on_curve(const Network& net, std::uint32_t c, const Vec3& p, doubl
     if (d <= best_d)
       best_d = d, best = {.curve = c, .arc = curve.arc[i] + t * (curve.arc[i + 1] - curve.arc[i])};
   }
+  if (distance) *distance = best_d;
   return best;
+}
+
+// The point of curve c at arc length `arc`.
+Vec3 point_at_arc(const Network& net, const Network::Curve& c, double arc) {
+  const auto it = std::upper_bound(c.arc.begin(), c.arc.end(), arc);
+  const size_t k = std::clamp<size_t>(static_cast<size_t>(it - c.arc.begin()), 1, c.arc.size() - 1);
+  const double len = c.arc[k] - c.arc[k - 1];
+  const double t = len > 0 ? std::clamp((arc - c.arc[k - 1]) / len, 0.0, 1.0) : 0.0;
+  return (1 - t) * net.pos[c.verts[k - 1]] + t * net.pos[c.verts[k]];
+}
+
+// A curve lies on the sheet of a rim vertex at p (unit normal n) when the way to it runs
+// within 30° of the sheet's tangent plane. Curves a few cells apart (two sheets crossing a third
+// along nearly parallel curves) put a rim vertex near the other sheet's curve: joined there, its
+// strip would cross between the sheets.
+bool on_own_sheet(const Vec3& p, const Vec3& n, const Vec3& q) {
+  const Vec3 d = q - p;
+  return n.isZero() || std::abs(d.dot(n)) <= 0.5 * d.norm();
+}
+
+// Where a rim vertex at p (unit normal n, or zero) is joined: the nearest place on a crossing
+// curve of its own sheet (on_own_sheet; the nearest of all when none is), or the nearest
+// special vertex along that curve within `reach`, around which the rim turns.
+Anchor anchor_of(const Network& net, const SingularSetIndex& index,
+                 const std::vector<std::uint32_t>& curve_of, const Vec3& p, const Vec3& n,
+                 double reach) {
+  const SingularSetIndex::Nearest hit = index.nearest(p);
+  if (hit.curve < 0) return {};
+  std::uint32_t c = curve_of[static_cast<size_t>(hit.curve)];
+  const std::uint32_t i = hit.segment;
+  double arc = net.curves[c].arc[i] + hit.t * (net.curves[c].arc[i + 1] - net.curves[c].arc[i]);
+  if (!on_own_sheet(p, n, point_at_arc(net, net.curves[c], arc))) {
+    double best_d = std::numeric_limits<double>::infinity();
+    for (std::uint32_t other : curve_of) {
+      double d = 0;
+      const Anchor a = anchor_on_curve(net, other, p, index.reach(), &d);
+      if (a.ok() && d < best_d && on_own_sheet(p, n, point_at_arc(net, net.curves[other], a.arc)))
+        best_d = d, c = other, arc = a.arc;
+    }
+  }
+  const Network::Curve& curve = net.curves[c];
+  std::uint32_t best = kNone;
+  double best_d = std::numeric_limits<double>::infinity();
+  for (size_t k = 0; k < curve.verts.size(); ++k) {
+    const std::uint32_t v = curve.verts[k];
+    if (!net.special[v]) continue;
+    double d = std::abs(curve.arc[k] - arc);
+    if (curve.closed) d = std::min(d, curve.length() - d);
+    if (d <= reach && d < best_d) best_d = d, best = v;
+  }
+  if (best != kNone) return {.special = best};
+  return {.curve = c, .arc = arc};
 }
 
 // A closed chain turned to start where a run of anchors on one curve starts (if it has more
@@ -282,13 +315,13 @@ std::vector<Chain> rim_chains(const std::vector<std::array<std::uint32_t, 2>>& e
 // Joins the rim of the cut to the crossing curves: each rim edge u → v and the graph path
 // between the vertices its ends are joined to bound a polygon (v, u, a_0 … a_k), fanned from u
 // over the path's first part and from v over the rest: triangles run like the kept triangle's,
-// so each half-sheet keeps its side. Returns the triangles (vertex base + i is graph vertex i),
-// or sets `failure`.
-std::vector<std::array<std::uint32_t, 3>> join_rim(const Mesh& mesh, const TubeCut& cut,
-                                                   const Network& net,
+// so each half-sheet keeps its side. Returns the triangles (vertex base + i is graph vertex i);
+// the chains that cannot be joined add nothing and are listed in `failures`.
+std::vector<std::array<std::uint32_t, 3>> join_rim(const Mesh& mesh, const Surface& surface,
+                                                   const TubeCut& cut, const Network& net,
                                                    const SingularSetIndex& index,
                                                    const CrossingCurves& crossing, double reach,
-                                                   std::string& failure) {
+                                                   std::vector<JoinFailure>& failures) {
   const std::uint32_t base = static_cast<std::uint32_t>(mesh.positions.size());
   // The rim: edges of kept triangles whose other triangle was removed.
   std::vector<std::array<std::uint32_t, 2>> rim;
@@ -299,16 +332,23 @@ std::vector<std::array<std::uint32_t, 3>> join_rim(const Mesh& mesh, const TubeC
     }
   std::vector<std::array<std::uint32_t, 3>> added;
   std::vector<std::uint32_t> path;
+  Evaluator ev(surface.field);
   for (const Chain& ch : rim_chains(rim)) {
     std::vector<Anchor> anchors;
     for (std::uint32_t v : ch.verts) {
-      anchors.push_back(anchor_of(net, index, crossing.curve_of, mesh.positions[v], reach));
-      if (!anchors.back().ok()) {
-        failure = fmt::format(
-            "a vertex of the cut at ({:.4g}, {:.4g}, {:.4g}) is far from every crossing curve",
-            mesh.positions[v].x(), mesh.positions[v].y(), mesh.positions[v].z());
-        return {};
-      }
+      Vec3 g = Vec3::Zero();
+      ev.value_gradient(mesh.positions[v], g);
+      const Vec3 n = g.allFinite() && g.norm() > 0 ? Vec3(g.normalized()) : Vec3::Zero();
+      anchors.push_back(anchor_of(net, index, crossing.curve_of, mesh.positions[v], n, reach));
+      if (!anchors.back().ok()) break;
+    }
+    if (!anchors.back().ok()) {
+      const Vec3& p = mesh.positions[ch.verts[anchors.size() - 1]];
+      failures.push_back(
+          {p, fmt::format("a vertex of the cut at ({:.4g}, {:.4g}, {:.4g}) is far from every "
+                          "crossing curve",
+                          p.x(), p.y(), p.z())});
+      continue;
     }
     std::vector<std::uint32_t> verts = ch.verts;
     std::vector<Vec3> points;
@@ -318,14 +358,25 @@ std::vector<std::array<std::uint32_t, 3>> join_rim(const Mesh& mesh, const TubeC
     if (ch.closed) start_at_run(verts, points, anchors);
     const std::vector<std::uint32_t> target = chain_targets(net, anchors, ch.closed, reach);
     const size_t edges = ch.closed ? verts.size() : verts.size() - 1;
+    const size_t chain_start = added.size();
     for (size_t e = 0; e < edges; ++e) {
       const size_t j = (e + 1) % verts.size();
       const std::uint32_t u = verts[e], v = verts[j];
-      if (!graph_path(net, target[e], target[j], 512, path)) {
-        failure =
-            fmt::format("the cut near ({:.4g}, {:.4g}, {:.4g}) could not be joined to a curve",
-                        mesh.positions[u].x(), mesh.positions[u].y(), mesh.positions[u].z());
-        return {};
+      // Two ends of curves on the clip a few tubes apart (a curve that leaves the clip and
+      // comes back, or two that end close together): the rim passes from one to the other
+      // along the clip, and so does the strip, over the clip between them.
+      const bool clip_ends = net.clip_end[target[e]] && net.clip_end[target[j]] &&
+                             (net.pos[target[e]] - net.pos[target[j]]).norm() <=
+                                 2 * kFreeEndReach * reach;
+      if (clip_ends && !graph_path(net, target[e], target[j], 512, path))
+        path = {target[e], target[j]};
+      else if (!graph_path(net, target[e], target[j], 512, path)) {
+        const Vec3& p = mesh.positions[u];
+        failures.push_back(
+            {p, fmt::format("the cut near ({:.4g}, {:.4g}, {:.4g}) could not be joined to a curve",
+                            p.x(), p.y(), p.z())});
+        added.resize(chain_start);
+        break;
       }
       size_t m = 0;  // path[0 .. m] fan from u, path[m .. k] from v
       for (size_t i = 1; i < path.size(); ++i)

@@ -41,21 +41,25 @@ json polygonize_json(const MeshResult& r) {
           {"triangles", r.polygonized_triangles}};
 }
 
+json points_json(const std::vector<Vec3>& points) {
+  json a = json::array();
+  for (const Vec3& p : points) a.push_back(json_read::from_vec3(p));
+  return a;
+}
+
 json crossings_json(const CrossingStats& cs) {
+  json left = json::array();
+  for (const CrossingStats::Place& p : cs.left_as_marching_cubes)
+    left.push_back({{"at", json_read::from_vec3(p.at)}, {"radius", p.radius}});
   return {{"crossing_curves", cs.crossing_curves},
           {"isolated_curves", cs.isolated_curves},
           {"curve_vertices", cs.curve_vertices},
           {"removed_triangles", cs.removed_triangles},
           {"added_triangles", cs.added_triangles},
           {"strip_vertices", cs.strip_vertices},
+          {"left_as_marching_cubes", left},
           {"failure", cs.failure},
           {"seconds", cs.seconds}};
-}
-
-json points_json(const std::vector<Vec3>& points) {
-  json a = json::array();
-  for (const Vec3& p : points) a.push_back(json_read::from_vec3(p));
-  return a;
 }
 
 json quality_json(const MeshQuality& q) {

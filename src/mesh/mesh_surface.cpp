@@ -24,6 +24,15 @@ void find_crossings(MeshResult& r, const MeshRun& run, std::stop_token stop) {
     SingularSet found;
     r.crossings = mesh_crossings(r.mesh, r.surface, r.polygonize.cell_size, {}, &found, stop);
     r.singular = std::move(found);
+    if (const auto& left = r.crossings->left_as_marching_cubes; !left.empty())
+      say_warning(r, run,
+                  fmt::format("{}: the crossings near ({:.4g}, {:.4g}, {:.4g}){} could not be "
+                              "joined to their curves and are left as marching cubes made them "
+                              "(rounded off there); every other crossing is treated",
+                              r.surface.label(), left[0].at.x(), left[0].at.y(), left[0].at.z(),
+                              left.size() > 1 ? fmt::format(" and {} more place{}", left.size() - 1,
+                                                            left.size() > 2 ? "s" : "")
+                                              : std::string()));
     if (!r.crossings->failure.empty())
       say_warning(r, run,
                   fmt::format("{}: the crossings along its singular curves are left as marching "

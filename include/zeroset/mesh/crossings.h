@@ -9,6 +9,7 @@
 /// with its constants, is in docs/meshing.md ("Crossings").
 #include <stop_token>
 #include <string>
+#include <vector>
 
 #include "zeroset/mesh/mesh.h"
 #include "zeroset/surface/singular_set.h"
@@ -37,8 +38,15 @@ struct CrossingStats {
   long long removed_triangles = 0;  ///< marching-cubes triangles in the tubes
   long long added_triangles = 0;    ///< triangles joining the half-sheets to the curves
   long long strip_vertices = 0;     ///< vertices added inside the strips (split long edges)
-  /// Why the crossings were left as marching cubes made them (empty: they were not). The mesh
-  /// is then unchanged apart from the isolated curves.
+  /// A ball where a cut could not be joined to the curves: the mesh inside is left as marching
+  /// cubes made it (the sheets rounded off there); every other crossing is treated.
+  struct Place {
+    Vec3 at = Vec3::Zero();
+    double radius = 0;
+  };
+  std::vector<Place> left_as_marching_cubes;
+  /// Why the crossings were left as marching cubes made them everywhere (empty: they were
+  /// not). The mesh is then unchanged apart from the isolated curves.
   std::string failure;
   double seconds = 0;
 };
