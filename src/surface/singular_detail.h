@@ -28,6 +28,7 @@ struct SingularScales {
 struct Converged {
   Vec3 p = Vec3::Zero();
   bool ok = false;
+  bool ran_off = false;  // stopped for going beyond max_move
 };
 
 /// One Gauss–Newton step towards the singular set from F, ∇F and ∇²F at a point: the

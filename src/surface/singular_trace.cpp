@@ -49,7 +49,10 @@ Converged converge(Evaluator& ev, const Vec3& start, const Eigen::Matrix<double,
     const Vec3 step = gauss_newton_step<N>(ev, c.p, basis, s.cell, damped);
     if (!step.allFinite()) return c;
     c.p -= step;
-    if ((c.p - start).norm() > max_move) return c;
+    if ((c.p - start).norm() > max_move) {
+      c.ran_off = true;
+      return c;
+    }
     if (step.norm() <= tiny) break;
   }
   c.ok = is_singular_here(ev, c.p, s);
@@ -62,9 +65,13 @@ Converged converge_to_singular(Evaluator& ev, const Vec3& start, const SingularS
                                double max_move) {
   // Plain Gauss–Newton first: it converges fastest, and onto a cuspidal edge (where ∇F grows
   // only quadratically across the curve) the damped steps do not reach the tolerances within
-  // the iterations. Where it fails, the damped steps (singular_gauss_newton_step).
+  // the iterations. Where it ran off (beyond max_move: along a curve instead of onto it), the
+  // damped steps (singular_gauss_newton_step); not where it converged to a point that is not
+  // singular (a sphere's centre), where they would only take all their iterations to get
+  // there too (a sphere's search took three times as long).
   const Converged plain = converge<3>(ev, start, Mat3::Identity(), s, max_move, false);
   if (plain.ok) return plain;
+  if (plain.ok || !plain.ran_off) return plain;
   return converge<3>(ev, start, Mat3::Identity(), s, max_move, true);
 }
 
