@@ -66,7 +66,9 @@ Script Script::parse(std::string_view text, const std::string& origin) {
   return script;
 }
 
-Script Script::load(const std::string& path) { return parse(read_text_file(path), path); }
+Script Script::load(const std::string& path) {
+  return parse(read_text_file(path, kMaxScriptBytes, "a viewer script"), path);
+}
 
 void Script::advance(ViewerState& state, ScriptHost& host, double now_s) {
   if (start_s_ < 0) start_s_ = now_s;

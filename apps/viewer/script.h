@@ -2,6 +2,7 @@
 // Scripts: a file of viewer commands (commands.h) run one after the other, with frame-loop
 // commands (frames, wait, steps, sleep, screenshot, ...) that let frames pass in between. Tests
 // and documentation pictures drive the viewer through them like a user would.
+#include <cstddef>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -26,10 +27,14 @@ class ScriptHost {
 /// A parsed script and how far it has run. Not thread-safe (the UI thread runs it).
 class Script {
  public:
+  /// The longest script file read (16 MiB: a few hundred thousand commands); a longer one, or
+  /// a device such as /dev/zero, is refused before it fills memory.
+  static constexpr std::size_t kMaxScriptBytes = std::size_t{16} << 20;
   /// Parses and checks every line (command names and argument counts) before anything runs.
   /// Throws InvalidArgument "ORIGIN:LINE: ..." for the first bad line.
   static Script parse(std::string_view text, const std::string& origin);
-  /// Reads and parses a file. Throws IoError or InvalidArgument.
+  /// Reads and parses a file. Throws IoError, or BadInput for a bad line or a file longer
+  /// than kMaxScriptBytes.
   static Script load(const std::string& path);
 
   /// Called once per frame, after the frame was drawn: runs commands until one needs more

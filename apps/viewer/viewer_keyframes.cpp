@@ -55,8 +55,8 @@ int keyframe_frames(const json& keys) {
 
 int ViewerState::keyframe_frames() const { return detail::keyframe_frames(keyframes_); }
 
-double ViewerState::keyframe_time(std::size_t index) const {
-  return entry_time(keyframes_.at(index), keyframe_frames());
+double ViewerState::keyframe_time(std::size_t index, std::optional<int> frames) const {
+  return entry_time(keyframes_.at(index), frames ? *frames : keyframe_frames());
 }
 
 Ease ViewerState::keyframe_ease(std::size_t index) const {

@@ -291,8 +291,9 @@ class ViewerState {
   const nlohmann::json& keyframes() const { return keyframes_; }
   bool has_keyframes() const { return !keyframes_.empty(); }
   /// Keyframe `index`'s time in [0, 1]; one given by frame is placed as in an animation of
-  /// keyframe_frames() frames.
-  double keyframe_time(std::size_t index) const;
+  /// `frames` frames (keyframe_frames() when not given: a pass over every keyframe, so a
+  /// caller that asks for many passes it once).
+  double keyframe_time(std::size_t index, std::optional<int> frames = std::nullopt) const;
   /// Keyframe `index`'s ease towards the next (in-out when the entry names none).
   Ease keyframe_ease(std::size_t index) const;
   /// The frame count that places keyframes given by frame: `zeroset animate`'s default (60),

@@ -6,6 +6,9 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
+
+#include <fmt/core.h>
 
 #include "zeroset/error.h"
 
@@ -20,15 +23,21 @@ std::string file_extension(const std::string& path) {
   return ext;
 }
 
-std::string read_text_file(const std::string& path) {
+std::string read_text_file(const std::string& path, std::size_t max_bytes, std::string_view what) {
   std::error_code ec;
   if (fs::is_directory(path, ec)) throw IoError(path, "is a directory, not a file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path, std::string("cannot open: ") + std::strerror(errno));
-  std::ostringstream s;
-  s << in.rdbuf();
+  std::string text;
+  std::vector<char> piece(1 << 16);
+  while (in && text.size() <= max_bytes) {
+    in.read(piece.data(), static_cast<std::streamsize>(piece.size()));
+    text.append(piece.data(), static_cast<std::size_t>(in.gcount()));
+  }
   if (in.bad()) throw IoError(path, "read failed");
-  return s.str();
+  if (text.size() > max_bytes)
+    throw BadInput(fmt::format("{}: larger than {} may be ({} MiB)", path, what, max_bytes >> 20));
+  return text;
 }
 
 }  // namespace zeroset

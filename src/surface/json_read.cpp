@@ -1,13 +1,11 @@
 #include "zeroset/surface/json_read.h"
 
+#include "zeroset/io/atomic_file.h"
+
 #include <fmt/core.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
-#include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <vector>
 
 #include "zeroset/error.h"
@@ -212,23 +210,7 @@ json parse(std::string_view text, const std::string& origin) {
 }
 
 std::string read_file(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw IoError(path, "is a directory, not a file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path, std::string("cannot open: ") + std::strerror(errno));
-  // Reads in pieces and stops one piece past the limit, so /dev/zero or a huge file costs
-  // no more than the limit.
-  std::string text;
-  std::vector<char> piece(1 << 16);
-  while (in && text.size() <= kMaxBytes) {
-    in.read(piece.data(), static_cast<std::streamsize>(piece.size()));
-    text.append(piece.data(), static_cast<std::size_t>(in.gcount()));
-  }
-  if (in.bad()) throw IoError(path, "read failed");
-  if (text.size() > kMaxBytes)
-    throw BadInput(
-        fmt::format("{}: larger than a scene file may be ({} MiB)", path, kMaxBytes >> 20));
-  return text;
+  return read_text_file(path, kMaxBytes, "a scene file");
 }
 
 }  // namespace zeroset::json_read

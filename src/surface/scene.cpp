@@ -408,6 +408,12 @@ Scene read_scene(const std::string& path) {
 
 void write_scene(const Scene& scene, const std::string& path) {
   const std::string text = scene_to_json(scene).dump(2) + "\n";
+  // A file zeroset could not read back is not written.
+  if (text.size() > json_read::kMaxBytes)
+    throw BadInput(fmt::format(
+        "{}: the scene would take {:.1f} MiB, more than a scene file may be ({} MiB); fewer "
+        "keyframes or clip parts would fit",
+        path, static_cast<double>(text.size()) / (1 << 20), json_read::kMaxBytes >> 20));
   write_file_atomically(path, [&](std::ostream& out) { out << text; });
 }
 

@@ -45,8 +45,10 @@ void expect_refused(const std::string& dir, const std::string& args,
 TEST(HostileInputs, ParameterValuesBeyondTheLimitAreRefused) {
   const std::string d = fresh_dir("hostile_params");
   expect_refused(d, "render kummer --param mu=1e308 -o OUT", {"mu", "1e+100"});
+#if defined(ZEROSET_HAVE_VIEWER)
   // Refused before a window opens (ImGui's slider aborted on such a value).
   expect_refused(d, "view kummer --param mu=1e308", {"mu", "1e+100"});
+#endif
   expect_refused(d, "sample kummer --param mu=-1e101 --png OUT", {"mu", "1e+100"});
   expect_refused(d, "mesh kummer --param mu=nan -o OUT", {"--param", "finite"}, "out.obj");
   expect_refused(d, "export kummer --param mu=inf -o OUT", {"--param", "finite"}, "out.pov");

@@ -13,6 +13,30 @@ namespace {
 
 using zeroset::test::temp_path;
 
+// A scene zeroset could not read back (over json_read::kMaxBytes) is refused before anything
+// is written; the old file stays.
+TEST(Scene, ASceneTooLargeToReadBackIsNotWritten) {
+  const std::string path = temp_path("too-large-scene.json");
+  std::ofstream(path) << "old";
+  Scene scene = resolve_scene("kummer");
+  scene.settings["note"] = std::string((std::size_t{32} << 20) + 1, 'a');
+  try {
+    write_scene(scene, path);
+    ADD_FAILURE() << "a scene of more than 32 MiB was written";
+  } catch (const BadInput& e) {
+    EXPECT_NE(std::string(e.what()).find("more than a scene file may be (32 MiB)"),
+              std::string::npos)
+        << e.what();
+  }
+  std::ifstream in(path);
+  std::string text;
+  std::getline(in, text);
+  EXPECT_EQ(text, "old");
+  scene.settings.erase("note");
+  write_scene(scene, path);
+  EXPECT_EQ(read_scene(path).surface.label(), scene.surface.label());
+}
+
 TEST(Scene, ResolvesCatalogNamesWithDefaults) {
   const Surface s = resolve_surface("kummer");
   EXPECT_EQ(s.name, "kummer");

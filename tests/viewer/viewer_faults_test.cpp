@@ -63,6 +63,41 @@ TEST(ViewerFaults, AMillionClipsOnTheCommandLineAreRefusedBeforeTheWindow) {
   EXPECT_LT(s, 10) << r.output;
 }
 
+// A script that never ends (a device such as /dev/zero) or is too long is refused before the
+// window opens, without reading more than the limit.
+TEST(ViewerFaults, AnEndlessScriptIsRefusedBeforeTheWindow) {
+  for (const std::string script : {"/dev/zero", "/dev/urandom"}) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto r = run_command(std::string(ZEROSET_BINARY) + " view kummer --frames 1 --script " +
+                               script);
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find(script + ": larger than a viewer script may be (16 MiB)"),
+              std::string::npos)
+        << r.output;
+    EXPECT_LT(s, 10) << r.output;
+  }
+}
+
+// The keyframe panel (open for a scene with keyframes) draws only the rows in view: each of
+// 50,000 rows asked for the frame count, a pass over every keyframe, and a frame took seconds
+// (3.3 s at 20,000 keyframes).
+TEST(ViewerFaults, FiftyThousandKeyframesDoNotSlowTheFrames) {
+  if (!has_xvfb()) GTEST_SKIP() << "xvfb-run is not installed";
+  constexpr int kKeyframes = 50'000;
+  std::string keys;
+  keys.reserve(kKeyframes * 48);
+  for (int k = 0; k < kKeyframes; ++k)
+    keys += (k ? ",{\"time\": " : "{\"time\": ") + std::to_string(k / (kKeyframes - 1.0)) +
+            ", \"params\": {\"a\": " + std::to_string(1 + 1e-5 * k) + "}}";
+  const std::string scene = write_file(
+      "keyframes.json", R"({"equation": "x^2 + y^2 + z^2 - a", "parameters": {"a": 1},
+        "clip": ["sphere:2"], "animation": {"keyframes": [)" + keys + "]}}");
+  const Timed t = view(scene + " --size 640x480 --frames 30");
+  EXPECT_EQ(t.result.exit_code, 0) << t.result.output;
+  EXPECT_LT(t.seconds, 40) << t.result.output;
+}
+
 TEST(ViewerFaults, LoadingAMillionClipsThenQuitIsPrompt) {
   if (!has_xvfb()) GTEST_SKIP() << "xvfb-run is not installed";
   const std::string scene = clip_scene("million-load.json", 1'000'000);

@@ -1,9 +1,12 @@
 #pragma once
 /// Writing output files so that an error never leaves a partial file (docs/architecture.md,
 /// "Errors"); zeroset/io/output_transaction.h groups the outputs of one command.
+#include <cstddef>
 #include <functional>
+#include <limits>
 #include <ostream>
 #include <string>
+#include <string_view>
 
 namespace zeroset {
 
@@ -23,7 +26,11 @@ void check_writable(const std::string& path);
 /// Lower-case extension of `path` without the dot ("" when none).
 std::string file_extension(const std::string& path);
 
-/// Reads a whole file; throws IoError with the reason.
-std::string read_text_file(const std::string& path);
+/// Reads a whole file; throws IoError with the reason. A file longer than `max_bytes` is
+/// refused (BadInput "PATH: larger than WHAT may be (N MiB)") one piece past the limit, so
+/// /dev/zero or a huge file costs no more than the limit.
+std::string read_text_file(const std::string& path,
+                           std::size_t max_bytes = std::numeric_limits<std::size_t>::max(),
+                           std::string_view what = "a file");
 
 }  // namespace zeroset
